@@ -1,0 +1,94 @@
+// The one scenario schema: what a scenario TOML file holds, with the built-in defaults.
+// The TOML layout (keys, units, validity ranges) is documented in sim/scenarios/README.md and
+// parsed by parse_scenario_file()/parse_scenario_text() in scenario.cpp.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sim/effects.hpp"
+
+namespace sim {
+
+enum class SegmentType { kStraight, kTurn };
+enum class TurnDirection { kLeft, kRight };
+
+/// One piece of the flight. A turn is a coordinated level bank-to-turn: roll-in over roll_time_s
+/// to bank_deg, constant bank (heading rate g tan(phi) / V, no sideslip), roll-out over
+/// roll_time_s; heading_change_deg counts the heading turned during the whole segment including
+/// the transitions.
+struct Segment {
+  SegmentType type = SegmentType::kStraight;
+  double duration_s = 60.0;           ///< straight only
+  TurnDirection direction = TurnDirection::kRight;  ///< turn only
+  double bank_deg = 60.0;             ///< turn only, magnitude (0, 80]
+  double heading_change_deg = 180.0;  ///< turn only, magnitude (0, 3600]
+  double roll_time_s = 5.0;           ///< turn only, each of roll-in and roll-out (0, 60]
+};
+
+struct StartState {
+  double lat_deg = 35.0;
+  double lon_deg = 127.0;
+  double alt_m = 5000.0;      ///< ellipsoidal height
+  double speed_mps = 250.0;   ///< ground speed, constant during the flight
+  double heading_deg = 0.0;   ///< true heading
+  double pitch_deg = 0.0;     ///< constant body pitch above the (level) flight path
+};
+
+/// 1-sigma values of the IMU errors drawn per run from the seed (the paper's Table 1 by default).
+struct ImuErrorSigmas {
+  double accel_bias_ug = 100.0;
+  double accel_scale_factor_ppm = 100.0;
+  double accel_misalignment_arcsec = 5.0;
+  double gyro_bias_degph = 0.01;
+  double gyro_scale_factor_ppm = 100.0;
+  double gyro_misalignment_arcsec = 5.0;
+  double gyro_arw_deg_per_rthr = 0.0;       ///< angle random walk [deg/sqrt(h)]
+  double accel_vrw_ug_per_rthz = 0.0;       ///< velocity random walk [ug/sqrt(Hz)]
+  double gyro_bias_instability_degph = 0.0; ///< 1-sigma of a first-order Gauss-Markov bias drift
+  double accel_bias_instability_ug = 0.0;   ///< 1-sigma of a first-order Gauss-Markov bias drift
+  double bias_instability_tau_s = 3600.0;   ///< correlation time of both drifts
+};
+
+/// Which error set the IMU model draws: the paper's Table 1, only biases and noise (what the
+/// 15-state model estimates), or none at all (perfect IMU).
+enum class ImuErrorSet { kPaper, kBaseline, kNone };
+
+struct ImuConfig {
+  int rate_hz = 1000;  ///< IMU sample rate; a multiple of the 200 Hz navigation rate
+  ImuErrorSet errors = ImuErrorSet::kPaper;
+  ImuErrorSigmas sigmas{};
+};
+
+struct Scenario {
+  std::string name = "bank-to-turn";
+  double duration_s = 1800.0;
+  std::uint64_t seed = 1;
+  StartState start{};
+  std::vector<Segment> segments = default_segments();
+  /// After the last segment, continue with segment index repeat_from (0-based); nullopt: fly
+  /// straight after the last segment until duration_s.
+  std::optional<std::size_t> repeat_from = std::size_t{1};
+  ImuConfig imu{};
+  /// Truth-side effects switched on at fixed values on top of the drawn errors.
+  EffectSet effects{};
+
+  /// Default flight: 60 s straight, then alternating 180-degree right and left 60-degree bank
+  /// turns with 30 s straights between them, repeated for the whole 1800 s.
+  static std::vector<Segment> default_segments();
+};
+
+/// Result of parsing: either a scenario or a message naming the offending key and its line.
+struct ScenarioParseResult {
+  std::optional<Scenario> scenario;
+  std::string error;  ///< e.g. "scenario.toml:12:1: unknown key 'trajectory.segment[2].bnak_deg'"
+  bool ok() const { return scenario.has_value(); }
+};
+
+ScenarioParseResult parse_scenario_text(const std::string& toml_text, const std::string& source_name);
+ScenarioParseResult parse_scenario_file(const std::string& path);
+
+}  // namespace sim

@@ -1,0 +1,161 @@
+// Truth kinematics and the ideal IMU output.
+//
+// A Motion describes a trajectory as a small ODE state y (integrated here with RK4) plus
+// closed-form functions of (t, y) for everything else: position, ENU velocity and its time
+// derivative, attitude and the body rate relative to the navigation frame. The TruthGenerator
+// turns any Motion into mutually consistent truth samples at the IMU rate (1 kHz by default):
+//   omega_ib_b = omega_nb_b + C_n_b (omega_ie_n + omega_en_n)
+//   f_b        = C_n_b (dv/dt + (2 omega_ie_n + omega_en_n) x v - g_n)
+// and the ideal incremental outputs delta-theta = int omega_ib_b dt, delta-v = int f_b dt over
+// each sample interval (Simpson's rule on the half-step RK4 grid), which is exactly what an
+// error-free integrating gyro and accelerometer triad would deliver.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fsw/frames.hpp"
+#include "sim/scenario.hpp"
+
+namespace sim {
+
+using fsw::Mat3;
+using fsw::Quat;
+using fsw::Vec3;
+
+/// Continuous truth at one instant.
+struct Kinematics {
+  Vec3 llh = Vec3::Zero();               ///< lat [rad], lon [rad], h [m]
+  Vec3 vel_enu_mps = Vec3::Zero();       ///< ENU velocity
+  Vec3 acc_enu_mps2 = Vec3::Zero();      ///< time derivative of the ENU velocity components
+  Mat3 C_b_n = Mat3::Identity();
+  Vec3 omega_nb_b_radps = Vec3::Zero();  ///< body rate relative to the navigation frame
+};
+
+/// What the trajectory is doing at an instant (for plots and per-turn analysis).
+struct MotionPhase {
+  int segment = -1;   ///< index into the scenario's segment list, -1 outside any segment
+  int turn = -1;      ///< running number of the turn being flown (0, 1, ...), -1 when not turning
+  bool turning = false;
+};
+
+class Motion {
+ public:
+  static constexpr int kMaxStates = 6;
+  using State = Eigen::Matrix<double, kMaxStates, 1>;
+
+  virtual ~Motion() = default;
+  virtual State initial_state() const = 0;
+  virtual State derivative(double t_s, const State& y) const = 0;
+  virtual Kinematics eval(double t_s, const State& y) const = 0;
+  virtual MotionPhase phase(double /*t_s*/) const { return {}; }
+};
+
+/// One truth sample: the state at t_s and the ideal IMU increments over (t_s - dt_s, t_s].
+struct TruthSample {
+  double t_s = 0.0;
+  double dt_s = 0.0;
+  Vec3 llh = Vec3::Zero();
+  Vec3 vel_enu_mps = Vec3::Zero();
+  Mat3 C_b_n = Mat3::Identity();
+  Vec3 omega_ib_b_radps = Vec3::Zero();  ///< instantaneous at t_s
+  Vec3 omega_nb_b_radps = Vec3::Zero();  ///< instantaneous at t_s
+  Vec3 f_b_mps2 = Vec3::Zero();          ///< instantaneous at t_s
+  Vec3 dtheta_rad = Vec3::Zero();        ///< ideal gyro increment over the last interval
+  Vec3 dv_mps = Vec3::Zero();            ///< ideal accelerometer increment over the last interval
+  MotionPhase phase{};
+};
+
+/// Steps a Motion at a fixed rate, producing truth samples. Deterministic.
+class TruthGenerator {
+ public:
+  TruthGenerator(const Motion& motion, double rate_hz);
+  /// The sample at t = 0 (no increments).
+  const TruthSample& current() const { return cur_; }
+  /// Advances one sample interval and returns the new sample.
+  const TruthSample& next();
+
+ private:
+  struct Point {
+    Kinematics k;
+    Vec3 omega_ib_b;
+    Vec3 f_b;
+  };
+  Point evaluate(double t, const Motion::State& y) const;
+  void rk4(double t, double h);
+
+  const Motion& motion_;
+  double dt_s_;
+  long long index_ = 0;
+  Motion::State y_;
+  TruthSample cur_{};
+  Point p_cur_{};
+};
+
+/// Specific force and inertial body rate from kinematics (the equations above).
+void imu_from_kinematics(const Kinematics& k, Vec3& omega_ib_b, Vec3& f_b);
+
+// ------------------------------------------------------------------------------------------------
+// Motions
+// ------------------------------------------------------------------------------------------------
+
+/// One phase of a flight timeline.
+struct FlightPhase {
+  enum class Kind { kStraight, kRollIn, kBank, kRollOut };
+  Kind kind = Kind::kStraight;
+  double t0_s = 0.0;
+  double t1_s = 0.0;
+  double bank_rad = 0.0;  ///< signed target bank (+ right)
+  int segment = -1;
+  int turn = -1;
+};
+
+/// The scenario flight: level flight at constant speed with coordinated bank-to-turn segments.
+/// ODE state y = (heading, lat, lon, h).
+class FlightMotion final : public Motion {
+ public:
+  /// Builds the timeline up to the scenario duration; returns nullptr and an error message when
+  /// a turn is too small for its roll-in/roll-out time.
+  static std::unique_ptr<FlightMotion> create(const Scenario& sc, std::string& error);
+
+  State initial_state() const override;
+  State derivative(double t_s, const State& y) const override;
+  Kinematics eval(double t_s, const State& y) const override;
+  MotionPhase phase(double t_s) const override;
+
+  const std::vector<FlightPhase>& timeline() const { return phases_; }
+  /// Roll angle [rad] and roll rate [rad/s] at t.
+  void roll(double t_s, double& roll_rad, double& roll_rate_radps) const;
+
+ private:
+  FlightMotion() = default;
+  const FlightPhase& phase_at(double t_s) const;
+
+  StartState start_{};
+  double g_coord_mps2_ = 9.8;  ///< gravity used by the coordination law g tan(phi) / V
+  std::vector<FlightPhase> phases_;
+};
+
+/// A stationary IMU on a rate table: fixed position, zero velocity, initial attitude C_b_n0,
+/// rotating about a body axis at a constant rate from t = 0 (the paper's section II tests).
+class TableMotion final : public Motion {
+ public:
+  TableMotion(const Vec3& llh, const Mat3& C_b_n0, const Vec3& axis_b, double rate_radps);
+  State initial_state() const override { return State::Zero(); }
+  State derivative(double, const State&) const override { return State::Zero(); }
+  Kinematics eval(double t_s, const State& y) const override;
+
+ private:
+  Vec3 llh_;
+  Mat3 C_b_n0_;
+  Vec3 axis_b_;
+  double rate_radps_;
+};
+
+/// Roll transition shape: s(0) = 0, s(1) = 1, with zero first and second derivative at both ends.
+double smooth_step(double x);
+double smooth_step_rate(double x);  ///< ds/dx
+
+}  // namespace sim

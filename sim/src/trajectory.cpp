@@ -1,0 +1,263 @@
+#include "sim/trajectory.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sim {
+
+using fsw::kDegToRad;
+using fsw::kPi;
+
+double smooth_step(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x - std::sin(2.0 * kPi * x) / (2.0 * kPi);
+}
+
+double smooth_step_rate(double x) {
+  if (x <= 0.0 || x >= 1.0) return 0.0;
+  return 1.0 - std::cos(2.0 * kPi * x);
+}
+
+void imu_from_kinematics(const Kinematics& k, Vec3& omega_ib_b, Vec3& f_b) {
+  const double lat = k.llh.x(), h = k.llh.z();
+  const Vec3 w_ie = fsw::omega_ie_n(lat);
+  const Vec3 w_en = fsw::omega_en_n(lat, h, k.vel_enu_mps);
+  const Mat3 C_n_b = k.C_b_n.transpose();
+  omega_ib_b = k.omega_nb_b_radps + C_n_b * (w_ie + w_en);
+  f_b = C_n_b * (k.acc_enu_mps2 + (2.0 * w_ie + w_en).cross(k.vel_enu_mps) - fsw::gravity_enu_mps2(lat, h));
+}
+
+// ------------------------------------------------------------------------------------------------
+// TruthGenerator
+// ------------------------------------------------------------------------------------------------
+
+TruthGenerator::TruthGenerator(const Motion& motion, double rate_hz) : motion_(motion), dt_s_(1.0 / rate_hz) {
+  y_ = motion_.initial_state();
+  p_cur_ = evaluate(0.0, y_);
+  cur_.t_s = 0.0;
+  cur_.dt_s = 0.0;
+  cur_.llh = p_cur_.k.llh;
+  cur_.vel_enu_mps = p_cur_.k.vel_enu_mps;
+  cur_.C_b_n = p_cur_.k.C_b_n;
+  cur_.omega_ib_b_radps = p_cur_.omega_ib_b;
+  cur_.omega_nb_b_radps = p_cur_.k.omega_nb_b_radps;
+  cur_.f_b_mps2 = p_cur_.f_b;
+  cur_.phase = motion_.phase(0.0);
+}
+
+TruthGenerator::Point TruthGenerator::evaluate(double t, const Motion::State& y) const {
+  Point p;
+  p.k = motion_.eval(t, y);
+  imu_from_kinematics(p.k, p.omega_ib_b, p.f_b);
+  return p;
+}
+
+void TruthGenerator::rk4(double t, double h) {
+  const Motion::State k1 = motion_.derivative(t, y_);
+  const Motion::State k2 = motion_.derivative(t + 0.5 * h, y_ + 0.5 * h * k1);
+  const Motion::State k3 = motion_.derivative(t + 0.5 * h, y_ + 0.5 * h * k2);
+  const Motion::State k4 = motion_.derivative(t + h, y_ + h * k3);
+  y_ += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+}
+
+const TruthSample& TruthGenerator::next() {
+  // Times are computed from the integer index so that they do not drift by accumulation.
+  const double t0 = static_cast<double>(index_) * dt_s_;
+  const double tm = (static_cast<double>(index_) + 0.5) * dt_s_;
+  const double t1 = static_cast<double>(index_ + 1) * dt_s_;
+  rk4(t0, tm - t0);
+  const Point pm = evaluate(tm, y_);
+  rk4(tm, t1 - tm);
+  const Point p1 = evaluate(t1, y_);
+  const double h = t1 - t0;
+  cur_.dtheta_rad = h / 6.0 * (p_cur_.omega_ib_b + 4.0 * pm.omega_ib_b + p1.omega_ib_b);
+  cur_.dv_mps = h / 6.0 * (p_cur_.f_b + 4.0 * pm.f_b + p1.f_b);
+  ++index_;
+  p_cur_ = p1;
+  cur_.t_s = t1;
+  cur_.dt_s = h;
+  cur_.llh = p1.k.llh;
+  cur_.vel_enu_mps = p1.k.vel_enu_mps;
+  cur_.C_b_n = p1.k.C_b_n;
+  cur_.omega_ib_b_radps = p1.omega_ib_b;
+  cur_.omega_nb_b_radps = p1.k.omega_nb_b_radps;
+  cur_.f_b_mps2 = p1.f_b;
+  cur_.phase = motion_.phase(t1);
+  return cur_;
+}
+
+// ------------------------------------------------------------------------------------------------
+// FlightMotion
+// ------------------------------------------------------------------------------------------------
+
+namespace {
+/// Heading turned during one roll transition of length T to bank phi_b at speed V:
+/// int_0^T g tan(phi_b s(t/T)) / V dt (Gauss-Legendre on 64 panels; the integrand is smooth).
+double transition_heading_change(double g, double V, double phi_b, double T) {
+  static constexpr double xg[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
+  static constexpr double wg[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+  const int n = 64;
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double a = static_cast<double>(i) / n, b = static_cast<double>(i + 1) / n;
+    for (int j = 0; j < 3; ++j) {
+      const double x = 0.5 * (a + b) + 0.5 * (b - a) * xg[j];
+      sum += wg[j] * 0.5 * (b - a) * std::tan(phi_b * smooth_step(x));
+    }
+  }
+  return g / V * T * sum;
+}
+}  // namespace
+
+std::unique_ptr<FlightMotion> FlightMotion::create(const Scenario& sc, std::string& error) {
+  std::unique_ptr<FlightMotion> m(new FlightMotion());
+  m->start_ = sc.start;
+  m->g_coord_mps2_ = fsw::normal_gravity_mps2(sc.start.lat_deg * kDegToRad, sc.start.alt_m);
+  const double V = sc.start.speed_mps;
+  if (!(V > 0.0) || sc.segments.empty()) {
+    error = "scenario needs a positive speed and at least one segment";
+    return nullptr;
+  }
+  double t = 0.0;
+  std::size_t idx = 0;
+  int turn = 0;
+  while (t < sc.duration_s) {
+    if (idx >= sc.segments.size()) {
+      if (!sc.repeat_from) {
+        m->phases_.push_back({FlightPhase::Kind::kStraight, t, sc.duration_s + 1.0, 0.0, -1, -1});
+        break;
+      }
+      idx = *sc.repeat_from;
+    }
+    const Segment& s = sc.segments[idx];
+    const int seg = static_cast<int>(idx);
+    if (s.type == SegmentType::kStraight) {
+      m->phases_.push_back({FlightPhase::Kind::kStraight, t, t + s.duration_s, 0.0, seg, -1});
+      t += s.duration_s;
+    } else {
+      const double sign = s.direction == TurnDirection::kRight ? 1.0 : -1.0;
+      const double phi_b = s.bank_deg * kDegToRad;
+      const double T = s.roll_time_s;
+      const double dpsi_roll = transition_heading_change(m->g_coord_mps2_, V, phi_b, T);
+      const double psi_rate = m->g_coord_mps2_ * std::tan(phi_b) / V;
+      const double dpsi_total = s.heading_change_deg * kDegToRad;
+      const double t_bank = (dpsi_total - 2.0 * dpsi_roll) / psi_rate;
+      if (t_bank < 0.0) {
+        error = "segment " + std::to_string(idx) + ": heading change " + std::to_string(s.heading_change_deg) +
+                " deg is smaller than the " + std::to_string(2.0 * dpsi_roll / kDegToRad) +
+                " deg turned during roll-in and roll-out";
+        return nullptr;
+      }
+      m->phases_.push_back({FlightPhase::Kind::kRollIn, t, t + T, sign * phi_b, seg, turn});
+      m->phases_.push_back({FlightPhase::Kind::kBank, t + T, t + T + t_bank, sign * phi_b, seg, turn});
+      m->phases_.push_back(
+          {FlightPhase::Kind::kRollOut, t + T + t_bank, t + 2.0 * T + t_bank, sign * phi_b, seg, turn});
+      t += 2.0 * T + t_bank;
+      ++turn;
+    }
+    ++idx;
+  }
+  // Past the end of the timeline the aircraft flies straight.
+  m->phases_.push_back({FlightPhase::Kind::kStraight, t, 1e300, 0.0, -1, -1});
+  return m;
+}
+
+const FlightPhase& FlightMotion::phase_at(double t_s) const {
+  // First phase whose end is after t (phases are contiguous and sorted).
+  auto it = std::upper_bound(phases_.begin(), phases_.end(), t_s,
+                             [](double t, const FlightPhase& p) { return t < p.t1_s; });
+  if (it == phases_.end()) return phases_.back();
+  return *it;
+}
+
+void FlightMotion::roll(double t_s, double& roll_rad, double& roll_rate_radps) const {
+  const FlightPhase& p = phase_at(t_s);
+  const double T = p.t1_s - p.t0_s;
+  switch (p.kind) {
+    case FlightPhase::Kind::kStraight:
+      roll_rad = 0.0;
+      roll_rate_radps = 0.0;
+      return;
+    case FlightPhase::Kind::kBank:
+      roll_rad = p.bank_rad;
+      roll_rate_radps = 0.0;
+      return;
+    case FlightPhase::Kind::kRollIn: {
+      const double x = (t_s - p.t0_s) / T;
+      roll_rad = p.bank_rad * smooth_step(x);
+      roll_rate_radps = p.bank_rad * smooth_step_rate(x) / T;
+      return;
+    }
+    case FlightPhase::Kind::kRollOut: {
+      const double x = (t_s - p.t0_s) / T;
+      roll_rad = p.bank_rad * (1.0 - smooth_step(x));
+      roll_rate_radps = -p.bank_rad * smooth_step_rate(x) / T;
+      return;
+    }
+  }
+}
+
+Motion::State FlightMotion::initial_state() const {
+  State y = State::Zero();
+  y(0) = start_.heading_deg * kDegToRad;
+  y(1) = start_.lat_deg * kDegToRad;
+  y(2) = start_.lon_deg * kDegToRad;
+  y(3) = start_.alt_m;
+  return y;
+}
+
+Motion::State FlightMotion::derivative(double t_s, const State& y) const {
+  double phi = 0.0, phi_dot = 0.0;
+  roll(t_s, phi, phi_dot);
+  const double V = start_.speed_mps;
+  const Vec3 v(V * std::sin(y(0)), V * std::cos(y(0)), 0.0);
+  const Vec3 rate = fsw::llh_rate(Vec3(y(1), y(2), y(3)), v);
+  State d = State::Zero();
+  d(0) = g_coord_mps2_ * std::tan(phi) / V;
+  d(1) = rate.x();
+  d(2) = rate.y();
+  d(3) = rate.z();
+  return d;
+}
+
+Kinematics FlightMotion::eval(double t_s, const State& y) const {
+  double phi = 0.0, phi_dot = 0.0;
+  roll(t_s, phi, phi_dot);
+  const double V = start_.speed_mps;
+  const double psi = y(0);
+  const double psi_dot = g_coord_mps2_ * std::tan(phi) / V;
+  const double theta = start_.pitch_deg * kDegToRad;
+  Kinematics k;
+  k.llh = Vec3(y(1), y(2), y(3));
+  k.vel_enu_mps = Vec3(V * std::sin(psi), V * std::cos(psi), 0.0);
+  k.acc_enu_mps2 = Vec3(V * std::cos(psi) * psi_dot, -V * std::sin(psi) * psi_dot, 0.0);
+  k.C_b_n = fsw::C_b_n_from_euler(phi, theta, psi);
+  k.omega_nb_b_radps = fsw::omega_nb_b_from_euler_rates(phi, theta, phi_dot, 0.0, psi_dot);
+  return k;
+}
+
+MotionPhase FlightMotion::phase(double t_s) const {
+  const FlightPhase& p = phase_at(t_s);
+  MotionPhase mp;
+  mp.segment = p.segment;
+  mp.turn = p.turn;
+  mp.turning = p.kind != FlightPhase::Kind::kStraight;
+  return mp;
+}
+
+// ------------------------------------------------------------------------------------------------
+// TableMotion
+// ------------------------------------------------------------------------------------------------
+
+TableMotion::TableMotion(const Vec3& llh, const Mat3& C_b_n0, const Vec3& axis_b, double rate_radps)
+    : llh_(llh), C_b_n0_(C_b_n0), axis_b_(axis_b.normalized()), rate_radps_(rate_radps) {}
+
+Kinematics TableMotion::eval(double t_s, const State& /*y*/) const {
+  Kinematics k;
+  k.llh = llh_;
+  k.C_b_n = C_b_n0_ * fsw::quat_from_rotvec(axis_b_ * (rate_radps_ * t_s)).toRotationMatrix();
+  k.omega_nb_b_radps = axis_b_ * rate_radps_;
+  return k;
+}
+
+}  // namespace sim

@@ -1,0 +1,41 @@
+// Wires the truth simulator to the fsw mechanization for free-inertial (unaided) runs: the common
+// loop behind the perfect-IMU tests, the profile cross-check and the section-II analyses.
+#pragma once
+
+#include <functional>
+
+#include "fsw/strapdown.hpp"
+#include "sim/imu_model.hpp"
+#include "sim/trajectory.hpp"
+
+namespace tools {
+
+/// Errors of a navigation solution against truth at one instant.
+struct NavErrors {
+  fsw::Vec3 pos_enu_m = fsw::Vec3::Zero();      ///< nav minus truth
+  fsw::Vec3 vel_enu_mps = fsw::Vec3::Zero();    ///< nav minus truth
+  fsw::Vec3 att_phi_enu_rad = fsw::Vec3::Zero();  ///< attitude error phi (frames.hpp)
+};
+
+NavErrors nav_errors(const fsw::NavState& nav, const sim::TruthSample& truth);
+
+struct FreeInertialConfig {
+  double duration_s = 1800.0;
+  double imu_rate_hz = 1000.0;
+  double nav_rate_hz = 200.0;
+  /// Initial attitude error phi applied to the truth attitude at t = 0 (e.g. from alignment).
+  fsw::Vec3 initial_phi_enu_rad = fsw::Vec3::Zero();
+  /// Reset height and vertical velocity to truth after every frame (an ideal altimeter): the
+  /// unaided vertical channel diverges and would otherwise pollute long analyses.
+  bool hold_vertical_to_truth = false;
+};
+
+/// Called after every navigation frame with the truth at the same instant and the solution.
+using FreeInertialCallback = std::function<void(const sim::TruthSample&, const fsw::NavState&)>;
+
+/// Flies the motion with the given IMU model (nullptr: perfect IMU), initialised from truth.
+/// Returns the last errors. Never throws; a failing fsw step is reported through `status`.
+NavErrors run_free_inertial(const sim::Motion& motion, sim::ImuModel* imu, const FreeInertialConfig& cfg,
+                            const FreeInertialCallback& on_frame, fsw::Status* status = nullptr);
+
+}  // namespace tools
