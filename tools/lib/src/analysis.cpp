@@ -106,6 +106,7 @@ BankTurnCase run_bank_turn_case(const sim::Scenario& sc, std::size_t component, 
     if (was_turning && !truth.phase.turning) {
       c.turn_end_t_s.push_back(truth.t_s);
       c.turn_end_phi_u_rad.push_back(phi.z());
+      c.turn_end_phi_rad.push_back(phi);
       forced_per_turn.push_back(forcing_u);
       forcing_u = 0.0;
     }
@@ -127,6 +128,8 @@ BankTurnCase run_bank_turn_case(const sim::Scenario& sc, std::size_t component, 
     double forced = 0.0;
     for (double f : forced_per_turn) forced += f;
     c.predicted_per_turn_arcsec = forced / static_cast<double>(n) * fsw::kRadToArcsec;
+    c.coupled_per_turn_arcsec = c.u_error_per_turn_arcsec - c.predicted_per_turn_arcsec;
+    c.tilt_per_turn_arcsec = c.turn_end_phi_rad.back().head<2>().norm() / static_cast<double>(n) * fsw::kRadToArcsec;
   }
   // Excursion of phi_U around the straight line through the turn ends.
   for (std::size_t i = 0; i < c.t_s.size(); ++i) {
@@ -135,15 +138,18 @@ BankTurnCase run_bank_turn_case(const sim::Scenario& sc, std::size_t component, 
     const double trend = turns_done * c.u_error_per_turn_arcsec;
     c.u_oscillation_arcsec = std::max(c.u_oscillation_arcsec, std::abs(c.phi_rad[i].z() * fsw::kRadToArcsec - trend));
   }
-  // Accumulates: every completed turn adds to phi_U with the same sign, and the mean growth per
-  // turn exceeds 10% of the misalignment angle (the steady-turn forcing of eq. (7) is ~1.4 gamma).
+  // Accumulates: every completed turn changes phi_U with the same sign, the mean change per turn
+  // exceeds 10% of the misalignment angle (the steady-turn forcing of eq. (7) is ~1.4 gamma), and
+  // it is the turns' own eq. (7) forcing that produces it (within 25%), not tilt errors leaking
+  // into phi_U through the Earth rate (a slow, second-order coupling).
   bool same_sign = n > 1;
   for (std::size_t i = 1; i < n; ++i) {
     const double d0 = c.turn_end_phi_u_rad[0];
     const double di = c.turn_end_phi_u_rad[i] - c.turn_end_phi_u_rad[i - 1];
     same_sign = same_sign && (d0 * di > 0.0);
   }
-  c.accumulates = same_sign && std::abs(c.u_error_per_turn_arcsec) > 0.1 * gamma_arcsec;
+  c.accumulates = same_sign && std::abs(c.u_error_per_turn_arcsec) > 0.1 * gamma_arcsec &&
+                  std::abs(c.coupled_per_turn_arcsec) < 0.25 * std::abs(c.u_error_per_turn_arcsec);
   (void)last_turn;
   return c;
 }

@@ -60,10 +60,13 @@ struct BankTurnCase {
   std::vector<double> roll_rad;
   std::vector<double> turn_end_t_s;      ///< end of each completed turn
   std::vector<double> turn_end_phi_u_rad;
+  std::vector<fsw::Vec3> turn_end_phi_rad;
   double u_error_per_turn_arcsec = 0.0;  ///< mean growth of phi_U per completed turn
-  double predicted_per_turn_arcsec = 0.0;
-  double u_oscillation_arcsec = 0.0;     ///< largest excursion of phi_U from its per-turn trend
-  bool accumulates = false;
+  double predicted_per_turn_arcsec = 0.0;  ///< direct eq. (7) forcing of phi_U per turn
+  double coupled_per_turn_arcsec = 0.0;    ///< the rest: tilt errors leaking into phi_U via Earth rate
+  double tilt_per_turn_arcsec = 0.0;       ///< mean growth of the horizontal (E, N) error per turn
+  double u_oscillation_arcsec = 0.0;       ///< largest excursion of phi_U from its per-turn trend
+  bool accumulates = false;  ///< phi_U grows turn after turn, driven by the turns themselves
 };
 
 /// Flies the scenario free-inertially with only one gyro misalignment (vertical channel held to

@@ -1,0 +1,33 @@
+#include <cstdlib>
+#include <stdexcept>
+
+#include "commands.hpp"
+
+namespace sdins {
+
+sim::Scenario load_scenario(const std::string& path, double duration_s, long long seed) {
+  sim::Scenario sc;
+  if (!path.empty()) {
+    sim::ScenarioParseResult r = sim::parse_scenario_file(path);
+    if (!r.ok()) throw std::runtime_error(r.error);
+    sc = *r.scenario;
+  }
+  if (duration_s > 0.0) sc.duration_s = duration_s;
+  if (seed >= 0) sc.seed = static_cast<std::uint64_t>(seed);
+  return sc;
+}
+
+int run_plot_script(const std::string& script, const std::string& args) {
+  const std::string cmd = std::string(SDINS_PYTHON) + " " + SDINS_PLOT_DIR + "/" + script + " " + args;
+  const int rc = std::system(cmd.c_str());
+  return rc == 0 ? 0 : 1;
+}
+
+int run_selected(CLI::App& app) {
+  if (app.got_subcommand("analyze")) return run_analyze();
+  if (app.got_subcommand("scenario")) return run_scenario_check();
+  if (app.got_subcommand("fly")) return run_fly();
+  return 1;
+}
+
+}  // namespace sdins

@@ -1,0 +1,28 @@
+// sdins: the one user-facing command line of the project.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "sdins: SDINS/GPS integrated navigation for bank-to-turn aircraft.\n"
+      "Flight-software core (200 Hz strapdown mechanization), truth simulator and analysis tools."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "sdins 0.1.0");
+  sdins::register_analyze(app);
+  sdins::register_scenario(app);
+  sdins::register_fly(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    return sdins::run_selected(app);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "sdins: error: %s\n", e.what());
+    return 1;
+  }
+}
