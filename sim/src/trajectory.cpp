@@ -34,15 +34,19 @@ void imu_from_kinematics(const Kinematics& k, Vec3& omega_ib_b, Vec3& f_b) {
 TruthGenerator::TruthGenerator(const Motion& motion, double rate_hz) : motion_(motion), dt_s_(1.0 / rate_hz) {
   y_ = motion_.initial_state();
   p_cur_ = evaluate(0.0, y_);
-  cur_.t_s = 0.0;
-  cur_.dt_s = 0.0;
-  cur_.llh = p_cur_.k.llh;
-  cur_.vel_enu_mps = p_cur_.k.vel_enu_mps;
-  cur_.C_b_n = p_cur_.k.C_b_n;
-  cur_.omega_ib_b_radps = p_cur_.omega_ib_b;
-  cur_.omega_nb_b_radps = p_cur_.k.omega_nb_b_radps;
-  cur_.f_b_mps2 = p_cur_.f_b;
-  cur_.phase = motion_.phase(0.0);
+  set_current(0.0, 0.0, p_cur_);
+}
+
+void TruthGenerator::set_current(double t, double dt, const Point& p) {
+  cur_.t_s = t;
+  cur_.dt_s = dt;
+  cur_.llh = p.k.llh;
+  cur_.vel_enu_mps = p.k.vel_enu_mps;
+  cur_.C_b_n = p.k.C_b_n;
+  cur_.omega_ib_b_radps = p.omega_ib_b;
+  cur_.omega_nb_b_radps = p.k.omega_nb_b_radps;
+  cur_.f_b_mps2 = p.f_b;
+  cur_.phase = motion_.phase(t);
 }
 
 TruthGenerator::Point TruthGenerator::evaluate(double t, const Motion::State& y) const {
@@ -74,15 +78,7 @@ const TruthSample& TruthGenerator::next() {
   cur_.dv_mps = h / 6.0 * (p_cur_.f_b + 4.0 * pm.f_b + p1.f_b);
   ++index_;
   p_cur_ = p1;
-  cur_.t_s = t1;
-  cur_.dt_s = h;
-  cur_.llh = p1.k.llh;
-  cur_.vel_enu_mps = p1.k.vel_enu_mps;
-  cur_.C_b_n = p1.k.C_b_n;
-  cur_.omega_ib_b_radps = p1.omega_ib_b;
-  cur_.omega_nb_b_radps = p1.k.omega_nb_b_radps;
-  cur_.f_b_mps2 = p1.f_b;
-  cur_.phase = motion_.phase(t1);
+  set_current(t1, h, p1);
   return cur_;
 }
 

@@ -8,15 +8,9 @@ using fsw::kDegToRad;
 // Each (rotation axis, misalignment) pair that the rotation excites, at 5 and 10 arcsec: the
 // simulated error must match the closed form within 2% of its peak.
 TEST(SingleAxisRotation, SimulatedErrorMatchesClosedForm) {
-  struct Pair {
-    int axis;
-    std::size_t comp;
-  };
-  // Catalogue order: xy=0 xz=1 yx=2 yz=3 zx=4 zy=5. Rotation about j excites gamma_ij.
-  const Pair pairs[] = {{2, 1}, {2, 3}, {1, 0}, {1, 5}, {0, 2}, {0, 4}};
-  for (const Pair p : pairs) {
+  for (const tools::RotationPair p : tools::kExcitedRotationPairs) {
     for (double gamma : {5.0, 10.0}) {
-      const auto c = tools::run_rotation_case(p.axis, p.comp, gamma, 10.0, 72.0, 35.0 * kDegToRad);
+      const auto c = tools::run_rotation_case(p.axis, p.component, gamma, 10.0, 72.0, 35.0 * kDegToRad);
       ASSERT_GT(c.peak_formula_rad, 1.5 * gamma * fsw::kArcsecToRad) << c.name;
       EXPECT_LT(c.max_deviation_rad, 0.02 * c.peak_formula_rad)
           << c.name << " deviation " << c.max_deviation_rad * fsw::kRadToArcsec << " arcsec of peak "

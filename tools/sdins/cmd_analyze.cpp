@@ -118,14 +118,9 @@ int run_analyze() {
 
   // ---- Single-axis rotation ----
   std::printf("single-axis rotation (10 deg/s, 72 s, one gyro misalignment):\n");
-  struct Pair {
-    int axis;
-    std::size_t comp;
-  };
-  const Pair pairs[] = {{2, 1}, {2, 3}, {1, 0}, {1, 5}, {0, 2}, {0, 4}};
-  for (const Pair p : pairs) {
+  for (const tools::RotationPair p : tools::kExcitedRotationPairs) {
     for (double gamma : {5.0, 10.0}) {
-      const tools::RotationCase c = tools::run_rotation_case(p.axis, p.comp, gamma, 10.0, 72.0, lat);
+      const tools::RotationCase c = tools::run_rotation_case(p.axis, p.component, gamma, 10.0, 72.0, lat);
       std::ofstream f = open_out(out / ("rotation_" + c.name + ".csv"));
       f << "t_s,phi_E_sim_arcsec,phi_N_sim_arcsec,phi_U_sim_arcsec,phi_E_formula_arcsec,phi_N_formula_arcsec,"
            "phi_U_formula_arcsec\n";
@@ -136,11 +131,11 @@ int run_analyze() {
       }
       const double pct = 100.0 * c.max_deviation_rad / c.peak_formula_rad;
       std::printf("  about %c, gamma_%s = %4.1f arcsec: peak %6.2f arcsec, max |sim - formula| %.4f arcsec (%.2f%% of peak)\n",
-                  "xyz"[p.axis], fsw::kEffectCatalogue[0].components[p.comp], gamma,
+                  "xyz"[p.axis], fsw::kEffectCatalogue[0].components[p.component], gamma,
                   c.peak_formula_rad * kRadToArcsec, c.max_deviation_rad * kRadToArcsec, pct);
       j["single_axis_rotation"].push_back({{"case", c.name},
                                            {"axis", std::string(1, "xyz"[p.axis])},
-                                           {"component", fsw::kEffectCatalogue[0].components[p.comp]},
+                                           {"component", fsw::kEffectCatalogue[0].components[p.component]},
                                            {"gamma_arcsec", gamma},
                                            {"rate_dps", c.rate_dps},
                                            {"peak_formula_arcsec", c.peak_formula_rad * kRadToArcsec},

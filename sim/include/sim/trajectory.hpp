@@ -85,6 +85,7 @@ class TruthGenerator {
   };
   Point evaluate(double t, const Motion::State& y) const;
   void rk4(double t, double h);
+  void set_current(double t, double dt, const Point& p);
 
   const Motion& motion_;
   double dt_s_;

@@ -48,6 +48,14 @@ struct RotationCase {
 fsw::Vec3 rotation_error_formula(const fsw::Mat3& C_b_n0, const fsw::Mat3& M, const fsw::Vec3& axis_b,
                                  double rate_radps, double t_s);
 
+/// The (rotation axis, gyro misalignment) pairs that a single-axis rotation excites: rotating about
+/// body axis j excites gamma_ij (catalogue order xy=0 xz=1 yx=2 yz=3 zx=4 zy=5).
+struct RotationPair {
+  int axis;
+  std::size_t component;
+};
+inline constexpr RotationPair kExcitedRotationPairs[6] = {{2, 1}, {2, 3}, {1, 0}, {1, 5}, {0, 2}, {0, 4}};
+
 RotationCase run_rotation_case(int axis, std::size_t component, double gamma_arcsec, double rate_dps,
                                double duration_s, double lat_rad);
 
