@@ -119,10 +119,9 @@ std::unique_ptr<FlightMotion> FlightMotion::create(const Scenario& sc, std::stri
   int turn = 0;
   while (t < sc.duration_s) {
     if (idx >= sc.segments.size()) {
-      if (!sc.repeat_from) {
-        m->phases_.push_back({FlightPhase::Kind::kStraight, t, sc.duration_s + 1.0, 0.0, -1, -1});
-        break;
-      }
+      // No repeat: the closing straight phase below starts here (pushing one that ends at
+      // duration + 1 as well would overlap it and break the contiguous-timeline invariant).
+      if (!sc.repeat_from) break;
       idx = *sc.repeat_from;
     }
     const Segment& s = sc.segments[idx];
