@@ -95,7 +95,6 @@ BankTurnCase run_bank_turn_case(const sim::Scenario& sc, std::size_t component, 
   cfg.duration_s = sc.duration_s;
   cfg.hold_vertical_to_truth = true;
   int frame = 0;
-  int last_turn = -1;
   bool was_turning = false;
   double forcing_u = 0.0;  // integral of the eq. (7) forcing term over the current turn
   std::vector<double> forced_per_turn;
@@ -111,7 +110,6 @@ BankTurnCase run_bank_turn_case(const sim::Scenario& sc, std::size_t component, 
       forcing_u = 0.0;
     }
     was_turning = truth.phase.turning;
-    last_turn = std::max(last_turn, truth.phase.turn);
     if (++frame % 100 == 0) {  // 2 Hz series
       double roll = 0.0, roll_rate = 0.0;
       motion->roll(truth.t_s, roll, roll_rate);
@@ -150,7 +148,6 @@ BankTurnCase run_bank_turn_case(const sim::Scenario& sc, std::size_t component, 
   }
   c.accumulates = same_sign && std::abs(c.u_error_per_turn_arcsec) > 0.1 * gamma_arcsec &&
                   std::abs(c.coupled_per_turn_arcsec) < 0.25 * std::abs(c.u_error_per_turn_arcsec);
-  (void)last_turn;
   return c;
 }
 
