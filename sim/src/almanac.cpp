@@ -1,6 +1,7 @@
 // YUMA almanac reader and almanac orbit propagation (IS-GPS-200 20.3.3.5.2.1, Table 20-IV with
 // the almanac simplifications: no harmonic corrections, no inclination rate, i0 given in full).
 #include "sim/almanac.hpp"
+#include "sim/text_file.hpp"
 
 #include <algorithm>
 #include <array>
@@ -8,8 +9,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
 #include <sstream>
 
 namespace sim {
@@ -200,12 +199,9 @@ AlmanacParseResult parse_yuma_text(const std::string& text, const std::string& s
 
 AlmanacParseResult parse_yuma_file(const std::string& path) {
   try {
-    std::error_code ec;
-    std::ifstream in(path, std::ios::binary);
-    if (!in || std::filesystem::is_directory(path, ec)) return {std::nullopt, path + ":0: cannot open almanac file"};
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse_yuma_text(text.str(), path);
+    const std::optional<std::string> text = read_text_file(path);
+    if (!text) return {std::nullopt, path + ":0: cannot open almanac file"};
+    return parse_yuma_text(*text, path);
   } catch (const std::exception& e) {
     return {std::nullopt, path + ":0: " + e.what()};
   }

@@ -1,11 +1,10 @@
 #include "sim/profile.hpp"
+#include "sim/text_file.hpp"
 
 #include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <fstream>
-#include <iterator>
 #include <sstream>
 #include <string_view>
 #include <system_error>
@@ -114,18 +113,13 @@ ProfileLoadResult parse_profile_text(const std::string& text, const std::string&
 }
 
 ProfileLoadResult load_profile(const std::string& path) {
-  ProfileLoadResult result;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+  const std::optional<std::string> text = read_text_file(path);
+  if (!text) {
+    ProfileLoadResult result;
     result.error = path + ": cannot open file";
     return result;
   }
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) {
-    result.error = path + ": read error";
-    return result;
-  }
-  return parse_profile_text(text, path);
+  return parse_profile_text(*text, path);
 }
 
 // ------------------------------------------------------------------------------------------------

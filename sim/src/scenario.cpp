@@ -2,11 +2,10 @@
 // error reported as "<source>:<line>:<col>: <message naming the dotted key path>". The schema is
 // documented in sim/scenarios/README.md.
 #include "sim/scenario.hpp"
+#include "sim/text_file.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <functional>
 #include <initializer_list>
 #include <limits>
@@ -329,12 +328,9 @@ ScenarioParseResult parse_scenario_text(const std::string& toml_text, const std:
 }
 
 ScenarioParseResult parse_scenario_file(const std::string& path) {
-  std::error_code ec;
-  std::ifstream in(path, std::ios::binary);
-  if (!in || std::filesystem::is_directory(path, ec)) return {std::nullopt, path + ": cannot open scenario file"};
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_scenario_text(text.str(), path);
+  const std::optional<std::string> text = read_text_file(path);
+  if (!text) return {std::nullopt, path + ": cannot open scenario file"};
+  return parse_scenario_text(*text, path);
 }
 
 }  // namespace sim
