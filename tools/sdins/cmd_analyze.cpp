@@ -21,9 +21,7 @@ using nlohmann::json;
 
 struct Options {
   std::string out = "out/analysis";
-  std::string scenario;
-  double duration_s = -1.0;
-  long long seed = -1;
+  ScenarioOptions scenario;
   double gamma_arcsec = 20.0;
   bool plots = true;
 } opt;
@@ -72,9 +70,7 @@ void register_analyze(CLI::App& app) {
       "misalignment (5 and 10 arcsec), and the bank-to-turn accumulation of the heading error for each of the "
       "six gyro misalignments. Writes CSV, PNG plots, summary.md and analysis.json to --out.");
   sub->add_option("--out", opt.out, "output directory")->capture_default_str();
-  sub->add_option("--scenario", opt.scenario, "scenario TOML file (default: built-in bank-to-turn)");
-  sub->add_option("--duration", opt.duration_s, "override the scenario duration [s]");
-  sub->add_option("--seed", opt.seed, "override the scenario seed");
+  add_scenario_options(sub, opt.scenario);
   sub->add_option("--gamma", opt.gamma_arcsec, "gyro misalignment for the bank-to-turn cases [arcsec]")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 3600.0));
@@ -83,7 +79,7 @@ void register_analyze(CLI::App& app) {
 
 int run_analyze() {
   namespace fs = std::filesystem;
-  const sim::Scenario sc = load_scenario(opt.scenario, opt.duration_s, opt.seed);
+  const sim::Scenario sc = opt.scenario.load();
   const fs::path out(opt.out);
   fs::create_directories(out);
   const double lat = sc.start.lat_deg * kDegToRad;

@@ -13,9 +13,7 @@
 namespace sdins {
 namespace {
 struct Options {
-  std::string scenario;
-  double duration_s = -1.0;
-  long long seed = -1;
+  ScenarioOptions scenario;
   std::string errors;
   std::string csv;
 } opt;
@@ -25,15 +23,13 @@ void register_fly(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "fly", "Free-inertial flight of a scenario: truth simulator -> IMU error model -> fsw 200 Hz mechanization, "
              "no aiding. Prints position/velocity/attitude error against truth every 60 s.");
-  sub->add_option("--scenario", opt.scenario, "scenario TOML file (default: built-in bank-to-turn)");
-  sub->add_option("--duration", opt.duration_s, "override the scenario duration [s]");
-  sub->add_option("--seed", opt.seed, "override the scenario seed");
+  add_scenario_options(sub, opt.scenario);
   sub->add_option("--errors", opt.errors, "override the IMU error set")->check(CLI::IsMember({"paper", "baseline", "none"}));
   sub->add_option("--csv", opt.csv, "write the 1 Hz error history to this CSV file");
 }
 
 int run_fly() {
-  sim::Scenario sc = load_scenario(opt.scenario, opt.duration_s, opt.seed);
+  sim::Scenario sc = opt.scenario.load();
   if (opt.errors == "paper") sc.imu.errors = sim::ImuErrorSet::kPaper;
   if (opt.errors == "baseline") sc.imu.errors = sim::ImuErrorSet::kBaseline;
   if (opt.errors == "none") sc.imu.errors = sim::ImuErrorSet::kNone;

@@ -20,7 +20,7 @@ void register_scenario(CLI::App& app) {
 }
 
 int run_scenario_check() {
-  const sim::Scenario sc = load_scenario(opt.file, -1.0, -1);
+  const sim::Scenario sc = ScenarioOptions{opt.file}.load();
   std::string err;
   auto motion = sim::FlightMotion::create(sc, err);
   if (!motion) throw std::runtime_error(err);

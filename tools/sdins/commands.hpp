@@ -18,9 +18,16 @@ int run_analyze();
 int run_scenario_check();
 int run_fly();
 
-/// Loads --scenario FILE (or the built-in default when empty) and applies --duration/--seed
-/// overrides (negative: keep). Throws std::runtime_error with the parser's message.
-sim::Scenario load_scenario(const std::string& path, double duration_s, long long seed);
+/// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
+struct ScenarioOptions {
+  std::string file;         ///< empty: the built-in bank-to-turn scenario
+  double duration_s = -1.0;  ///< negative: keep the scenario's
+  long long seed = -1;       ///< negative: keep the scenario's
+  /// Loads the file (or the default) and applies the overrides. Throws std::runtime_error with
+  /// the parser's message.
+  sim::Scenario load() const;
+};
+void add_scenario_options(CLI::App* sub, ScenarioOptions& opt);
 
 /// Runs a plotting script with the Python that has matplotlib (SDINS_PYTHON). Returns its exit code.
 int run_plot_script(const std::string& script, const std::string& args);

@@ -1,20 +1,28 @@
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 
 #include "commands.hpp"
 
 namespace sdins {
 
-sim::Scenario load_scenario(const std::string& path, double duration_s, long long seed) {
+sim::Scenario ScenarioOptions::load() const {
   sim::Scenario sc;
-  if (!path.empty()) {
-    sim::ScenarioParseResult r = sim::parse_scenario_file(path);
+  if (!file.empty()) {
+    sim::ScenarioParseResult r = sim::parse_scenario_file(file);
     if (!r.ok()) throw std::runtime_error(r.error);
     sc = *r.scenario;
   }
   if (duration_s > 0.0) sc.duration_s = duration_s;
   if (seed >= 0) sc.seed = static_cast<std::uint64_t>(seed);
   return sc;
+}
+
+void add_scenario_options(CLI::App* sub, ScenarioOptions& opt) {
+  sub->add_option("--scenario", opt.file, "scenario TOML file (default: built-in bank-to-turn)");
+  sub->add_option("--duration", opt.duration_s, "override the scenario duration [s]")->check(CLI::Range(0.001, 86400.0));
+  sub->add_option("--seed", opt.seed, "override the scenario seed")
+      ->check(CLI::Range(0LL, std::numeric_limits<long long>::max()));
 }
 
 int run_plot_script(const std::string& script, const std::string& args) {
