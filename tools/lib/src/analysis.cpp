@@ -101,7 +101,7 @@ BankTurnCase run_bank_turn_case(const sim::Scenario& sc, std::size_t component, 
   run_free_inertial(*motion, &imu, cfg, [&](const sim::TruthSample& truth, const fsw::NavState& nav) {
     const Vec3 phi = fsw::attitude_error_enu(nav.C_b_n(), truth.C_b_n);
     // Equation (7) forcing of phi_U: -(C_b_n M omega_ib_b)_U, integrated at the frame rate.
-    if (truth.phase.turning) forcing_u += -(truth.C_b_n * (e.gyro_misalignment_rad * truth.omega_ib_b_radps)).z() / 200.0;
+    if (truth.phase.turning) forcing_u += -(truth.C_b_n * (e.gyro_misalignment_rad * truth.omega_ib_b_radps)).z() / cfg.nav_rate_hz;
     if (was_turning && !truth.phase.turning) {
       c.turn_end_t_s.push_back(truth.t_s);
       c.turn_end_phi_u_rad.push_back(phi.z());
