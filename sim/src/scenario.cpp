@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <initializer_list>
 #include <limits>
@@ -14,6 +15,8 @@
 #include <utility>
 
 #include <toml++/toml.h>
+
+#include "fsw/gnss.hpp"
 
 namespace sim {
 
@@ -26,6 +29,10 @@ std::vector<Segment> Scenario::default_segments() {
           Segment{.type = SegmentType::kStraight, .duration_s = 30.0}, left,
           Segment{.type = SegmentType::kStraight, .duration_s = 30.0}};
 }
+
+std::string default_almanac_path() { return std::string(SDINS_SHARED_DATA_DIR) + "/almanac/yuma-week431.alm"; }
+
+std::string almanac_path(const GpsConfig& cfg) { return cfg.almanac.empty() ? default_almanac_path() : cfg.almanac; }
 
 namespace {
 
@@ -110,6 +117,7 @@ class Parser {
         {"trajectory", [&](const toml::node& n, const std::string& p) { return trajectory(n, p, s); }},
         {"imu", [&](const toml::node& n, const std::string& p) { return imu(n, p, s.imu); }},
         {"effects", [&](const toml::node& n, const std::string& p) { return effects(n, p, s.effects); }},
+        {"gps", [&](const toml::node& n, const std::string& p) { return gps(n, p, s.gps); }},
     });
   }
 
@@ -148,6 +156,19 @@ class Parser {
 
   Handler number(double& out, Range range) {
     return [this, &out, range](const toml::node& n, const std::string& p) { return read_number(n, p, range, out); };
+  }
+
+  /// An integer key (a float such as 12.0 is rejected) in [lo, hi].
+  Handler integer(int& out, int lo, int hi) {
+    return [this, &out, lo, hi](const toml::node& n, const std::string& p) {
+      const auto* v = n.as_integer();
+      if (!v || v->get() < lo || v->get() > hi) {
+        return fail(n, "'" + p + "' must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]" +
+                           got(n));
+      }
+      out = static_cast<int>(v->get());
+      return true;
+    };
   }
 
   template <typename E>
@@ -271,6 +292,33 @@ class Parser {
     });
   }
 
+  bool gps(const toml::node& n, const std::string& path, GpsConfig& g) {
+    const toml::table* t = table(n, path);
+    return t && fields(*t, path + ".", {
+        {"almanac", [&](const toml::node& node, const std::string& p) {
+           const auto* v = node.as_string();
+           if (!v) return fail(node, "'" + p + "' must be a string (a file path, \"\" for the default)" + got(node));
+           g.almanac = v->get();
+           return true;
+         }},
+        {"start_week", integer(g.start_week, 0, 9999)},
+        {"start_tow_s", number(g.start_tow_s, right_open(0.0, 604800.0))},
+        {"rate_hz", number(g.rate_hz, left_open(0.0, 20.0))},
+        {"elevation_mask_deg", number(g.elevation_mask_deg, right_open(0.0, 90.0))},
+        {"pseudorange_gm_sigma_m", number(g.pseudorange_gm_sigma_m, non_negative())},
+        {"pseudorange_gm_tau_s", number(g.pseudorange_gm_tau_s, positive())},
+        {"pseudorange_rate_gm_sigma_mps", number(g.pseudorange_rate_gm_sigma_mps, non_negative())},
+        {"pseudorange_rate_gm_tau_s", number(g.pseudorange_rate_gm_tau_s, positive())},
+        {"pseudorange_white_sigma_m", number(g.pseudorange_white_sigma_m, non_negative())},
+        {"pseudorange_rate_white_sigma_mps", number(g.pseudorange_rate_white_sigma_mps, non_negative())},
+        {"clock_bias_sigma_m", number(g.clock_bias_sigma_m, non_negative())},
+        {"clock_drift_sigma_mps", number(g.clock_drift_sigma_mps, non_negative())},
+        {"clock_h0", number(g.clock_h0, non_negative())},
+        {"clock_h_minus2", number(g.clock_h_minus2, non_negative())},
+        {"max_channels", integer(g.max_channels, 1, fsw::kMaxGnssChannels)},
+    });
+  }
+
   /// Scalar effects take a number, multi-component effects a table of components (catalogue units).
   bool effects(const toml::node& n, const std::string& path, EffectSet& set) {
     const toml::table* t = table(n, path);
@@ -330,7 +378,19 @@ ScenarioParseResult parse_scenario_text(const std::string& toml_text, const std:
 ScenarioParseResult parse_scenario_file(const std::string& path) {
   const std::optional<std::string> text = read_text_file(path);
   if (!text) return {std::nullopt, path + ": cannot open scenario file"};
-  return parse_scenario_text(*text, path);
+  ScenarioParseResult r = parse_scenario_text(*text, path);
+  if (r.scenario && !r.scenario->gps.almanac.empty()) {
+    try {
+      const std::filesystem::path almanac(r.scenario->gps.almanac);
+      if (almanac.is_relative()) {
+        const std::filesystem::path dir = std::filesystem::absolute(std::filesystem::path(path)).parent_path();
+        r.scenario->gps.almanac = (dir / almanac).lexically_normal().string();
+      }
+    } catch (const std::exception& e) {  // std::filesystem::absolute may throw filesystem_error
+      return {std::nullopt, path + ": cannot resolve 'gps.almanac': " + e.what()};
+    }
+  }
+  return r;
 }
 
 }  // namespace sim

@@ -1,6 +1,8 @@
 // Scenario TOML parser (sim/src/scenario.cpp) and effect helpers (sim/src/effects.cpp).
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "fsw/frames.hpp"
@@ -49,6 +51,24 @@ void expect_same(const Scenario& a, const Scenario& b) {
   EXPECT_EQ(sa.accel_bias_instability_ug, sb.accel_bias_instability_ug);
   EXPECT_EQ(sa.bias_instability_tau_s, sb.bias_instability_tau_s);
   EXPECT_EQ(a.effects.value, b.effects.value);
+  const sim::GpsConfig& ga = a.gps;
+  const sim::GpsConfig& gb = b.gps;
+  EXPECT_EQ(ga.almanac, gb.almanac);
+  EXPECT_EQ(ga.start_week, gb.start_week);
+  EXPECT_EQ(ga.start_tow_s, gb.start_tow_s);
+  EXPECT_EQ(ga.rate_hz, gb.rate_hz);
+  EXPECT_EQ(ga.elevation_mask_deg, gb.elevation_mask_deg);
+  EXPECT_EQ(ga.pseudorange_gm_sigma_m, gb.pseudorange_gm_sigma_m);
+  EXPECT_EQ(ga.pseudorange_gm_tau_s, gb.pseudorange_gm_tau_s);
+  EXPECT_EQ(ga.pseudorange_rate_gm_sigma_mps, gb.pseudorange_rate_gm_sigma_mps);
+  EXPECT_EQ(ga.pseudorange_rate_gm_tau_s, gb.pseudorange_rate_gm_tau_s);
+  EXPECT_EQ(ga.pseudorange_white_sigma_m, gb.pseudorange_white_sigma_m);
+  EXPECT_EQ(ga.pseudorange_rate_white_sigma_mps, gb.pseudorange_rate_white_sigma_mps);
+  EXPECT_EQ(ga.clock_bias_sigma_m, gb.clock_bias_sigma_m);
+  EXPECT_EQ(ga.clock_drift_sigma_mps, gb.clock_drift_sigma_mps);
+  EXPECT_EQ(ga.clock_h0, gb.clock_h0);
+  EXPECT_EQ(ga.clock_h_minus2, gb.clock_h_minus2);
+  EXPECT_EQ(ga.max_channels, gb.max_channels);
 }
 
 Scenario parse_ok(const std::string& text) {
@@ -169,6 +189,69 @@ tropospheric_delay = 1
   expect_same(s, want);
 }
 
+TEST(ScenarioParse, GpsTableRoundTrips) {
+  const Scenario s = parse_ok(R"(
+[gps]
+almanac = "/data/other.alm"
+start_week = 2300
+start_tow_s = 0
+rate_hz = 5
+elevation_mask_deg = 5.5
+pseudorange_gm_sigma_m = 3.0
+pseudorange_gm_tau_s = 120
+pseudorange_rate_gm_sigma_mps = 0.05
+pseudorange_rate_gm_tau_s = 2.5
+pseudorange_white_sigma_m = 0.5
+pseudorange_rate_white_sigma_mps = 0.01
+clock_bias_sigma_m = 0
+clock_drift_sigma_mps = 0.1
+clock_h0 = 9.4e-20
+clock_h_minus2 = 0
+max_channels = 16
+)");
+  Scenario want;
+  want.gps = {.almanac = "/data/other.alm", .start_week = 2300, .start_tow_s = 0.0, .rate_hz = 5.0,
+              .elevation_mask_deg = 5.5, .pseudorange_gm_sigma_m = 3.0, .pseudorange_gm_tau_s = 120.0,
+              .pseudorange_rate_gm_sigma_mps = 0.05, .pseudorange_rate_gm_tau_s = 2.5,
+              .pseudorange_white_sigma_m = 0.5, .pseudorange_rate_white_sigma_mps = 0.01, .clock_bias_sigma_m = 0.0,
+              .clock_drift_sigma_mps = 0.1, .clock_h0 = 9.4e-20, .clock_h_minus2 = 0.0, .max_channels = 16};
+  expect_same(s, want);
+}
+
+TEST(ScenarioParse, GpsDefaultAlmanacIsTheSharedFile) {
+  const Scenario s;
+  EXPECT_EQ(s.gps.almanac, "");
+  EXPECT_EQ(sim::almanac_path(s.gps), std::string(SDINS_SHARED_DATA_DIR) + "/almanac/yuma-week431.alm");
+  EXPECT_EQ(sim::default_almanac_path(), sim::almanac_path(s.gps));
+  sim::GpsConfig other;
+  other.almanac = "/x/y.alm";
+  EXPECT_EQ(sim::almanac_path(other), "/x/y.alm");
+  // Text parsing keeps a relative path as written.
+  EXPECT_EQ(parse_ok("[gps]\nalmanac = \"alm/y.alm\"\n").gps.almanac, "alm/y.alm");
+}
+
+TEST(ScenarioParse, GpsAlmanacRelativeToScenarioFile) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(testing::TempDir()) / "sdins_scenario_almanac_test" / "scenarios";
+  fs::create_directories(dir);
+  const fs::path file = dir / "s.toml";
+  {
+    std::ofstream out(file);
+    out << "[gps]\nalmanac = \"../alm/week.alm\"\n";
+  }
+  sim::ScenarioParseResult r = sim::parse_scenario_file(file.string());
+  ASSERT_TRUE(r.ok()) << r.error;
+  EXPECT_EQ(r.scenario->gps.almanac, (fs::absolute(dir).parent_path() / "alm" / "week.alm").lexically_normal().string());
+  {
+    std::ofstream out(file);
+    out << "[gps]\nalmanac = \"/abs/week.alm\"\n";
+  }
+  r = sim::parse_scenario_file(file.string());
+  ASSERT_TRUE(r.ok()) << r.error;
+  EXPECT_EQ(r.scenario->gps.almanac, "/abs/week.alm");
+  fs::remove_all(dir.parent_path());
+}
+
 TEST(ScenarioParse, SegmentsWithoutRepeatFromDoNotRepeat) {
   const Scenario s = parse_ok("[[trajectory.segment]]\ntype = \"straight\"\n");
   ASSERT_EQ(s.segments.size(), 1u);
@@ -259,6 +342,36 @@ TEST(ScenarioReject, OtherInvalidValues) {
   expect_rejected("[imu]\nbias_instability_tau_s = 0\n", 2, "'imu.bias_instability_tau_s'");
   expect_rejected("start = 5\n", 1, "'start' must be a table");
   expect_rejected("[trajectory]\nsegment = []\n", 2, "'trajectory.segment' must not be empty");
+}
+
+TEST(ScenarioReject, GpsUnknownKey) {
+  expect_rejected("[gps]\nrate_hz = 2\nelevation_mask = 5\n", 3, "unknown key 'gps.elevation_mask'");
+}
+
+TEST(ScenarioReject, GpsBadValues) {
+  std::string e = expect_rejected("[gps]\n\nrate_hz = 25\n", 3, "'gps.rate_hz'");
+  EXPECT_TRUE(contains(e, "must be a number in (0, 20]")) << e;
+  expect_rejected("[gps]\nrate_hz = 0\n", 2, "'gps.rate_hz'");
+  e = expect_rejected("[gps]\nmax_channels = 17\n", 2, "'gps.max_channels'");
+  EXPECT_TRUE(contains(e, "must be an integer in [1, 16]")) << e;
+  expect_rejected("[gps]\nmax_channels = 0\n", 2, "'gps.max_channels'");
+  expect_rejected("[gps]\nmax_channels = 12.0\n", 2, "'gps.max_channels'");
+  expect_rejected("[gps]\nstart_week = 1455.5\n", 2, "'gps.start_week'");
+  expect_rejected("[gps]\nstart_week = -1\n", 2, "'gps.start_week'");
+  expect_rejected("[gps]\nstart_tow_s = 604800\n", 2, "'gps.start_tow_s'");
+  expect_rejected("[gps]\nstart_tow_s = -1\n", 2, "'gps.start_tow_s'");
+  expect_rejected("[gps]\nelevation_mask_deg = 90\n", 2, "'gps.elevation_mask_deg'");
+  expect_rejected("[gps]\nelevation_mask_deg = -5\n", 2, "'gps.elevation_mask_deg'");
+  expect_rejected("[gps]\npseudorange_gm_sigma_m = -1\n", 2, "'gps.pseudorange_gm_sigma_m'");
+  expect_rejected("[gps]\npseudorange_gm_tau_s = 0\n", 2, "'gps.pseudorange_gm_tau_s'");
+  expect_rejected("[gps]\npseudorange_rate_gm_tau_s = -3\n", 2, "'gps.pseudorange_rate_gm_tau_s'");
+  expect_rejected("[gps]\npseudorange_rate_white_sigma_mps = nan\n", 2, "'gps.pseudorange_rate_white_sigma_mps'");
+  expect_rejected("[gps]\nclock_h0 = -2e-19\n", 2, "'gps.clock_h0'");
+  expect_rejected("[gps]\nclock_h_minus2 = inf\n", 2, "'gps.clock_h_minus2'");
+  expect_rejected("[gps]\nclock_bias_sigma_m = \"30\"\n", 2, "'gps.clock_bias_sigma_m'");
+  e = expect_rejected("[gps]\nalmanac = 5\n", 2, "'gps.almanac'");
+  EXPECT_TRUE(contains(e, "must be a string")) << e;
+  expect_rejected("gps = 1\n", 1, "'gps' must be a table");
 }
 
 TEST(ScenarioReject, UnknownEffect) {

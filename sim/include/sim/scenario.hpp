@@ -63,6 +63,35 @@ struct ImuConfig {
   ImuErrorSigmas sigmas{};
 };
 
+/// The simulated GPS receiver (sim/gps_model.hpp): constellation, time, measurement errors.
+/// Clock: two-state random process (bias b [m], drift d [m/s]) driven by white noise of PSD
+/// S_bias = h0/2 c^2 [m^2/s] and S_drift = 2 pi^2 h_-2 c^2 [m^2/s^3] (Allan-variance coefficients).
+struct GpsConfig {
+  /// YUMA almanac path; empty: default_almanac_path(). parse_scenario_file() makes a relative path
+  /// absolute against the scenario file's directory; use almanac_path() to get the file to read.
+  std::string almanac;
+  int start_week = 1455;             ///< full GPS week at scenario t = 0 (week 431 mod 1024 of the default almanac)
+  double start_tow_s = 589824.0;     ///< GPS seconds of week at scenario t = 0 (the default almanac's toa)
+  double rate_hz = 1.0;              ///< measurement epochs at t = k / rate_hz, (0, 20]
+  double elevation_mask_deg = 10.0;  ///< satellites below are not tracked, [0, 90)
+  double pseudorange_gm_sigma_m = 8.0;          ///< first-order Gauss-Markov error per satellite, 1-sigma
+  double pseudorange_gm_tau_s = 60.0;           ///< its correlation time, > 0
+  double pseudorange_rate_gm_sigma_mps = 0.2;   ///< first-order Gauss-Markov error per satellite, 1-sigma
+  double pseudorange_rate_gm_tau_s = 10.0;      ///< its correlation time, > 0
+  double pseudorange_white_sigma_m = 0.0;       ///< white noise per epoch, 1-sigma
+  double pseudorange_rate_white_sigma_mps = 0.0;
+  double clock_bias_sigma_m = 30.0;             ///< initial receiver clock bias (c * dt), 1-sigma
+  double clock_drift_sigma_mps = 1.0;           ///< initial receiver clock drift (c * ddt), 1-sigma
+  double clock_h0 = 2e-19;                      ///< white-frequency coefficient h0 [s] (TCXO)
+  double clock_h_minus2 = 2e-20;                ///< random-walk-frequency coefficient h_-2 [1/s] (TCXO)
+  int max_channels = 12;  ///< [1, fsw::kMaxGnssChannels]; the highest satellites are kept when more are visible
+};
+
+/// The almanac shipped with the project: "<SDINS_SHARED_DATA_DIR>/almanac/yuma-week431.alm".
+std::string default_almanac_path();
+/// The almanac file a GpsConfig names: cfg.almanac, or default_almanac_path() when it is empty.
+std::string almanac_path(const GpsConfig& cfg);
+
 struct Scenario {
   std::string name = "bank-to-turn";
   double duration_s = 1800.0;
@@ -75,6 +104,7 @@ struct Scenario {
   ImuConfig imu{};
   /// Truth-side effects switched on at fixed values on top of the drawn errors.
   EffectSet effects{};
+  GpsConfig gps{};
 
   /// Default flight: 60 s straight, then alternating 180-degree right and left 60-degree bank
   /// turns with 30 s straights between them, repeated for the whole 1800 s.
@@ -88,7 +118,9 @@ struct ScenarioParseResult {
   bool ok() const { return scenario.has_value(); }
 };
 
+/// gps.almanac is kept as written (a relative path is then relative to the working directory).
 ScenarioParseResult parse_scenario_text(const std::string& toml_text, const std::string& source_name);
+/// As parse_scenario_text; a relative gps.almanac is resolved against the file's directory.
 ScenarioParseResult parse_scenario_file(const std::string& path);
 
 }  // namespace sim
