@@ -1,0 +1,174 @@
+// Error-state extended Kalman filter, tightly coupled to GPS pseudorange and pseudorange rate
+// (1 Hz task). One implementation for every model: Ekf<Layout15>, Ekf<Layout24>, and the
+// extended layouts of the diagnosis (error_state.hpp defines the states and their signs).
+//
+// PROPAGATION (linearised SDINS error model, ENU, frames.hpp conventions)
+//   d(dp)/dt  = dv
+//   d(dv)/dt  = f_n x phi + C_b_n df_b - (2 w_ie + w_en) x dv + v x (2 dw_ie + dw_en) + dg
+//   d(phi)/dt = -w_in x phi + dw_in - C_b_n dw_ib_b
+//   df_b = db_a + (dSF_a + dM_a) f_b,    dw_ib_b = db_g + (dSF_g + dM_g) w_ib_b
+// dw_ie, dw_en: the rate errors caused by the position (latitude) and velocity errors; dg the
+// normal-gravity error of the height error (+2 g / R dh Up). The misalignment and scale-factor
+// columns are driven by the measured angular rate and specific force, as in the paper's
+// equations (6), (7), (10) and (11): the gyro misalignment gamma_ij enters phi through
+// -C_b_n(:, i) * w_j. The filter integrates these columns from every 200 Hz frame (the
+// accumulate() call) and forms the transition matrix of the navigation block in sub-steps
+// (propagation_substep_frames frames each, second order), so the 1 Hz transition matrix sees the
+// turn's rates and attitudes as they were, not their 1 s average. Every non-navigation block is a
+// random constant or random walk; the clock is a two-state (bias, drift) random process.
+// Q: Qd = 0.5 (Phi Qc Phi^T + Qc) T per interval; the clock's Qd is exact.
+//
+// MEASUREMENTS (sequential scalar updates, Joseph form, symmetry enforced)
+//   y = z_hat - z = H dx + noise,  z_hat from gnss_geometry() at the antenna (lever arm) with the
+//   clock estimate; pseudorange H: position -e_n^T, attitude -e_n^T [(C_b_n l) x], clock bias 1;
+//   pseudorange rate H: velocity -e_n^T, clock drift 1 (e_n: unit line of sight receiver ->
+//   satellite in ENU). Every scalar is gated: (y - H dx)^2 / (H P H^T + R) > gate_chi2 rejects it
+//   (counted). The INS solution at the frame closest to the epoch is extrapolated to the epoch's
+//   time tag with its velocity.
+//
+// TIME-CORRELATED MEASUREMENT ERRORS (layouts with kRangeError / kRangeRateError): each tracked
+//   satellite is bound to a channel; the channel's first-order Gauss-Markov error is a state
+//   (H = 1), propagated with a = exp(-T / tau) and Qd = sigma^2 (1 - a^2). A newly tracked
+//   satellite takes a free channel, whose state restarts at zero with variance sigma^2 and no
+//   correlation; a satellite that is not in the epoch releases its channel.
+//
+// FEEDBACK (closed loop): after each epoch the estimate is removed from the navigation solution
+// (Strapdown::correct) and added to the IMU compensation, and the error state is reset to zero.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+
+#include "fsw/error_state.hpp"
+#include "fsw/frames.hpp"
+#include "fsw/gnss.hpp"
+#include "fsw/imu_compensation.hpp"
+#include "fsw/status.hpp"
+#include "fsw/strapdown.hpp"
+
+namespace fsw {
+
+struct EkfConfig {
+  // Initial 1-sigma uncertainty of each block (used when the layout has it).
+  double pos_sigma_m = 10.0;
+  double vel_sigma_mps = 0.5;
+  Vec3 att_sigma_rad = Vec3::Constant(100.0 * kArcsecToRad);  ///< phi_E, phi_N, phi_U
+  double accel_bias_sigma_mps2 = 100.0 * kMicroG_mps2;
+  double gyro_bias_sigma_radps = 0.01 * kDegPerHourToRadps;
+  double accel_misalign_sigma_rad = 5.0 * kArcsecToRad;
+  double gyro_misalign_sigma_rad = 5.0 * kArcsecToRad;
+  double accel_scale_sigma = 100e-6;
+  double gyro_scale_sigma = 100e-6;
+  double clock_bias_sigma_m = 30.0;
+  double clock_drift_sigma_mps = 1.0;
+
+  // Process noise (continuous-time spectral densities, square roots).
+  double vrw_mps_per_rts = 1e-4;           ///< velocity random walk
+  double arw_rad_per_rts = 1e-7;           ///< angle random walk
+  double accel_bias_rw_mps2_per_rts = 0.0; ///< bias random walk (0: random constant)
+  double gyro_bias_rw_radps_per_rts = 0.0;
+  double clock_bias_psd_m2ps = 0.0;        ///< S_b  (h0/2 c^2)
+  double clock_drift_psd_m2ps3 = 0.0;      ///< S_d  (2 pi^2 h_-2 c^2)
+
+  // Measurements. With the channel error blocks (Layout15Full/24Gm) these are the white part only.
+  double pseudorange_sigma_m = 8.0;
+  double pseudorange_rate_sigma_mps = 0.2;
+  // Time-correlated (first-order Gauss-Markov) channel errors, for layouts with kRangeError /
+  // kRangeRateError: 1-sigma and correlation time.
+  double range_gm_sigma_m = 8.0;
+  double range_gm_tau_s = 60.0;
+  double range_rate_gm_sigma_mps = 0.2;
+  double range_rate_gm_tau_s = 10.0;
+  bool use_pseudorange_rate = true;
+  double gate_chi2 = 10.83;  ///< 1 degree of freedom, P(reject | good) = 0.001
+  Vec3 lever_arm_b_m = Vec3::Zero();  ///< IMU reference point -> GNSS antenna, body axes
+
+  int propagation_substep_frames = 10;  ///< navigation frames per transition-matrix sub-step
+};
+
+/// What one measurement update did.
+struct EkfUpdateReport {
+  int pr_used = 0;
+  int prr_used = 0;
+  int pr_rejected = 0;   ///< failed the innovation gate
+  int prr_rejected = 0;
+  int obs_invalid = 0;   ///< non-finite or implausible observation data, not used
+  int obs_no_channel = 0;  ///< more satellites than error-state channels: used with the white model
+  bool clock_initialised = false;  ///< this epoch set the clock estimate from the measurements
+};
+
+template <class Layout>
+class Ekf {
+  static_assert(kNavigationBlocksLead<Layout>, "position, velocity, attitude must be the first blocks");
+  static_assert(Layout::has(Block::kClock), "tight coupling needs the receiver clock states");
+
+ public:
+  static constexpr int N = Layout::kSize;
+  static constexpr int kNs = N - 9;
+  using Vec = Eigen::Matrix<double, N, 1>;
+  using Mat = Eigen::Matrix<double, N, N>;
+  using RowVec = Eigen::Matrix<double, 1, N>;
+
+  Status init(const EkfConfig& cfg);
+
+  /// 200 Hz: one navigation frame after the mechanization step. inc holds the compensated
+  /// increments of the frame, nav the solution at its end.
+  Status accumulate(const FrameIncrement& inc, const NavState& nav);
+
+  /// 1 Hz: P = Phi P Phi^T + Q over the frames accumulated since the last call.
+  Status propagate();
+
+  /// Measurement update with one epoch. nav: the INS solution at the frame closest to the epoch;
+  /// omega_ib_b: body rate of that frame (for the lever-arm velocity).
+  Status update(const GnssEpoch& epoch, const NavState& nav, const Vec3& omega_ib_b_radps, EkfUpdateReport& report);
+
+  /// Applies the estimate to the solution and the IMU compensation and resets it to zero.
+  Status feedback(Strapdown& ins, ImuCompensation& comp);
+
+  const Vec& x() const { return x_; }
+  const Mat& P() const { return P_; }
+  /// Transition matrix of the interval closed by the last propagate().
+  const Mat& last_transition() const { return last_Phi_; }
+  double clock_bias_m() const { return clock_bias_m_; }
+  double clock_drift_mps() const { return clock_drift_mps_; }
+  bool clock_initialised() const { return clock_initialised_; }
+  /// PRN bound to each measurement-error channel (0: free); only for layouts with kRangeError.
+  const std::array<std::uint8_t, kGnssErrorChannels>& channel_prn() const { return slot_prn_; }
+  const EkfConfig& config() const { return cfg_; }
+
+ private:
+  void flush_substep(const NavState& nav);
+  bool scalar_update(const RowVec& h, double y, double r);
+  int bind_channel(std::uint8_t prn);
+  void reset_channel_state(int state, double sigma);
+
+  EkfConfig cfg_{};
+  bool initialised_ = false;
+  Vec x_ = Vec::Zero();
+  Mat P_ = Mat::Zero();
+  Mat Phi_ = Mat::Identity();  ///< transition since the last propagate()
+  Mat last_Phi_ = Mat::Identity();
+  double interval_s_ = 0.0;    ///< time covered by Phi_
+  // Sub-step sums.
+  int sub_frames_ = 0;
+  double sub_T_ = 0.0;
+  Mat3 sum_C_dt_ = Mat3::Zero();                          ///< sum C_b_n dt
+  Vec3 sum_dv_n_ = Vec3::Zero();                          ///< sum C_b_n dv (f_n dt)
+  Eigen::Matrix<double, 3, 9> sum_C_dv_ = Eigen::Matrix<double, 3, 9>::Zero();   ///< col 3i+j: sum C(:,i) dv_j
+  Eigen::Matrix<double, 3, 9> sum_C_dth_ = Eigen::Matrix<double, 3, 9>::Zero();  ///< col 3i+j: sum C(:,i) dtheta_j
+  NavState last_nav_{};
+  double clock_bias_m_ = 0.0;
+  double clock_drift_mps_ = 0.0;
+  bool clock_initialised_ = false;
+  std::array<std::uint8_t, kGnssErrorChannels> slot_prn_{};
+  Eigen::Matrix<double, kGnssErrorChannels, 1> range_err_hat_ = Eigen::Matrix<double, kGnssErrorChannels, 1>::Zero();
+  Eigen::Matrix<double, kGnssErrorChannels, 1> rate_err_hat_ = Eigen::Matrix<double, kGnssErrorChannels, 1>::Zero();
+};
+
+extern template class Ekf<Layout15>;
+extern template class Ekf<Layout24>;
+extern template class Ekf<Layout15Full>;
+extern template class Ekf<Layout24Full>;
+
+}  // namespace fsw

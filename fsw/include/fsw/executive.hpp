@@ -1,0 +1,111 @@
+// The rate-group executive of the flight software: one minor frame per call of tick().
+//
+//   200 Hz rate group: IMU compensation -> coning/sculling frame builder -> strapdown step ->
+//                      EKF accumulation (the transition-matrix integrals)
+//   1 Hz rate group:   EKF propagate -> measurement update with the GNSS epoch -> feedback
+//
+// The 1 Hz group runs inside the minor frame in which it falls due, after the 200 Hz group (the
+// order of a rate-monotonic schedule on one core): it is due every frames_per_ekf navigation frames
+// and runs as soon as a GNSS epoch whose time tag lies within max_gnss_age_s of the INS time is
+// available; if none arrives within gnss_wait_frames frames after it fell due, it propagates
+// without a measurement (counted). The measurement is aligned to the INS time tag: the solution
+// is extrapolated from the frame end to the epoch's time with the frame's velocity and
+// acceleration.
+//
+// Everything arrives through FrameInput and leaves through FrameOutput and Health: no clocks, no
+// I/O, no allocation; the same inputs give bit-identical outputs. Frame overruns are measured by
+// the caller (HAL), which passes the previous tick's execution time in.
+#pragma once
+
+#include <cstdint>
+
+#include "fsw/ekf.hpp"
+#include "fsw/gnss.hpp"
+#include "fsw/imu_compensation.hpp"
+#include "fsw/status.hpp"
+#include "fsw/strapdown.hpp"
+
+namespace fsw {
+
+struct ExecutiveConfig {
+  int imu_samples_per_frame = 5;    ///< IMU rate / navigation rate (1000 / 200)
+  double nav_rate_hz = 200.0;
+  int frames_per_ekf = 200;         ///< 200 Hz / 1 Hz
+  int gnss_wait_frames = 40;        ///< how long a due EKF step waits for its epoch (0.2 s)
+  double max_gnss_age_s = 0.25;     ///< epochs older than this at use are stale
+  double frame_budget_s = 0.005;    ///< a tick that took longer is an overrun
+  EkfConfig ekf{};
+};
+
+/// Health counters, F Prime style telemetry rather than asserts.
+struct ExecutiveHealth {
+  std::uint32_t ticks = 0;
+  std::uint32_t nav_frames = 0;
+  std::uint32_t ekf_runs = 0;
+  std::uint32_t ekf_updates = 0;         ///< EKF runs with a measurement update
+  std::uint32_t ekf_without_gnss = 0;    ///< EKF runs that had to propagate only
+  std::uint32_t imu_samples = 0;
+  std::uint32_t imu_rejected = 0;        ///< non-finite or non-positive dt samples, not used
+  std::uint32_t imu_short_ticks = 0;     ///< ticks with fewer samples than imu_samples_per_frame
+  std::uint32_t imu_time_gaps = 0;       ///< consecutive samples further apart than 1.5 dt
+  std::uint32_t gnss_epochs = 0;         ///< received
+  std::uint32_t gnss_stale = 0;          ///< too old when the EKF could use them
+  std::uint32_t gnss_replaced = 0;       ///< overwritten by a newer epoch before use
+  std::uint32_t gnss_invalid = 0;        ///< malformed epochs (n_obs out of range, non-finite time)
+  std::uint32_t pr_used = 0, prr_used = 0, pr_rejected = 0, prr_rejected = 0, obs_invalid = 0;
+  std::uint32_t overruns = 0;
+  double worst_tick_s = 0.0;
+  std::uint32_t fsw_errors = 0;          ///< fsw calls that returned an unexpected status
+};
+
+struct FrameInput {
+  const ImuSample* imu = nullptr;  ///< the raw IMU samples that arrived during this minor frame
+  int n_imu = 0;
+  const GnssEpoch* gnss = nullptr;  ///< an epoch that arrived during this frame, or nullptr
+  double prev_tick_exec_s = -1.0;   ///< measured execution time of the previous tick (< 0: unknown)
+};
+
+struct FrameOutput {
+  bool nav_valid = false;     ///< a navigation frame completed in this tick
+  NavState nav{};             ///< solution at the end of the last completed frame (after feedback)
+  bool ekf_ran = false;
+  bool ekf_updated = false;
+  EkfUpdateReport report{};
+};
+
+template <class Layout>
+class Executive {
+ public:
+  Status init(const ExecutiveConfig& cfg, const NavState& initial);
+  Status tick(const FrameInput& in, FrameOutput& out);
+
+  const ExecutiveHealth& health() const { return health_; }
+  const Ekf<Layout>& ekf() const { return ekf_; }
+  const Strapdown& ins() const { return ins_; }
+  const ImuCompensation& compensation() const { return comp_; }
+  const ExecutiveConfig& config() const { return cfg_; }
+
+ private:
+  void run_ekf(FrameOutput& out);
+
+  ExecutiveConfig cfg_{};
+  bool initialised_ = false;
+  FrameBuilder builder_{};
+  Strapdown ins_{};
+  ImuCompensation comp_{};
+  Ekf<Layout> ekf_{};
+  ExecutiveHealth health_{};
+  GnssEpoch pending_{};
+  bool have_pending_ = false;
+  int frames_since_ekf_ = 0;
+  bool have_last_sample_ = false;
+  double last_sample_t_s_ = 0.0;
+  Vec3 last_accel_n_mps2_ = Vec3::Zero();
+};
+
+extern template class Executive<Layout15>;
+extern template class Executive<Layout24>;
+extern template class Executive<Layout15Full>;
+extern template class Executive<Layout24Full>;
+
+}  // namespace fsw

@@ -1,0 +1,431 @@
+#include "fsw/ekf.hpp"
+
+#include <cmath>
+
+#include "fsw/effect_catalogue.hpp"
+
+namespace fsw {
+namespace {
+
+bool finite3(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+using Mat9 = Eigen::Matrix<double, 9, 9>;
+
+/// Navigation-block dynamics matrix (9 x 9) at the given solution and mean specific force.
+Mat9 navigation_dynamics(const NavState& nav, const Vec3& f_n_mps2) {
+  const double lat = nav.llh.x(), h = nav.llh.z();
+  const double rm = meridian_radius_m(lat) + h;
+  const double rn = normal_radius_m(lat) + h;
+  const double tl = std::tan(lat), cl = std::cos(lat), sl = std::sin(lat);
+  const Vec3& v = nav.vel_enu_mps;
+  const double we = wgs84::omega_ie_radps;
+  const Vec3 w_ie = omega_ie_n(lat);
+  const Vec3 w_en = omega_en_n(lat, h, v);
+
+  // Rate errors: d(w_in) = Mv dv + (Mp_ie + Mp_en) dp; only the latitude (North) error matters.
+  Mat3 Mv = Mat3::Zero();
+  Mv(0, 1) = -1.0 / rm;
+  Mv(1, 0) = 1.0 / rn;
+  Mv(2, 0) = tl / rn;
+  Mat3 Mp_ie = Mat3::Zero();
+  Mp_ie(1, 1) = -we * sl / rm;
+  Mp_ie(2, 1) = we * cl / rm;
+  Mat3 Mp_en = Mat3::Zero();
+  Mp_en(2, 1) = v.x() / (rn * cl * cl * rm);
+  Mp_en(0, 2) = v.y() / (rm * rm);
+  Mp_en(1, 2) = -v.x() / (rn * rn);
+  Mp_en(2, 2) = -v.x() * tl / (rn * rn);
+
+  const double g = normal_gravity_mps2(lat, h);
+  Mat9 F = Mat9::Zero();
+  F.block<3, 3>(0, 3) = Mat3::Identity();
+  F.block<3, 3>(3, 0) = skew(v) * (2.0 * Mp_ie + Mp_en);
+  F(5, 2) += 2.0 * g / (rm > rn ? rm : rn);
+  F.block<3, 3>(3, 3) = skew(v) * Mv - skew(2.0 * w_ie + w_en);
+  F.block<3, 3>(3, 6) = skew(f_n_mps2);
+  F.block<3, 3>(6, 0) = Mp_ie + Mp_en;
+  F.block<3, 3>(6, 3) = Mv;
+  F.block<3, 3>(6, 6) = -skew(w_ie + w_en);
+  return F;
+}
+
+}  // namespace
+
+template <class Layout>
+Status Ekf<Layout>::init(const EkfConfig& cfg) {
+  if (cfg.propagation_substep_frames < 1 || !(cfg.pseudorange_sigma_m > 0.0) ||
+      !(cfg.pseudorange_rate_sigma_mps > 0.0) || !(cfg.gate_chi2 > 0.0) || !finite3(cfg.att_sigma_rad) ||
+      !finite3(cfg.lever_arm_b_m))
+    return Status::kBadConfig;
+  cfg_ = cfg;
+  x_.setZero();
+  Vec sig = Vec::Zero();
+  sig.template segment<3>(0).setConstant(cfg.pos_sigma_m);
+  sig.template segment<3>(3).setConstant(cfg.vel_sigma_mps);
+  sig.template segment<3>(6) = cfg.att_sigma_rad;
+  auto fill = [&sig](Block b, double s) {
+    const int o = Layout::offset(b);
+    if (o >= 0)
+      for (int k = 0; k < block_size(b); ++k) sig(o + k) = s;
+  };
+  fill(Block::kAccelBias, cfg.accel_bias_sigma_mps2);
+  fill(Block::kGyroBias, cfg.gyro_bias_sigma_radps);
+  fill(Block::kAccelMisalign, cfg.accel_misalign_sigma_rad);
+  fill(Block::kGyroMisalign, cfg.gyro_misalign_sigma_rad);
+  fill(Block::kAccelScale, cfg.accel_scale_sigma);
+  fill(Block::kGyroScale, cfg.gyro_scale_sigma);
+  fill(Block::kRangeError, cfg.range_gm_sigma_m);
+  fill(Block::kRangeRateError, cfg.range_rate_gm_sigma_mps);
+  if ((Layout::has(Block::kRangeError) && !(cfg.range_gm_tau_s > 0.0)) ||
+      (Layout::has(Block::kRangeRateError) && !(cfg.range_rate_gm_tau_s > 0.0)))
+    return Status::kBadConfig;
+  const int oc = Layout::offset(Block::kClock);
+  sig(oc) = cfg.clock_bias_sigma_m;
+  sig(oc + 1) = cfg.clock_drift_sigma_mps;
+  if (!sig.allFinite() || (sig.array() < 0.0).any()) return Status::kBadConfig;
+  P_ = sig.array().square().matrix().asDiagonal();
+  Phi_.setIdentity();
+  interval_s_ = 0.0;
+  sub_frames_ = 0;
+  sub_T_ = 0.0;
+  clock_bias_m_ = 0.0;
+  clock_drift_mps_ = 0.0;
+  clock_initialised_ = false;
+  slot_prn_.fill(0);
+  range_err_hat_.setZero();
+  rate_err_hat_.setZero();
+  initialised_ = true;
+  return Status::kOk;
+}
+
+template <class Layout>
+Status Ekf<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
+  if (!initialised_) return Status::kNotInitialised;
+  if (!(inc.dt_s > 0.0) || !finite3(inc.dv_sum_mps) || !finite3(inc.dtheta_sum_rad)) return Status::kBadInput;
+  const Mat3 C = nav.C_b_n();
+  sum_C_dt_ += C * inc.dt_s;
+  sum_dv_n_ += C * inc.dv_sum_mps;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      sum_C_dv_.col(3 * i + j) += C.col(i) * inc.dv_sum_mps(j);
+      sum_C_dth_.col(3 * i + j) += C.col(i) * inc.dtheta_sum_rad(j);
+    }
+  sub_T_ += inc.dt_s;
+  last_nav_ = nav;
+  if (++sub_frames_ >= cfg_.propagation_substep_frames) flush_substep(nav);
+  return Status::kOk;
+}
+
+template <class Layout>
+void Ekf<Layout>::flush_substep(const NavState& nav) {
+  if (sub_frames_ == 0) return;
+  const double T = sub_T_;
+  const Mat9 FT = navigation_dynamics(nav, sum_dv_n_ / T) * T;
+  Mat9 A = Mat9::Identity() + FT;
+  A.noalias() += 0.5 * FT * FT;
+
+  // Integrated sensor-error columns of the navigation rows.
+  Eigen::Matrix<double, 9, N> B = Eigen::Matrix<double, 9, N>::Zero();
+  if constexpr (Layout::has(Block::kAccelBias)) B.template block<3, 3>(3, Layout::offset(Block::kAccelBias)) = sum_C_dt_;
+  if constexpr (Layout::has(Block::kGyroBias)) B.template block<3, 3>(6, Layout::offset(Block::kGyroBias)) = -sum_C_dt_;
+  if constexpr (Layout::has(Block::kAccelMisalign)) {
+    constexpr int o = Layout::offset(Block::kAccelMisalign);
+    for (int k = 0; k < 3; ++k) {
+      const AxisPair ax = kAccelMisalignmentAxes[k];
+      B.template block<3, 1>(3, o + k) = sum_C_dv_.col(3 * ax.i + ax.j);
+    }
+  }
+  if constexpr (Layout::has(Block::kGyroMisalign)) {
+    constexpr int o = Layout::offset(Block::kGyroMisalign);
+    for (int k = 0; k < 6; ++k) {
+      const AxisPair ax = kGyroMisalignmentAxes[k];
+      B.template block<3, 1>(6, o + k) = -sum_C_dth_.col(3 * ax.i + ax.j);
+    }
+  }
+  if constexpr (Layout::has(Block::kAccelScale)) {
+    constexpr int o = Layout::offset(Block::kAccelScale);
+    for (int i = 0; i < 3; ++i) B.template block<3, 1>(3, o + i) = sum_C_dv_.col(4 * i);
+  }
+  if constexpr (Layout::has(Block::kGyroScale)) {
+    constexpr int o = Layout::offset(Block::kGyroScale);
+    for (int i = 0; i < 3; ++i) B.template block<3, 1>(6, o + i) = -sum_C_dth_.col(4 * i);
+  }
+  // Second order: the forcing integrated over the sub-step is carried on by half its dynamics.
+  const Mat9 half = Mat9::Identity() + 0.5 * FT;
+  Eigen::Matrix<double, 9, N> top;
+  top.noalias() = A.lazyProduct(Phi_.template topRows<9>());
+  top.noalias() += half.lazyProduct(B);
+  Phi_.template topRows<9>() = top;
+
+  interval_s_ += T;
+  sub_frames_ = 0;
+  sub_T_ = 0.0;
+  sum_C_dt_.setZero();
+  sum_dv_n_.setZero();
+  sum_C_dv_.setZero();
+  sum_C_dth_.setZero();
+}
+
+template <class Layout>
+Status Ekf<Layout>::propagate() {
+  if (!initialised_) return Status::kNotInitialised;
+  flush_substep(last_nav_);
+  const double T = interval_s_;
+  if (!(T > 0.0)) return Status::kOk;
+  constexpr int oc = Layout::offset(Block::kClock);
+  Phi_(oc, oc + 1) = T;  // the nav rows never touch the clock, whose block is still identity
+  double a_range = 1.0, a_rate = 1.0;
+  if constexpr (Layout::has(Block::kRangeError)) {
+    a_range = std::exp(-T / cfg_.range_gm_tau_s);
+    for (int k = 0; k < kGnssErrorChannels; ++k) Phi_(Layout::offset(Block::kRangeError) + k, Layout::offset(Block::kRangeError) + k) = a_range;
+  }
+  if constexpr (Layout::has(Block::kRangeRateError)) {
+    a_rate = std::exp(-T / cfg_.range_rate_gm_tau_s);
+    for (int k = 0; k < kGnssErrorChannels; ++k)
+      Phi_(Layout::offset(Block::kRangeRateError) + k, Layout::offset(Block::kRangeRateError) + k) = a_rate;
+  }
+
+  Vec qc = Vec::Zero();
+  qc.template segment<3>(3).setConstant(cfg_.vrw_mps_per_rts * cfg_.vrw_mps_per_rts);
+  qc.template segment<3>(6).setConstant(cfg_.arw_rad_per_rts * cfg_.arw_rad_per_rts);
+  if constexpr (Layout::has(Block::kAccelBias))
+    qc.template segment<3>(Layout::offset(Block::kAccelBias))
+        .setConstant(cfg_.accel_bias_rw_mps2_per_rts * cfg_.accel_bias_rw_mps2_per_rts);
+  if constexpr (Layout::has(Block::kGyroBias))
+    qc.template segment<3>(Layout::offset(Block::kGyroBias))
+        .setConstant(cfg_.gyro_bias_rw_radps_per_rts * cfg_.gyro_bias_rw_radps_per_rts);
+  Mat PhiQ;
+  PhiQ.noalias() = Phi_ * qc.asDiagonal();
+  Mat Q;
+  Q.noalias() = PhiQ.lazyProduct(Phi_.transpose());
+  Q.diagonal() += qc;
+  Q *= 0.5 * T;
+  const double Sb = cfg_.clock_bias_psd_m2ps, Sd = cfg_.clock_drift_psd_m2ps3;
+  Q(oc, oc) = Sb * T + Sd * T * T * T / 3.0;
+  Q(oc, oc + 1) = Q(oc + 1, oc) = Sd * T * T / 2.0;
+  Q(oc + 1, oc + 1) = Sd * T;
+  if constexpr (Layout::has(Block::kRangeError)) {
+    const double q = cfg_.range_gm_sigma_m * cfg_.range_gm_sigma_m * (1.0 - a_range * a_range);
+    for (int k = 0; k < kGnssErrorChannels; ++k) Q(Layout::offset(Block::kRangeError) + k, Layout::offset(Block::kRangeError) + k) = q;
+    range_err_hat_ *= a_range;
+  }
+  if constexpr (Layout::has(Block::kRangeRateError)) {
+    const double q = cfg_.range_rate_gm_sigma_mps * cfg_.range_rate_gm_sigma_mps * (1.0 - a_rate * a_rate);
+    for (int k = 0; k < kGnssErrorChannels; ++k)
+      Q(Layout::offset(Block::kRangeRateError) + k, Layout::offset(Block::kRangeRateError) + k) = q;
+    rate_err_hat_ *= a_rate;
+  }
+
+  Mat PPhiT;
+  PPhiT.noalias() = P_.lazyProduct(Phi_.transpose());
+  P_.noalias() = Phi_.lazyProduct(PPhiT);
+  P_ += Q;
+  P_ = 0.5 * (P_ + P_.transpose()).eval();
+  x_ = (Phi_ * x_).eval();
+  clock_bias_m_ += clock_drift_mps_ * T;
+  last_Phi_ = Phi_;
+  Phi_.setIdentity();
+  interval_s_ = 0.0;
+  return Status::kOk;
+}
+
+template <class Layout>
+bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r) {
+  Vec s;
+  s.noalias() = P_ * h.transpose();
+  const double S = h.dot(s) + r;
+  const double nu = y - h.dot(x_);
+  if (!(S > 0.0) || !(nu * nu <= cfg_.gate_chi2 * S)) return false;
+  Vec K = s / S;
+  // Consider states get no gain; the Joseph form below stays exact for this suboptimal gain.
+  for (int b = 0; b < Layout::kNumBlocks; ++b) {
+    const Block blk = Layout::kBlocks[b];
+    if (Layout::is_consider(blk)) K.segment(Layout::offset(blk), block_size(blk)).setZero();
+  }
+  x_ += K * nu;
+  // Joseph form (I - K h) P (I - K h)^T + K r K^T, expanded for a scalar measurement.
+  P_.noalias() -= K * s.transpose();
+  P_.noalias() -= s * K.transpose();
+  P_.noalias() += (S * K) * K.transpose();
+  return true;
+}
+
+template <class Layout>
+void Ekf<Layout>::reset_channel_state(int state, double sigma) {
+  x_(state) = 0.0;
+  P_.row(state).setZero();
+  P_.col(state).setZero();
+  P_(state, state) = sigma * sigma;
+}
+
+template <class Layout>
+int Ekf<Layout>::bind_channel(std::uint8_t prn) {
+  if constexpr (!Layout::has(Block::kRangeError) && !Layout::has(Block::kRangeRateError)) {
+    (void)prn;
+    return -1;
+  } else {
+    for (int s = 0; s < kGnssErrorChannels; ++s)
+      if (slot_prn_[s] == prn) return s;
+    for (int s = 0; s < kGnssErrorChannels; ++s) {
+      if (slot_prn_[s] != 0) continue;
+      slot_prn_[s] = prn;
+      if constexpr (Layout::has(Block::kRangeError)) {
+        reset_channel_state(Layout::offset(Block::kRangeError) + s, cfg_.range_gm_sigma_m);
+        range_err_hat_(s) = 0.0;
+      }
+      if constexpr (Layout::has(Block::kRangeRateError)) {
+        reset_channel_state(Layout::offset(Block::kRangeRateError) + s, cfg_.range_rate_gm_sigma_mps);
+        rate_err_hat_(s) = 0.0;
+      }
+      return s;
+    }
+    return -1;
+  }
+}
+
+template <class Layout>
+Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Vec3& omega_ib_b_radps,
+                           EkfUpdateReport& report) {
+  report = EkfUpdateReport{};
+  if (!initialised_) return Status::kNotInitialised;
+  if (epoch.n_obs < 0 || epoch.n_obs > kMaxGnssChannels || !std::isfinite(epoch.t_s) || !finite3(omega_ib_b_radps))
+    return Status::kBadInput;
+  const double lat = nav.llh.x(), lon = nav.llh.y();
+  const Mat3 Cne = C_n_e(lat, lon);
+  const Mat3 C = nav.C_b_n();
+  const Vec3 l_n = C * cfg_.lever_arm_b_m;
+  const Vec3 w_ie_b = C.transpose() * omega_ie_n(lat);
+  const Vec3 v_ant_n = nav.vel_enu_mps + C * (omega_ib_b_radps - w_ie_b).cross(cfg_.lever_arm_b_m);
+  const double dt = epoch.t_s - nav.t_s;  // epoch time tag minus INS time tag
+  const Vec3 r_ant = ecef_from_llh(nav.llh) + Cne * (l_n + v_ant_n * dt);
+  const Vec3 v_ant = Cne * v_ant_n;
+  const double clk_b = clock_bias_m_ + clock_drift_mps_ * dt;
+
+  GnssGeometry geo[kMaxGnssChannels];
+  bool valid[kMaxGnssChannels] = {};
+  double sum_b = 0.0, sum_d = 0.0;
+  int n_valid = 0;
+  for (int k = 0; k < epoch.n_obs; ++k) {
+    const GnssObservation& o = epoch.obs[k];
+    const double rs = o.sat_pos_ecef_m.norm();
+    if (!finite3(o.sat_pos_ecef_m) || !finite3(o.sat_vel_ecef_mps) || !std::isfinite(o.pseudorange_m) ||
+        !std::isfinite(o.pseudorange_rate_mps) || rs < 1.0e7 || rs > 1.0e8) {
+      ++report.obs_invalid;
+      continue;
+    }
+    geo[k] = gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r_ant, v_ant);
+    valid[k] = true;
+    sum_b += o.pseudorange_m - geo[k].range_m;
+    sum_d += o.pseudorange_rate_mps - geo[k].range_rate_mps;
+    ++n_valid;
+  }
+  if (!clock_initialised_) {
+    if (n_valid == 0) return Status::kOk;
+    clock_bias_m_ = sum_b / n_valid;
+    clock_drift_mps_ = sum_d / n_valid;
+    clock_initialised_ = true;
+    report.clock_initialised = true;
+    return Status::kOk;  // this epoch's measurements set the clock; they are not used twice
+  }
+  constexpr int oc = Layout::offset(Block::kClock);
+  constexpr bool kChannels = Layout::has(Block::kRangeError) || Layout::has(Block::kRangeRateError);
+  // Release the channels of satellites that are no longer tracked.
+  if constexpr (kChannels) {
+    for (int s = 0; s < kGnssErrorChannels; ++s) {
+      bool tracked = false;
+      for (int k = 0; k < epoch.n_obs; ++k) tracked = tracked || (valid[k] && epoch.obs[k].prn == slot_prn_[s]);
+      if (!tracked) slot_prn_[s] = 0;
+    }
+  }
+  for (int k = 0; k < epoch.n_obs; ++k) {
+    if (!valid[k]) continue;
+    const GnssObservation& o = epoch.obs[k];
+    const int slot = kChannels ? bind_channel(o.prn) : -1;
+    double r_pr = cfg_.pseudorange_sigma_m * cfg_.pseudorange_sigma_m;
+    double r_prr = cfg_.pseudorange_rate_sigma_mps * cfg_.pseudorange_rate_sigma_mps;
+    double range_err = 0.0, rate_err = 0.0;
+    RowVec h = RowVec::Zero();
+    if constexpr (kChannels) {
+      if (slot < 0) {  // no channel left: fold the correlated error into the white noise
+        ++report.obs_no_channel;
+        r_pr += cfg_.range_gm_sigma_m * cfg_.range_gm_sigma_m;
+        r_prr += cfg_.range_rate_gm_sigma_mps * cfg_.range_rate_gm_sigma_mps;
+      }
+    }
+    const Vec3 e_n = Cne.transpose() * geo[k].los_ecef;
+    h.template segment<3>(0) = -e_n.transpose();
+    h.template segment<3>(6) = -e_n.transpose() * skew(l_n);
+    h(oc) = 1.0;
+    if constexpr (Layout::has(Block::kRangeError)) {
+      if (slot >= 0) {
+        h(Layout::offset(Block::kRangeError) + slot) = 1.0;
+        range_err = range_err_hat_(slot);
+      }
+    }
+    if (scalar_update(h, geo[k].range_m + clk_b + range_err - o.pseudorange_m, r_pr))
+      ++report.pr_used;
+    else
+      ++report.pr_rejected;
+    if (!cfg_.use_pseudorange_rate) continue;
+    h.setZero();
+    h.template segment<3>(3) = -e_n.transpose();
+    h(oc + 1) = 1.0;
+    if constexpr (Layout::has(Block::kRangeRateError)) {
+      if (slot >= 0) {
+        h(Layout::offset(Block::kRangeRateError) + slot) = 1.0;
+        rate_err = rate_err_hat_(slot);
+      }
+    }
+    if (scalar_update(h, geo[k].range_rate_mps + clock_drift_mps_ + rate_err - o.pseudorange_rate_mps, r_prr))
+      ++report.prr_used;
+    else
+      ++report.prr_rejected;
+  }
+  P_ = 0.5 * (P_ + P_.transpose()).eval();
+  return Status::kOk;
+}
+
+template <class Layout>
+Status Ekf<Layout>::feedback(Strapdown& ins, ImuCompensation& comp) {
+  if (!initialised_) return Status::kNotInitialised;
+  if (!x_.allFinite()) {
+    x_.setZero();
+    return Status::kBadInput;
+  }
+  const Status st = ins.correct(x_.template segment<3>(0), x_.template segment<3>(3), x_.template segment<3>(6));
+  if (st != Status::kOk) return st;
+  if constexpr (Layout::has(Block::kAccelBias)) comp.accel_bias_mps2 += x_.template segment<3>(Layout::offset(Block::kAccelBias));
+  if constexpr (Layout::has(Block::kGyroBias)) comp.gyro_bias_radps += x_.template segment<3>(Layout::offset(Block::kGyroBias));
+  if constexpr (Layout::has(Block::kAccelMisalign)) {
+    constexpr int o = Layout::offset(Block::kAccelMisalign);
+    for (int k = 0; k < 3; ++k) comp.accel_error(kAccelMisalignmentAxes[k].i, kAccelMisalignmentAxes[k].j) += x_(o + k);
+  }
+  if constexpr (Layout::has(Block::kGyroMisalign)) {
+    constexpr int o = Layout::offset(Block::kGyroMisalign);
+    for (int k = 0; k < 6; ++k) comp.gyro_error(kGyroMisalignmentAxes[k].i, kGyroMisalignmentAxes[k].j) += x_(o + k);
+  }
+  if constexpr (Layout::has(Block::kAccelScale)) {
+    constexpr int o = Layout::offset(Block::kAccelScale);
+    for (int i = 0; i < 3; ++i) comp.accel_error(i, i) += x_(o + i);
+  }
+  if constexpr (Layout::has(Block::kGyroScale)) {
+    constexpr int o = Layout::offset(Block::kGyroScale);
+    for (int i = 0; i < 3; ++i) comp.gyro_error(i, i) += x_(o + i);
+  }
+  constexpr int oc = Layout::offset(Block::kClock);
+  clock_bias_m_ -= x_(oc);
+  clock_drift_mps_ -= x_(oc + 1);
+  if constexpr (Layout::has(Block::kRangeError))
+    range_err_hat_ -= x_.template segment<kGnssErrorChannels>(Layout::offset(Block::kRangeError));
+  if constexpr (Layout::has(Block::kRangeRateError))
+    rate_err_hat_ -= x_.template segment<kGnssErrorChannels>(Layout::offset(Block::kRangeRateError));
+  x_.setZero();
+  return Status::kOk;
+}
+
+template class Ekf<Layout15>;
+template class Ekf<Layout24>;
+template class Ekf<Layout15Full>;
+template class Ekf<Layout24Full>;
+
+}  // namespace fsw
