@@ -12,11 +12,13 @@ namespace sdins {
 void register_analyze(CLI::App& app);
 void register_scenario(CLI::App& app);
 void register_fly(CLI::App& app);
+void register_montecarlo(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
 int run_scenario_check();
 int run_fly();
+int run_montecarlo();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

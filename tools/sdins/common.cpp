@@ -35,6 +35,7 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("analyze")) return run_analyze();
   if (app.got_subcommand("scenario")) return run_scenario_check();
   if (app.got_subcommand("fly")) return run_fly();
+  if (app.got_subcommand("montecarlo")) return run_montecarlo();
   return 1;
 }
 

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   sdins::register_analyze(app);
   sdins::register_scenario(app);
   sdins::register_fly(app);
+  sdins::register_montecarlo(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

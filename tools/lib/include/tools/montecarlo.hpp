@@ -1,0 +1,130 @@
+// Software-in-the-loop Monte Carlo of the tightly coupled filters: truth simulator -> IMU and GPS
+// error models -> fsw executive (15- and/or 24-state model, the same inputs for both), with the
+// statistics across runs that the paper's figures show.
+//
+// The truth trajectory does not depend on the seed, so it is generated once (TruthTrack) and
+// shared by every run; each run draws its own IMU errors, GPS errors, clock and initial errors
+// from seed = scenario seed + run index. Results are kept per run and reduced in run order, so
+// the statistics are bit-identical for any number of threads or MPI ranks.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fsw/executive.hpp"
+#include "sim/almanac.hpp"
+#include "sim/scenario.hpp"
+#include "sim/trajectory.hpp"
+
+namespace tools {
+
+/// The seed-independent truth of a scenario: IMU increments at the IMU rate and full truth at
+/// every GNSS epoch.
+struct TruthTrack {
+  struct Increment {
+    double t_s;
+    double dt_s;
+    fsw::Vec3 dtheta_rad;
+    fsw::Vec3 dv_mps;
+  };
+  std::vector<Increment> imu;            ///< samples 1..n (the sample at t = 0 has no increment)
+  std::vector<sim::TruthSample> epochs;  ///< truth at t = k / gps_rate, k = 0..; epochs[0] is t = 0
+  int samples_per_epoch = 1000;          ///< IMU samples between GNSS epochs
+  double generate_wall_s = 0.0;
+  /// Throws std::runtime_error for a scenario it cannot fly (e.g. rates that do not divide).
+  static TruthTrack generate(const sim::Scenario& sc);
+};
+
+enum class Model { k15, k24 };
+inline const char* model_name(Model m) { return m == Model::k15 ? "15" : "24"; }
+
+struct MonteCarloConfig {
+  int runs = 100;
+  int first_run = 0;               ///< run indices first_run .. first_run + runs - 1
+  std::vector<Model> models{Model::k15, Model::k24};
+  int threads = 0;                 ///< 0: all hardware threads
+  double init_pos_sigma_m = 5.0;   ///< per axis, drawn per run
+  double init_vel_sigma_mps = 0.1; ///< per axis, drawn per run
+  /// The filter's tuning beyond what follows from the scenario (sigmas, measurement noise).
+  double vrw_mps_per_rts = 1e-4;
+  double arw_rad_per_rts = 2e-7;
+  double gate_chi2 = 10.83;
+  /// Carry the GPS model's time-correlated errors as per-channel states (Layout15Gm/24Gm); false:
+  /// the paper's plain layouts with the total error as white measurement noise.
+  bool model_gps_errors = true;
+};
+
+/// The executive configuration a scenario implies for a model (rates, initial sigmas from the
+/// scenario's sensor sigmas and the alignment formulas, measurement noise from the GPS model).
+fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloConfig& mc);
+
+/// Per-epoch quantities of one run and one model, after the epoch's feedback.
+struct EpochRecord {
+  float resid_att_rad[3];   ///< attitude error after feedback (INS error minus estimate, eq. 12)
+  float pos_err_m[3];
+  float vel_err_mps[3];
+  float sigma_att_rad[3];   ///< filter sigma of phi
+  float sigma_pos_m[3];
+  float sigma_vel_mps[3];
+  float nees;               ///< 9-state navigation NEES (position, velocity, attitude)
+  float nees_att;           ///< 3-state attitude NEES
+};
+
+/// End-of-run estimates of the sensor errors (truth minus final compensation, i.e. the residual)
+/// and the filter's sigma for them, in the layout's order of the sensor blocks.
+struct SensorResidual {
+  std::string name;   ///< e.g. "gyro_mis.yz"
+  double residual = 0.0;
+  double initial_sigma = 0.0;
+  double sigma = 0.0;
+  std::string unit;
+};
+
+struct RunResult {
+  int run = 0;
+  std::uint64_t seed = 0;
+  std::vector<std::vector<EpochRecord>> epochs;  ///< [model][epoch]
+  std::vector<std::vector<SensorResidual>> sensors;  ///< [model][state]
+  std::vector<fsw::ExecutiveHealth> health;      ///< [model]
+  double wall_sim_s = 0.0;   ///< IMU and GPS error models
+  double wall_mech_s = 0.0;  ///< 200 Hz rate group (all models)
+  double wall_ekf_s = 0.0;   ///< ticks in which the 1 Hz EKF ran (all models), minus a mechanization frame
+};
+
+/// Flies one run (index `run`) through all models of the config.
+RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
+                  const MonteCarloConfig& mc, int run);
+
+/// Runs runs [first_run, first_run + runs) on `threads` threads; results in run order.
+std::vector<RunResult> run_many(const sim::Scenario& sc, const TruthTrack& truth,
+                                const std::vector<sim::AlmanacEntry>& almanac, const MonteCarloConfig& mc);
+
+/// Statistics across runs for one model.
+struct ModelStats {
+  Model model = Model::k15;
+  int runs = 0;
+  std::vector<double> t_s;
+  std::vector<int> turning;                    ///< 1 while the aircraft turns
+  std::vector<std::array<double, 3>> att_mean_rad, att_std_rad, att_filter_sigma_rad;
+  std::vector<double> pos_rms_m, vel_rms_mps, pos_filter_sigma_m, vel_filter_sigma_mps;
+  std::vector<double> nees_mean, nees_att_mean;
+  double mean_nees = 0.0;        ///< time average of nees_mean over t >= nees_from_s
+  double mean_nees_att = 0.0;
+  double nees_from_s = 0.0;
+  std::array<double, 2> nees_bounds{};      ///< 95% bounds of the run-averaged 9-dof NEES
+  std::array<double, 2> nees_att_bounds{};  ///< ... of the 3-dof attitude NEES
+  std::vector<SensorResidual> sensors;      ///< residual = RMS across runs, sigma = mean filter sigma
+  fsw::ExecutiveHealth health{};            ///< summed over runs
+};
+
+ModelStats reduce(const std::vector<RunResult>& results, std::size_t model_index, Model model, const TruthTrack& truth);
+
+/// Two-sided 95% bounds of the average of `runs` independent chi-square(dof) variables.
+std::array<double, 2> chi2_mean_bounds(int dof, int runs);
+
+/// Writes the per-epoch statistics as CSV (degrees for attitude).
+void write_stats_csv(const ModelStats& s, const std::string& path);
+
+}  // namespace tools

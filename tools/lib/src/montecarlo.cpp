@@ -1,0 +1,440 @@
+#include "tools/montecarlo.hpp"
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+#include <thread>
+
+#include "fsw/alignment.hpp"
+#include "fsw/effect_catalogue.hpp"
+#include "sim/gps_model.hpp"
+#include "sim/imu_model.hpp"
+#include "sim/rng.hpp"
+#include "tools/free_inertial.hpp"
+
+namespace tools {
+namespace {
+
+using fsw::Block;
+using fsw::Vec3;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+constexpr std::uint64_t kStreamInitialErrors = 20;
+
+/// One model's executive plus what the run records from it.
+struct ModelRunner {
+  virtual ~ModelRunner() = default;
+  virtual fsw::Status init(const fsw::ExecutiveConfig& cfg, const fsw::NavState& nav) = 0;
+  virtual bool tick(const fsw::FrameInput& in) = 0;  ///< returns whether the EKF ran
+  virtual void record(const sim::TruthSample& truth) = 0;
+  virtual std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg) const = 0;
+  virtual fsw::ExecutiveHealth health() const = 0;
+  std::vector<EpochRecord>* records = nullptr;
+};
+
+template <class Layout>
+struct ModelRun final : ModelRunner {
+  fsw::Executive<Layout> exec;
+  fsw::FrameOutput out;
+
+  fsw::Status init(const fsw::ExecutiveConfig& cfg, const fsw::NavState& nav) override { return exec.init(cfg, nav); }
+  bool tick(const fsw::FrameInput& in) override {
+    exec.tick(in, out);
+    return out.ekf_ran;
+  }
+  fsw::ExecutiveHealth health() const override { return exec.health(); }
+
+  void record(const sim::TruthSample& truth) override {
+    const NavErrors e = nav_errors(out.nav, truth);
+    const auto& P = exec.ekf().P();
+    EpochRecord r{};
+    Eigen::Matrix<double, 9, 1> err;
+    err << e.pos_enu_m, e.vel_enu_mps, e.att_phi_enu_rad;
+    for (int i = 0; i < 3; ++i) {
+      r.resid_att_rad[i] = static_cast<float>(e.att_phi_enu_rad(i));
+      r.pos_err_m[i] = static_cast<float>(e.pos_enu_m(i));
+      r.vel_err_mps[i] = static_cast<float>(e.vel_enu_mps(i));
+      r.sigma_pos_m[i] = static_cast<float>(std::sqrt(P(i, i)));
+      r.sigma_vel_mps[i] = static_cast<float>(std::sqrt(P(3 + i, 3 + i)));
+      r.sigma_att_rad[i] = static_cast<float>(std::sqrt(P(6 + i, 6 + i)));
+    }
+    const Eigen::Matrix<double, 9, 9> Pn = P.template topLeftCorner<9, 9>();
+    r.nees = static_cast<float>(err.dot(Pn.ldlt().solve(err)));
+    const Eigen::Matrix3d Pa = P.template block<3, 3>(6, 6);
+    r.nees_att = static_cast<float>(e.att_phi_enu_rad.dot(Pa.ldlt().solve(e.att_phi_enu_rad)));
+    records->push_back(r);
+  }
+
+  std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg) const override {
+    std::vector<SensorResidual> out_s;
+    const auto& P = exec.ekf().P();
+    const fsw::ImuCompensation& c = exec.compensation();
+    auto add = [&](const std::string& name, int state, double truth_v, double est, double sigma0, const char* unit,
+                   double scale) {
+      out_s.push_back({name, (truth_v - est) * scale, sigma0 * scale, std::sqrt(P(state, state)) * scale, unit});
+    };
+    const char* axes[3] = {"x", "y", "z"};
+    if constexpr (Layout::has(Block::kAccelBias)) {
+      const int o = Layout::offset(Block::kAccelBias);
+      for (int i = 0; i < 3; ++i)
+        add(std::string("accel_bias.") + axes[i], o + i, truth.accel_bias_mps2(i), c.accel_bias_mps2(i),
+            cfg.ekf.accel_bias_sigma_mps2, "ug", 1.0 / fsw::kMicroG_mps2);
+    }
+    if constexpr (Layout::has(Block::kGyroBias)) {
+      const int o = Layout::offset(Block::kGyroBias);
+      for (int i = 0; i < 3; ++i)
+        add(std::string("gyro_bias.") + axes[i], o + i, truth.gyro_bias_radps(i), c.gyro_bias_radps(i),
+            cfg.ekf.gyro_bias_sigma_radps, "deg/h", 1.0 / fsw::kDegPerHourToRadps);
+    }
+    if constexpr (Layout::has(Block::kAccelMisalign)) {
+      const int o = Layout::offset(Block::kAccelMisalign);
+      const auto& info = fsw::effect_info(fsw::Effect::kAccelMisalignment);
+      for (int k = 0; k < 3; ++k) {
+        const auto ax = fsw::kAccelMisalignmentAxes[k];
+        add(std::string("accel_mis.") + info.components[k], o + k, truth.accel_misalignment_rad(ax.i, ax.j),
+            c.accel_error(ax.i, ax.j), cfg.ekf.accel_misalign_sigma_rad, "arcsec", fsw::kRadToArcsec);
+      }
+    }
+    if constexpr (Layout::has(Block::kGyroMisalign)) {
+      const int o = Layout::offset(Block::kGyroMisalign);
+      const auto& info = fsw::effect_info(fsw::Effect::kGyroMisalignment);
+      for (int k = 0; k < 6; ++k) {
+        const auto ax = fsw::kGyroMisalignmentAxes[k];
+        add(std::string("gyro_mis.") + info.components[k], o + k, truth.gyro_misalignment_rad(ax.i, ax.j),
+            c.gyro_error(ax.i, ax.j), cfg.ekf.gyro_misalign_sigma_rad, "arcsec", fsw::kRadToArcsec);
+      }
+    }
+    return out_s;
+  }
+};
+
+}  // namespace
+
+TruthTrack TruthTrack::generate(const sim::Scenario& sc) {
+  const auto t0 = Clock::now();
+  std::string err;
+  auto motion = sim::FlightMotion::create(sc, err);
+  if (!motion) throw std::runtime_error(err);
+  TruthTrack tt;
+  const double spe = sc.imu.rate_hz / sc.gps.rate_hz;
+  if (std::abs(spe - std::round(spe)) > 1e-9 || spe < 1.0)
+    throw std::runtime_error("the GPS rate must divide the IMU rate");
+  tt.samples_per_epoch = static_cast<int>(std::lround(spe));
+  const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
+  tt.imu.reserve(static_cast<std::size_t>(n));
+  tt.epochs.reserve(static_cast<std::size_t>(n / tt.samples_per_epoch + 1));
+  sim::TruthGenerator gen(*motion, sc.imu.rate_hz);
+  tt.epochs.push_back(gen.current());
+  for (long long k = 1; k <= n; ++k) {
+    const sim::TruthSample& s = gen.next();
+    tt.imu.push_back({s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps});
+    if (k % tt.samples_per_epoch == 0) tt.epochs.push_back(s);
+  }
+  tt.generate_wall_s = seconds_since(t0);
+  return tt;
+}
+
+fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloConfig& mc) {
+  fsw::ExecutiveConfig cfg;
+  cfg.imu_samples_per_frame = sc.imu.rate_hz / 200;
+  cfg.nav_rate_hz = 200.0;
+  cfg.frames_per_ekf = static_cast<int>(std::lround(200.0 / sc.gps.rate_hz));
+  const sim::ImuErrorSigmas& s = sc.imu.sigmas;
+  fsw::EkfConfig& e = cfg.ekf;
+  e.pos_sigma_m = std::max(mc.init_pos_sigma_m, 1.0);
+  e.vel_sigma_mps = std::max(mc.init_vel_sigma_mps, 0.01);
+  // Initial attitude sigma: what self-alignment leaves for the scenario's bias sigmas.
+  const double lat = sc.start.lat_deg * fsw::kDegToRad;
+  const double g = fsw::normal_gravity_mps2(lat, sc.start.alt_m);
+  const double sa = s.accel_bias_ug * fsw::kMicroG_mps2, sg = s.gyro_bias_degph * fsw::kDegPerHourToRadps;
+  const double level = sa / g;
+  const double up = std::hypot(sg / (fsw::wgs84::omega_ie_radps * std::cos(lat)), level * std::tan(lat));
+  e.att_sigma_rad = Vec3(std::max(level, 1e-6), std::max(level, 1e-6), std::max(up, 1e-6));
+  const bool paper = sc.imu.errors == sim::ImuErrorSet::kPaper;
+  const bool none = sc.imu.errors == sim::ImuErrorSet::kNone;
+  e.accel_bias_sigma_mps2 = none ? 1e-7 : std::max(sa, 1e-7);
+  e.gyro_bias_sigma_radps = none ? 1e-10 : std::max(sg, 1e-10);
+  e.accel_misalign_sigma_rad = paper ? std::max(s.accel_misalignment_arcsec * fsw::kArcsecToRad, 1e-8) : 1e-8;
+  e.gyro_misalign_sigma_rad = paper ? std::max(s.gyro_misalignment_arcsec * fsw::kArcsecToRad, 1e-8) : 1e-8;
+  e.accel_scale_sigma = paper ? std::max(s.accel_scale_factor_ppm * 1e-6, 1e-9) : 1e-9;
+  e.gyro_scale_sigma = paper ? std::max(s.gyro_scale_factor_ppm * 1e-6, 1e-9) : 1e-9;
+  e.clock_bias_sigma_m = 10.0;
+  e.clock_drift_sigma_mps = 0.5;
+  const double c2 = fsw::kSpeedOfLight_mps * fsw::kSpeedOfLight_mps;
+  e.clock_bias_psd_m2ps = std::max(sc.gps.clock_h0 / 2.0 * c2, 1e-4);
+  e.clock_drift_psd_m2ps3 = std::max(2.0 * fsw::kPi * fsw::kPi * sc.gps.clock_h_minus2 * c2, 1e-4);
+  if (mc.model_gps_errors) {
+    // Correlated part as channel states; the white part (with a floor that keeps P well
+    // conditioned when the simulator adds none) as measurement noise.
+    e.range_gm_sigma_m = std::max(sc.gps.pseudorange_gm_sigma_m, 0.01);
+    e.range_gm_tau_s = sc.gps.pseudorange_gm_tau_s;
+    e.range_rate_gm_sigma_mps = std::max(sc.gps.pseudorange_rate_gm_sigma_mps, 0.001);
+    e.range_rate_gm_tau_s = sc.gps.pseudorange_rate_gm_tau_s;
+    e.pseudorange_sigma_m = std::max(sc.gps.pseudorange_white_sigma_m, 0.3);
+    e.pseudorange_rate_sigma_mps = std::max(sc.gps.pseudorange_rate_white_sigma_mps, 0.01);
+  } else {
+    e.pseudorange_sigma_m = std::max(std::hypot(sc.gps.pseudorange_gm_sigma_m, sc.gps.pseudorange_white_sigma_m), 0.1);
+    e.pseudorange_rate_sigma_mps =
+        std::max(std::hypot(sc.gps.pseudorange_rate_gm_sigma_mps, sc.gps.pseudorange_rate_white_sigma_mps), 0.005);
+  }
+  e.vrw_mps_per_rts = mc.vrw_mps_per_rts;
+  e.arw_rad_per_rts = mc.arw_rad_per_rts;
+  e.gate_chi2 = mc.gate_chi2;
+  return cfg;
+}
+
+RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
+                  const MonteCarloConfig& mc, int run) {
+  RunResult res;
+  res.run = run;
+  res.seed = sc.seed + static_cast<std::uint64_t>(run);
+  const std::uint64_t seed = res.seed;
+  const sim::ImuErrors errors = sim::draw_imu_errors(sc.imu, sc.effects, seed);
+  sim::ImuModel imu(errors, seed);
+  sim::GpsModel gps(sc.gps, almanac, sc.effects, seed);
+
+  // Initial errors: the attitude that self-alignment leaves for this run's biases (at the start
+  // attitude), plus drawn position and velocity errors.
+  const sim::TruthSample& t0 = truth.epochs.front();
+  const double lat = t0.llh.x();
+  const Vec3 phi0 = fsw::predicted_alignment_error(t0.C_b_n * errors.accel_bias_mps2, t0.C_b_n * errors.gyro_bias_radps,
+                                                   lat, fsw::normal_gravity_mps2(lat, t0.llh.z()));
+  sim::Rng rng(seed, kStreamInitialErrors);
+  Vec3 dp, dv;
+  for (int i = 0; i < 3; ++i) dp(i) = rng.normal() * mc.init_pos_sigma_m;
+  for (int i = 0; i < 3; ++i) dv(i) = rng.normal() * mc.init_vel_sigma_mps;
+  fsw::NavState init;
+  init.t_s = t0.t_s + errors.time_offset_s;
+  init.llh = t0.llh + Vec3(dp.y() / (fsw::meridian_radius_m(lat) + t0.llh.z()),
+                           dp.x() / ((fsw::normal_radius_m(lat) + t0.llh.z()) * std::cos(lat)), dp.z());
+  init.vel_enu_mps = t0.vel_enu_mps + dv;
+  init.q_b_n = fsw::quat_from_rotvec(-phi0) * fsw::Quat(t0.C_b_n);
+  init.q_b_n.normalize();
+
+  const fsw::ExecutiveConfig cfg = executive_config(sc, mc);
+  const std::size_t n_models = mc.models.size();
+  res.epochs.assign(n_models, {});
+  std::vector<std::unique_ptr<ModelRunner>> runners;
+  for (std::size_t m = 0; m < n_models; ++m) {
+    const bool is15 = mc.models[m] == Model::k15;
+    if (mc.model_gps_errors)
+      runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout15Full>)
+                             : std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout24Full>));
+    else
+      runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout15>)
+                             : std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout24>));
+    res.epochs[m].reserve(truth.epochs.size());
+    runners[m]->records = &res.epochs[m];
+    if (runners[m]->init(cfg, init) != fsw::Status::kOk)
+      throw std::runtime_error(std::string("executive init failed for model ") + model_name(mc.models[m]));
+  }
+
+  const int spf = cfg.imu_samples_per_frame;
+  std::array<fsw::ImuSample, fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
+  int n_in_frame = 0;
+  sim::TruthSample ts;  // carries the fields the IMU model reads
+  fsw::GnssEpoch epoch;
+  Clock::duration d_sim{}, d_mech{}, d_ekf{};
+  for (std::size_t j = 0; j < truth.imu.size(); ++j) {
+    auto c0 = Clock::now();
+    const TruthTrack::Increment& inc = truth.imu[j];
+    ts.t_s = inc.t_s;
+    ts.dt_s = inc.dt_s;
+    ts.dtheta_rad = inc.dtheta_rad;
+    ts.dv_mps = inc.dv_mps;
+    frame[static_cast<std::size_t>(n_in_frame++)] = imu.measure(ts);
+    const bool is_epoch = (j + 1) % static_cast<std::size_t>(truth.samples_per_epoch) == 0;
+    const sim::TruthSample* te = is_epoch ? &truth.epochs[(j + 1) / static_cast<std::size_t>(truth.samples_per_epoch)] : nullptr;
+    if (is_epoch) gps.measure(*te, epoch);
+    auto c1 = Clock::now();
+    d_sim += c1 - c0;
+    if (n_in_frame < spf) continue;
+    fsw::FrameInput in;
+    in.imu = frame.data();
+    in.n_imu = n_in_frame;
+    in.gnss = is_epoch ? &epoch : nullptr;
+    n_in_frame = 0;
+    bool ekf_ran = false;
+    for (auto& r : runners) ekf_ran |= r->tick(in);
+    const auto c2 = Clock::now();
+    (ekf_ran ? d_ekf : d_mech) += c2 - c1;
+    if (is_epoch)
+      for (auto& r : runners) r->record(*te);
+  }
+  res.sensors.assign(n_models, {});
+  res.health.assign(n_models, {});
+  for (std::size_t m = 0; m < n_models; ++m) {
+    res.sensors[m] = runners[m]->sensors(errors, cfg);
+    res.health[m] = runners[m]->health();
+  }
+  // EKF ticks also ran one mechanization frame each; charge that to the mechanization.
+  const double frames = static_cast<double>(truth.imu.size() / static_cast<std::size_t>(spf));
+  const double ekf_ticks = static_cast<double>(truth.epochs.size() - 1);
+  const double mech_per_tick = std::chrono::duration<double>(d_mech).count() / std::max(1.0, frames - ekf_ticks);
+  res.wall_sim_s = std::chrono::duration<double>(d_sim).count();
+  res.wall_mech_s = std::chrono::duration<double>(d_mech).count() + mech_per_tick * ekf_ticks;
+  res.wall_ekf_s = std::max(0.0, std::chrono::duration<double>(d_ekf).count() - mech_per_tick * ekf_ticks);
+  return res;
+}
+
+std::vector<RunResult> run_many(const sim::Scenario& sc, const TruthTrack& truth,
+                                const std::vector<sim::AlmanacEntry>& almanac, const MonteCarloConfig& mc) {
+  std::vector<RunResult> results(static_cast<std::size_t>(std::max(mc.runs, 0)));
+  int threads = mc.threads > 0 ? mc.threads : static_cast<int>(std::thread::hardware_concurrency());
+  threads = std::max(1, std::min(threads, mc.runs));
+  std::atomic<int> next{0};
+  std::vector<std::string> errors(static_cast<std::size_t>(threads));
+  auto worker = [&](int w) {
+    try {
+      for (int k = next++; k < mc.runs; k = next++)
+        results[static_cast<std::size_t>(k)] = run_one(sc, truth, almanac, mc, mc.first_run + k);
+    } catch (const std::exception& e) {
+      errors[static_cast<std::size_t>(w)] = e.what();
+      next = mc.runs;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int w = 1; w < threads; ++w) pool.emplace_back(worker, w);
+  worker(0);
+  for (auto& t : pool) t.join();
+  for (const auto& e : errors)
+    if (!e.empty()) throw std::runtime_error(e);
+  return results;
+}
+
+std::array<double, 2> chi2_mean_bounds(int dof, int runs) {
+  // Wilson-Hilferty: chi2_k quantile ~ k (1 - 2/(9k) + z sqrt(2/(9k)))^3, z = -/+1.959964.
+  const double k = static_cast<double>(dof) * runs;
+  auto q = [k](double z) {
+    const double a = 2.0 / (9.0 * k);
+    const double c = 1.0 - a + z * std::sqrt(a);
+    return k * c * c * c;
+  };
+  return {q(-1.959963985) / runs, q(1.959963985) / runs};
+}
+
+ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, Model model, const TruthTrack& truth) {
+  ModelStats s;
+  s.model = model;
+  s.runs = static_cast<int>(results.size());
+  if (results.empty()) return s;
+  const std::size_t ne = results.front().epochs[mi].size();
+  const double n = static_cast<double>(results.size());
+  s.t_s.resize(ne);
+  s.turning.resize(ne);
+  s.att_mean_rad.assign(ne, {});
+  s.att_std_rad.assign(ne, {});
+  s.att_filter_sigma_rad.assign(ne, {});
+  s.pos_rms_m.assign(ne, 0.0);
+  s.vel_rms_mps.assign(ne, 0.0);
+  s.pos_filter_sigma_m.assign(ne, 0.0);
+  s.vel_filter_sigma_mps.assign(ne, 0.0);
+  s.nees_mean.assign(ne, 0.0);
+  s.nees_att_mean.assign(ne, 0.0);
+  for (std::size_t e = 0; e < ne; ++e) {
+    const sim::TruthSample& t = truth.epochs[e + 1];
+    s.t_s[e] = t.t_s;
+    s.turning[e] = t.phase.turning ? 1 : 0;
+    std::array<double, 3> sum{}, sum2{}, sig{};
+    double p2 = 0, v2 = 0, ps = 0, vs = 0, nees = 0, nees_att = 0;
+    for (const RunResult& r : results) {  // run order: deterministic
+      const EpochRecord& x = r.epochs[mi][e];
+      for (int i = 0; i < 3; ++i) {
+        sum[i] += x.resid_att_rad[i];
+        sum2[i] += static_cast<double>(x.resid_att_rad[i]) * x.resid_att_rad[i];
+        sig[i] += x.sigma_att_rad[i];
+      }
+      for (int i = 0; i < 2; ++i) {
+        p2 += static_cast<double>(x.pos_err_m[i]) * x.pos_err_m[i];
+        v2 += static_cast<double>(x.vel_err_mps[i]) * x.vel_err_mps[i];
+        ps += static_cast<double>(x.sigma_pos_m[i]) * x.sigma_pos_m[i];
+        vs += static_cast<double>(x.sigma_vel_mps[i]) * x.sigma_vel_mps[i];
+      }
+      nees += x.nees;
+      nees_att += x.nees_att;
+    }
+    for (int i = 0; i < 3; ++i) {
+      const double m = sum[i] / n;
+      s.att_mean_rad[e][i] = m;
+      s.att_std_rad[e][i] = n > 1 ? std::sqrt(std::max(0.0, (sum2[i] - n * m * m) / (n - 1))) : 0.0;
+      s.att_filter_sigma_rad[e][i] = sig[i] / n;
+    }
+    s.pos_rms_m[e] = std::sqrt(p2 / n);
+    s.vel_rms_mps[e] = std::sqrt(v2 / n);
+    s.pos_filter_sigma_m[e] = std::sqrt(ps / n);
+    s.vel_filter_sigma_mps[e] = std::sqrt(vs / n);
+    s.nees_mean[e] = nees / n;
+    s.nees_att_mean[e] = nees_att / n;
+  }
+  // Consistency: averaged after the first minute (the initial transient of the clock and position).
+  s.nees_from_s = 60.0;
+  double acc = 0, acc_att = 0;
+  int cnt = 0;
+  for (std::size_t e = 0; e < ne; ++e)
+    if (s.t_s[e] >= s.nees_from_s) {
+      acc += s.nees_mean[e];
+      acc_att += s.nees_att_mean[e];
+      ++cnt;
+    }
+  s.mean_nees = cnt ? acc / cnt : 0.0;
+  s.mean_nees_att = cnt ? acc_att / cnt : 0.0;
+  s.nees_bounds = chi2_mean_bounds(9, s.runs);
+  s.nees_att_bounds = chi2_mean_bounds(3, s.runs);
+  // Sensor residuals: RMS across runs and the mean filter sigma.
+  s.sensors = results.front().sensors[mi];
+  for (std::size_t k = 0; k < s.sensors.size(); ++k) {
+    double r2 = 0, sg = 0;
+    for (const RunResult& r : results) {
+      r2 += r.sensors[mi][k].residual * r.sensors[mi][k].residual;
+      sg += r.sensors[mi][k].sigma;
+    }
+    s.sensors[k].residual = std::sqrt(r2 / n);
+    s.sensors[k].sigma = sg / n;
+  }
+  for (const RunResult& r : results) {
+    const fsw::ExecutiveHealth& h = r.health[mi];
+    fsw::ExecutiveHealth& a = s.health;
+    a.ticks += h.ticks;
+    a.nav_frames += h.nav_frames;
+    a.ekf_runs += h.ekf_runs;
+    a.ekf_updates += h.ekf_updates;
+    a.ekf_without_gnss += h.ekf_without_gnss;
+    a.imu_samples += h.imu_samples;
+    a.imu_rejected += h.imu_rejected;
+    a.gnss_epochs += h.gnss_epochs;
+    a.gnss_stale += h.gnss_stale;
+    a.pr_used += h.pr_used;
+    a.prr_used += h.prr_used;
+    a.pr_rejected += h.pr_rejected;
+    a.prr_rejected += h.prr_rejected;
+    a.obs_invalid += h.obs_invalid;
+    a.fsw_errors += h.fsw_errors;
+  }
+  return s;
+}
+
+void write_stats_csv(const ModelStats& s, const std::string& path) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write " + path);
+  f << "t_s,turning,mean_E_deg,mean_N_deg,mean_U_deg,std_E_deg,std_N_deg,std_U_deg,filter_sigma_E_deg,"
+       "filter_sigma_N_deg,filter_sigma_U_deg,pos_rms_m,pos_filter_sigma_m,vel_rms_mps,vel_filter_sigma_mps,nees,"
+       "nees_att\n";
+  f.precision(9);
+  const double d = fsw::kRadToDeg;
+  for (std::size_t e = 0; e < s.t_s.size(); ++e) {
+    f << s.t_s[e] << "," << s.turning[e];
+    for (int i = 0; i < 3; ++i) f << "," << s.att_mean_rad[e][i] * d;
+    for (int i = 0; i < 3; ++i) f << "," << s.att_std_rad[e][i] * d;
+    for (int i = 0; i < 3; ++i) f << "," << s.att_filter_sigma_rad[e][i] * d;
+    f << "," << s.pos_rms_m[e] << "," << s.pos_filter_sigma_m[e] << "," << s.vel_rms_mps[e] << ","
+      << s.vel_filter_sigma_mps[e] << "," << s.nees_mean[e] << "," << s.nees_att_mean[e] << "\n";
+  }
+}
+
+}  // namespace tools
