@@ -194,11 +194,21 @@ Status Ekf<Layout>::propagate() {
   if constexpr (Layout::has(Block::kGyroBias))
     qc.template segment<3>(Layout::offset(Block::kGyroBias))
         .setConstant(cfg_.gyro_bias_rw_radps_per_rts * cfg_.gyro_bias_rw_radps_per_rts);
-  Mat PhiQ;
-  PhiQ.noalias() = Phi_ * qc.asDiagonal();
-  Mat Q;
-  Q.noalias() = PhiQ.lazyProduct(Phi_.transpose());
-  Q.diagonal() += qc;
+  // Phi's structure: dense navigation rows (0..8); below them a diagonal (random constants,
+  // Gauss-Markov decays) plus the clock's bias-drift coupling. Q and P use it (O(9 N^2), not N^3).
+  Mat Q = Mat::Zero();
+  for (int j = 0; j < N; ++j) {  // Qd = 0.5 (Phi Qc Phi^T + Qc) T, Qc diagonal
+    if (qc(j) == 0.0) continue;
+    const Eigen::Matrix<double, 9, 1> v = Phi_.template block<9, 1>(0, j);
+    const double vj = j >= 9 ? Phi_(j, j) : 0.0;
+    Q.template topLeftCorner<9, 9>().noalias() += qc(j) * v * v.transpose();
+    if (j >= 9) {
+      Q.template block<9, 1>(0, j) += qc(j) * vj * v;
+      Q.template block<1, 9>(j, 0) += qc(j) * vj * v.transpose();
+      Q(j, j) += qc(j) * vj * vj;
+    }
+    Q(j, j) += qc(j);
+  }
   Q *= 0.5 * T;
   const double Sb = cfg_.clock_bias_psd_m2ps, Sd = cfg_.clock_drift_psd_m2ps3;
   Q(oc, oc) = Sb * T + Sd * T * T * T / 3.0;
@@ -216,9 +226,13 @@ Status Ekf<Layout>::propagate() {
     rate_err_hat_ *= a_rate;
   }
 
-  Mat PPhiT;
-  PPhiT.noalias() = P_.lazyProduct(Phi_.transpose());
-  P_.noalias() = Phi_.lazyProduct(PPhiT);
+  Mat PhiP;  // Phi P
+  PhiP.template topRows<9>().noalias() = Phi_.template topRows<9>().lazyProduct(P_);
+  for (int i = 9; i < N; ++i) PhiP.row(i) = Phi_(i, i) * P_.row(i);
+  PhiP.row(oc) += Phi_(oc, oc + 1) * P_.row(oc + 1);
+  P_.template leftCols<9>().noalias() = PhiP.lazyProduct(Phi_.template topRows<9>().transpose());
+  for (int j = 9; j < N; ++j) P_.col(j) = Phi_(j, j) * PhiP.col(j);
+  P_.col(oc) += Phi_(oc, oc + 1) * PhiP.col(oc + 1);
   P_ += Q;
   P_ = 0.5 * (P_ + P_.transpose()).eval();
   x_ = (Phi_ * x_).eval();
@@ -231,8 +245,9 @@ Status Ekf<Layout>::propagate() {
 
 template <class Layout>
 bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r) {
-  Vec s;
-  s.noalias() = P_ * h.transpose();
+  Vec s = Vec::Zero();  // P h^T over the few non-zeros of h
+  for (int j = 0; j < N; ++j)
+    if (h(j) != 0.0) s.noalias() += h(j) * P_.col(j);
   const double S = h.dot(s) + r;
   const double nu = y - h.dot(x_);
   if (!(S > 0.0) || !(nu * nu <= cfg_.gate_chi2 * S)) return false;
@@ -244,9 +259,9 @@ bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r) {
   }
   x_ += K * nu;
   // Joseph form (I - K h) P (I - K h)^T + K r K^T, expanded for a scalar measurement.
-  P_.noalias() -= K * s.transpose();
-  P_.noalias() -= s * K.transpose();
-  P_.noalias() += (S * K) * K.transpose();
+  const Vec u = 0.5 * S * K - s;  // P - K s^T - s K^T + S K K^T = P + K u^T + u K^T
+  P_.noalias() += K * u.transpose();
+  P_.noalias() += u * K.transpose();
   return true;
 }
 
