@@ -77,10 +77,11 @@ void register_analyze(CLI::App& app) {
   sub->add_flag("!--no-plots", opt.plots, "skip the PNG plots (matplotlib)");
 }
 
-int run_analyze() {
+int run_analyze() { return run_analysis(opt.scenario.load(), opt.out, opt.gamma_arcsec, opt.plots); }
+
+int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gamma_arcsec, bool plots) {
   namespace fs = std::filesystem;
-  const sim::Scenario sc = opt.scenario.load();
-  const fs::path out(opt.out);
+  const fs::path out(out_dir);
   fs::create_directories(out);
   const double lat = sc.start.lat_deg * kDegToRad;
   json j;
@@ -142,10 +143,10 @@ int run_analyze() {
 
   // ---- Bank-to-turn ----
   std::printf("bank-to-turn (%s, %.0f s, each gyro misalignment alone at %.1f arcsec):\n", sc.name.c_str(),
-              sc.duration_s, opt.gamma_arcsec);
+              sc.duration_s, gamma_arcsec);
   std::vector<tools::BankTurnCase> bcases;
   for (std::size_t k = 0; k < 6; ++k) {
-    bcases.push_back(tools::run_bank_turn_case(sc, k, opt.gamma_arcsec));
+    bcases.push_back(tools::run_bank_turn_case(sc, k, gamma_arcsec));
     const tools::BankTurnCase& c = bcases.back();
     if (c.turn_end_t_s.empty()) throw std::runtime_error("the scenario completes no turn: nothing to analyse");
     std::ofstream f = open_out(out / ("bank_turn_" + c.component + ".csv"));
@@ -185,7 +186,7 @@ int run_analyze() {
      << "Scenario `" << sc.name << "`: " << sc.duration_s << " s, " << sc.start.speed_mps << " m/s, latitude "
      << sc.start.lat_deg << " deg. All errors come from the real fsw mechanization and alignment fed by the truth "
      << "simulator; the attitude error phi is defined in `fsw/include/fsw/frames.hpp`.\n\n"
-     << "## Bank-to-turn: heading error per turn, each gyro misalignment alone at " << opt.gamma_arcsec
+     << "## Bank-to-turn: heading error per turn, each gyro misalignment alone at " << gamma_arcsec
      << " arcsec\n\n"
      << "| misalignment | phi_U growth per turn [arcsec] | eq. (7) forcing per turn [arcsec] | Earth-rate coupling per "
         "turn [arcsec] | tilt growth per turn [arcsec] | phi_U oscillation [arcsec] | accumulates |\n"
@@ -226,11 +227,11 @@ int run_analyze() {
   open_out(out / "summary.md") << md.str();
 
   int rc = 0;
-  if (opt.plots) {
+  if (plots) {
     rc = run_plot_script("plot_analysis.py", "'" + out.string() + "'");
     if (rc != 0) std::fprintf(stderr, "sdins analyze: plotting failed (needs %s with matplotlib)\n", SDINS_PYTHON);
   }
-  std::printf("wrote %s/{analysis.json,summary.md,*.csv%s}\n", out.string().c_str(), opt.plots ? ",*.png" : "");
+  std::printf("wrote %s/{analysis.json,summary.md,*.csv%s}\n", out.string().c_str(), plots ? ",*.png" : "");
   return rc;
 }
 

@@ -13,12 +13,16 @@ void register_analyze(CLI::App& app);
 void register_scenario(CLI::App& app);
 void register_fly(CLI::App& app);
 void register_montecarlo(CLI::App& app);
+void register_paper(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
+/// The section-II analyses of a scenario into out_dir (used by analyze and paper).
+int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gamma_arcsec, bool plots);
 int run_scenario_check();
 int run_fly();
 int run_montecarlo();
+int run_paper();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

@@ -36,6 +36,7 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("scenario")) return run_scenario_check();
   if (app.got_subcommand("fly")) return run_fly();
   if (app.got_subcommand("montecarlo")) return run_montecarlo();
+  if (app.got_subcommand("paper")) return run_paper();
   return 1;
 }
 

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   sdins::register_scenario(app);
   sdins::register_fly(app);
   sdins::register_montecarlo(app);
+  sdins::register_paper(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

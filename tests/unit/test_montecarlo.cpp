@@ -1,0 +1,86 @@
+// The Monte Carlo on a short flight: filter consistency (NEES inside its chi-square bounds),
+// convergence, no rejected measurements, and determinism across thread counts.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "sim/almanac.hpp"
+#include "tools/montecarlo.hpp"
+
+namespace {
+
+struct Fixture {
+  sim::Scenario sc;
+  std::vector<sim::AlmanacEntry> almanac;
+  tools::TruthTrack truth;
+  explicit Fixture(double duration_s) {
+    sc.duration_s = duration_s;
+    const sim::AlmanacParseResult r = sim::parse_yuma_file(sim::almanac_path(sc.gps));
+    EXPECT_TRUE(r.ok()) << r.error;
+    if (r.ok()) almanac = *r.almanac;
+    truth = tools::TruthTrack::generate(sc);
+  }
+};
+
+}  // namespace
+
+TEST(MonteCarlo, ShortRunFiltersAreConsistentAndConverge) {
+  Fixture f(400.0);  // 60 s straight, then the first four turns
+  tools::MonteCarloConfig mc;
+  mc.runs = 12;
+  mc.threads = 2;
+  const auto results = tools::run_many(f.sc, f.truth, f.almanac, mc);
+  ASSERT_EQ(results.size(), 12u);
+  for (std::size_t m = 0; m < mc.models.size(); ++m) {
+    const tools::ModelStats s = tools::reduce(results, m, mc.models[m], f.truth);
+    SCOPED_TRACE(tools::model_name(mc.models[m]));
+    std::printf("model %s: mean NEES %.2f in [%.2f, %.2f]; attitude NEES %.2f in [%.2f, %.2f]; final U sigma %.1f arcsec\n",
+                tools::model_name(mc.models[m]), s.mean_nees, s.nees_bounds[0], s.nees_bounds[1], s.mean_nees_att,
+                s.nees_att_bounds[0], s.nees_att_bounds[1], s.att_std_rad.back()[2] * fsw::kRadToArcsec);
+    EXPECT_GT(s.mean_nees, s.nees_bounds[0]);
+    EXPECT_LT(s.mean_nees, s.nees_bounds[1]);
+    EXPECT_GT(s.mean_nees_att, s.nees_att_bounds[0]);
+    EXPECT_LT(s.mean_nees_att, s.nees_att_bounds[1]);
+    // Every epoch after the first is a measurement update; the gate rejects (almost) nothing.
+    EXPECT_EQ(s.health.ekf_updates, 12u * 400u);
+    EXPECT_LT(s.health.pr_rejected + s.health.prr_rejected, (s.health.pr_used + s.health.prr_used) / 200);
+    EXPECT_EQ(s.health.fsw_errors, 0u);
+    EXPECT_EQ(s.health.imu_rejected, 0u);
+    // Heading: from the alignment's ~170 arcsec to a few tens once the turns have made it observable.
+    EXPECT_GT(s.att_std_rad.front()[2] * fsw::kRadToArcsec, 80.0);
+    EXPECT_LT(s.att_std_rad.back()[2] * fsw::kRadToArcsec, 60.0);
+    EXPECT_LT(s.pos_rms_m.back(), 15.0);
+    EXPECT_LT(s.vel_rms_mps.back(), 0.3);
+  }
+}
+
+TEST(MonteCarlo, ResultsDoNotDependOnThreadCount) {
+  Fixture f(90.0);
+  tools::MonteCarloConfig mc;
+  mc.runs = 3;
+  mc.threads = 1;
+  const auto a = tools::run_many(f.sc, f.truth, f.almanac, mc);
+  mc.threads = 3;
+  const auto b = tools::run_many(f.sc, f.truth, f.almanac, mc);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t r = 0; r < a.size(); ++r)
+    for (std::size_t m = 0; m < a[r].epochs.size(); ++m) {
+      ASSERT_EQ(a[r].epochs[m].size(), b[r].epochs[m].size());
+      EXPECT_EQ(std::memcmp(a[r].epochs[m].data(), b[r].epochs[m].data(),
+                            a[r].epochs[m].size() * sizeof(tools::EpochRecord)),
+                0)
+          << "run " << r << " model " << m;
+    }
+  // Different runs differ (the seed reaches the IMU, GPS and initial errors).
+  EXPECT_NE(std::memcmp(a[0].epochs[0].data(), a[1].epochs[0].data(), sizeof(tools::EpochRecord) * 10), 0);
+}
+
+TEST(MonteCarlo, ChiSquareBoundsMatchTables) {
+  // chi2 quantiles / k: 9 dof, 100 runs -> chi2(900) 2.5% = 818.4, 97.5% = 984.8 (tables).
+  const auto b = tools::chi2_mean_bounds(9, 100);
+  EXPECT_NEAR(b[0], 8.184, 0.01);
+  EXPECT_NEAR(b[1], 9.848, 0.01);
+  const auto c = tools::chi2_mean_bounds(3, 10);  // chi2(30): 16.79, 46.98
+  EXPECT_NEAR(c[0], 1.679, 0.01);
+  EXPECT_NEAR(c[1], 4.698, 0.01);
+}
