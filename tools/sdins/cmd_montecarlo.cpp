@@ -44,35 +44,44 @@ void register_montecarlo(CLI::App& app) {
       "montecarlo",
       "Monte Carlo of the tightly coupled GPS/INS filters: N seeded runs (seed = scenario seed + run index) of the "
       "scenario through the fsw executive, on all cores; writes per-epoch statistics across runs (residual attitude "
-      "error mean and 1-sigma, filter sigma, position/velocity RMS, NEES) and summary.json.");
+      "error mean and 1-sigma, filter sigma, position/velocity RMS, NEES) and summary.json."
+#if SDINS_WITH_MPI
+      " Under mpirun -np K the runs are split across the K ranks and rank 0 writes the (identical) results."
+#endif
+      );
   add_scenario_options(sub, opt.scenario);
   sub->add_option("--runs", opt.runs, "number of runs")->check(CLI::Range(1, 100000));
   sub->add_option("--models", opt.models, "filters to run on the same data: 15, 24 or 15,24");
-  sub->add_option("--threads", opt.threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024));
+  sub->add_option("--threads", opt.threads,
+                  "worker threads per process (0: all cores; under mpirun with more than one rank: 1 per rank)")
+      ->check(CLI::Range(0, 1024));
   sub->add_option("--out", opt.out, "output directory");
 }
 
 int run_montecarlo() {
-  const sim::Scenario sc = opt.scenario.load();
-  tools::MonteCarloConfig mc;
-  mc.runs = opt.runs;
-  mc.models = parse_models(opt.models);
-  mc.threads = opt.threads;
-  std::filesystem::create_directories(opt.out);
-  const CaseResult r = run_case(sc, mc, opt.out, "");
-  if (!r.written) return 0;  // a non-root MPI rank
-  nlohmann::json j;
-  j["scenario"] = sc.name;
-  j["duration_s"] = sc.duration_s;
-  j["runs"] = mc.runs;
-  j["models"] = r.models;
-  j["timing"] = r.timing;
-  std::ofstream f(std::filesystem::path(opt.out) / "summary.json");
-  if (!f) throw std::runtime_error("cannot write summary.json in " + opt.out);
-  f << j.dump(2) << "\n";
-  print_case(r);
-  std::printf("outputs in %s\n", opt.out.c_str());
-  return 0;
+  // Under MPI every rank runs this; an error on any of them aborts the whole job.
+  return run_guarded([] {
+    const sim::Scenario sc = opt.scenario.load();
+    tools::MonteCarloConfig mc;
+    mc.runs = opt.runs;
+    mc.models = parse_models(opt.models);
+    mc.threads = opt.threads;
+    if (mpi_world().rank == 0) std::filesystem::create_directories(opt.out);
+    const CaseResult r = run_case(sc, mc, opt.out, "");
+    if (!r.written) return 0;  // a non-root MPI rank: rank 0 writes everything
+    nlohmann::json j;
+    j["scenario"] = sc.name;
+    j["duration_s"] = sc.duration_s;
+    j["runs"] = mc.runs;
+    j["models"] = r.models;
+    j["timing"] = r.timing;
+    std::ofstream f(std::filesystem::path(opt.out) / "summary.json");
+    if (!f) throw std::runtime_error("cannot write summary.json in " + opt.out);
+    f << j.dump(2) << "\n";
+    print_case(r);
+    std::printf("outputs in %s\n", opt.out.c_str());
+    return 0;
+  });
 }
 
 }  // namespace sdins

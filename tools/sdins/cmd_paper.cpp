@@ -127,6 +127,8 @@ void write_report(const fs::path& out, const json& summary) {
   f << "\nThe section-II analysis (alignment, single-axis rotation, bank-to-turn) is in [analysis/](analysis/summary.md).\n";
 }
 
+int run_paper_body();
+
 }  // namespace
 
 void register_paper(CLI::App& app) {
@@ -144,10 +146,14 @@ void register_paper(CLI::App& app) {
   sub->add_flag("!--no-analysis", opt.analysis, "skip the section-II analysis");
 }
 
-int run_paper() {
+int run_paper() { return run_guarded(run_paper_body); }
+
+namespace {
+int run_paper_body() {
   const sim::Scenario base = opt.scenario.load();
   const fs::path out(opt.out);
-  fs::create_directories(out);
+  const bool root_rank = mpi_world().rank == 0;
+  if (root_rank) fs::create_directories(out);
   json cases = json::array();
   bool root = true;
   double wall_total = 0.0;
@@ -161,7 +167,7 @@ int run_paper() {
     mc.threads = opt.threads;
     mc.models = {tools::Model::k15, tools::Model::k24};
     const std::string dir = level_dir(level);
-    fs::create_directories(out / dir);
+    if (root_rank) fs::create_directories(out / dir);
     std::printf("gyro misalignment 1-sigma %.0f arcsec: %d runs, 15- and 24-state filters\n", level, opt.runs);
     std::fflush(stdout);
     const CaseResult r = run_case(sc, mc, (out / dir).string(), "");
@@ -210,5 +216,6 @@ int run_paper() {
   std::printf("wrote %s/{summary.json,report.md,mis*/stats_*.csv,*.png,analysis/}\n", out.string().c_str());
   return 0;
 }
+}  // namespace
 
 }  // namespace sdins

@@ -2,16 +2,243 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <thread>
+#include <type_traits>
 
 #include "sim/almanac.hpp"
+
+#if SDINS_WITH_MPI
+#include <mpi.h>
+#endif
 
 namespace sdins {
 namespace {
 
 using nlohmann::json;
+
+// ---- RunResult <-> flat bytes (MPI gather). Ranks run the same binary on the same kind of
+// machine, so PODs travel as their bytes; the header and the exact length catch a mismatch.
+
+static_assert(std::is_trivially_copyable_v<tools::EpochRecord>);
+static_assert(std::is_trivially_copyable_v<fsw::ExecutiveHealth>);
+constexpr std::uint64_t kPackMagic = 0x31434d534e494453ULL;  // "SDINSMC1"
+
+class Packer {
+ public:
+  explicit Packer(std::vector<char>& buf) : buf_(buf) {}
+  void bytes(const void* p, std::size_t n) {
+    const char* c = static_cast<const char*>(p);
+    buf_.insert(buf_.end(), c, c + n);
+  }
+  template <class T>
+  void pod(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    bytes(&v, sizeof v);
+  }
+  void str(const std::string& v) {
+    pod(static_cast<std::uint64_t>(v.size()));
+    bytes(v.data(), v.size());
+  }
+
+ private:
+  std::vector<char>& buf_;
+};
+
+class Unpacker {
+ public:
+  Unpacker(const char* p, std::size_t n) : p_(p), end_(p + n) {}
+  void bytes(void* out, std::size_t n) {
+    if (static_cast<std::size_t>(end_ - p_) < n) throw std::runtime_error("MPI gather: truncated run results");
+    if (n) std::memcpy(out, p_, n);
+    p_ += n;
+  }
+  template <class T>
+  T pod() {
+    static_assert(std::is_trivially_copyable_v<T>);
+    T v;
+    bytes(&v, sizeof v);
+    return v;
+  }
+  std::uint64_t count(std::size_t elem_size) {  // an element count that must fit in what is left
+    const auto n = pod<std::uint64_t>();
+    if (elem_size && n > static_cast<std::uint64_t>(end_ - p_) / elem_size)
+      throw std::runtime_error("MPI gather: corrupt run results (count out of range)");
+    return n;
+  }
+  std::string str() {
+    std::string v(count(1), '\0');
+    bytes(v.data(), v.size());
+    return v;
+  }
+  bool done() const { return p_ == end_; }
+
+ private:
+  const char* p_;
+  const char* end_;
+};
+
+std::vector<char> pack_results(const std::vector<tools::RunResult>& rs) {
+  std::vector<char> buf;
+  Packer w(buf);
+  w.pod(kPackMagic);
+  w.pod(static_cast<std::uint64_t>(rs.size()));
+  for (const auto& r : rs) {
+    w.pod(static_cast<std::int64_t>(r.run));
+    w.pod(r.seed);
+    w.pod(static_cast<std::uint64_t>(r.epochs.size()));
+    for (const auto& e : r.epochs) {
+      w.pod(static_cast<std::uint64_t>(e.size()));
+      w.bytes(e.data(), e.size() * sizeof(tools::EpochRecord));
+    }
+    w.pod(static_cast<std::uint64_t>(r.sensors.size()));
+    for (const auto& model : r.sensors) {
+      w.pod(static_cast<std::uint64_t>(model.size()));
+      for (const auto& x : model) {
+        w.str(x.name);
+        w.pod(x.residual);
+        w.pod(x.initial_sigma);
+        w.pod(x.sigma);
+        w.str(x.unit);
+      }
+    }
+    w.pod(static_cast<std::uint64_t>(r.health.size()));
+    for (const auto& h : r.health) w.pod(h);
+    w.pod(r.wall_sim_s);
+    w.pod(r.wall_mech_s);
+    w.pod(r.wall_ekf_s);
+  }
+  return buf;
+}
+
+/// Appends the results packed in [data, data + n) to out.
+void unpack_results(const char* data, std::size_t n, std::vector<tools::RunResult>& out) {
+  Unpacker u(data, n);
+  if (u.pod<std::uint64_t>() != kPackMagic) throw std::runtime_error("MPI gather: not a packed run result");
+  const std::uint64_t nr = u.count(8);
+  for (std::uint64_t i = 0; i < nr; ++i) {
+    tools::RunResult r;
+    r.run = static_cast<int>(u.pod<std::int64_t>());
+    r.seed = u.pod<std::uint64_t>();
+    r.epochs.resize(u.count(8));
+    for (auto& e : r.epochs) {
+      e.resize(u.count(sizeof(tools::EpochRecord)));
+      u.bytes(e.data(), e.size() * sizeof(tools::EpochRecord));
+    }
+    r.sensors.resize(u.count(8));
+    for (auto& model : r.sensors) {
+      model.resize(u.count(8));
+      for (auto& x : model) {
+        x.name = u.str();
+        x.residual = u.pod<double>();
+        x.initial_sigma = u.pod<double>();
+        x.sigma = u.pod<double>();
+        x.unit = u.str();
+      }
+    }
+    r.health.resize(u.count(sizeof(fsw::ExecutiveHealth)));
+    for (auto& h : r.health) h = u.pod<fsw::ExecutiveHealth>();
+    r.wall_sim_s = u.pod<double>();
+    r.wall_mech_s = u.pod<double>();
+    r.wall_ekf_s = u.pod<double>();
+    out.push_back(std::move(r));
+  }
+  if (!u.done()) throw std::runtime_error("MPI gather: trailing bytes after the run results");
+}
+
+/// First run index (relative) of a rank's contiguous block.
+int block_begin(int runs, int size, int rank) {
+  return static_cast<int>(static_cast<long long>(runs) * rank / size);
+}
+
+#if SDINS_WITH_MPI
+constexpr int kTagSize = 7301, kTagData = 7302;
+constexpr std::size_t kChunk = std::size_t{1} << 30;  // MPI counts are int
+
+void mpi_check(int rc, const char* what) {
+  if (rc != MPI_SUCCESS) throw std::runtime_error(std::string("MPI error in ") + what);
+}
+
+/// Waits for a request without spinning a core: a rank that finished its block early (or rank 0
+/// waiting for a slower rank) would otherwise busy-poll in MPI_Send/MPI_Recv and, with more ranks
+/// than cores, slow down the ranks still flying.
+void wait_gently(MPI_Request& req, const char* what) {
+  auto pause = std::chrono::microseconds(50);
+  for (;;) {
+    int done = 0;
+    mpi_check(MPI_Test(&req, &done, MPI_STATUS_IGNORE), what);
+    if (done) return;
+    std::this_thread::sleep_for(pause);
+    pause = std::min(pause * 2, std::chrono::microseconds(5000));
+  }
+}
+
+void send_bytes(const std::vector<char>& buf, int dest) {
+  const std::uint64_t n = buf.size();
+  MPI_Request req;
+  mpi_check(MPI_Isend(&n, 1, MPI_UINT64_T, dest, kTagSize, MPI_COMM_WORLD, &req), "MPI_Isend");
+  wait_gently(req, "MPI_Isend");
+  for (std::size_t off = 0; off < buf.size(); off += kChunk) {
+    const int len = static_cast<int>(std::min(kChunk, buf.size() - off));
+    mpi_check(MPI_Isend(buf.data() + off, len, MPI_BYTE, dest, kTagData, MPI_COMM_WORLD, &req), "MPI_Isend");
+    wait_gently(req, "MPI_Isend");
+  }
+}
+
+std::vector<char> recv_bytes(int src) {
+  std::uint64_t n = 0;
+  MPI_Request req;
+  mpi_check(MPI_Irecv(&n, 1, MPI_UINT64_T, src, kTagSize, MPI_COMM_WORLD, &req), "MPI_Irecv");
+  wait_gently(req, "MPI_Irecv");
+  std::vector<char> buf(static_cast<std::size_t>(n));
+  for (std::size_t off = 0; off < buf.size(); off += kChunk) {
+    const int len = static_cast<int>(std::min(kChunk, buf.size() - off));
+    mpi_check(MPI_Irecv(buf.data() + off, len, MPI_BYTE, src, kTagData, MPI_COMM_WORLD, &req), "MPI_Irecv");
+    wait_gently(req, "MPI_Irecv");
+  }
+  return buf;
+}
+#endif
+
+/// Rank 0: every rank's results, in rank (= run) order; other ranks: sends theirs, returns {}.
+/// Rank 0's own results take the same pack/unpack path, so every run goes through it.
+std::vector<tools::RunResult> gather_results(std::vector<tools::RunResult> local, const MpiWorld& w) {
+  std::vector<char> mine = pack_results(local);
+  local.clear();
+  local.shrink_to_fit();
+  std::vector<tools::RunResult> all;
+#if SDINS_WITH_MPI
+  if (w.size > 1) {
+    if (w.rank != 0) {
+      send_bytes(mine, 0);
+      return all;
+    }
+    unpack_results(mine.data(), mine.size(), all);
+    mine = {};
+    for (int src = 1; src < w.size; ++src) {
+      const std::vector<char> buf = recv_bytes(src);
+      unpack_results(buf.data(), buf.size(), all);
+    }
+    return all;
+  }
+#else
+  (void)w;
+#endif
+  unpack_results(mine.data(), mine.size(), all);
+  return all;
+}
+
+/// Test hook: SDINS_TEST_FAIL_RANK=r makes rank r fail after flying its runs (tests the abort path).
+void maybe_inject_failure(const MpiWorld& w) {
+  const char* v = std::getenv("SDINS_TEST_FAIL_RANK");
+  if (v && *v && std::atoi(v) == w.rank)
+    throw std::runtime_error("injected failure (SDINS_TEST_FAIL_RANK=" + std::string(v) + ")");
+}
 
 json enu(const std::array<double, 3>& v, double scale) {
   return json{{"E", v[0] * scale}, {"N", v[1] * scale}, {"U", v[2] * scale}};
@@ -34,15 +261,36 @@ json health_json(const fsw::ExecutiveHealth& h) {
               {"prr_rejected", h.prr_rejected}, {"obs_invalid", h.obs_invalid}, {"fsw_errors", h.fsw_errors}};
 }
 
-}  // namespace
-
-CaseResult run_case(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, const std::string& out_dir,
-                    const std::string& prefix) {
+CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, const std::string& out_dir,
+                         const std::string& prefix) {
   const auto t0 = std::chrono::steady_clock::now();
+  const MpiWorld& w = mpi_world();
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
   const tools::TruthTrack truth = tools::TruthTrack::generate(sc);
-  const std::vector<tools::RunResult> results = tools::run_many(sc, truth, *alm.almanac, mc);
+  // This rank's block of runs; with one rank, all of them.
+  tools::MonteCarloConfig local = mc;
+  const int begin = block_begin(mc.runs, w.size, w.rank), end = block_begin(mc.runs, w.size, w.rank + 1);
+  local.first_run = mc.first_run + begin;
+  local.runs = end - begin;
+  if (local.threads == 0 && w.size > 1) local.threads = 1;  // ranks, not threads, fill the cores
+  std::vector<tools::RunResult> results;
+  if (local.runs > 0) results = tools::run_many(sc, truth, *alm.almanac, local);
+  maybe_inject_failure(w);
+  const auto tg = std::chrono::steady_clock::now();
+  double gather_s = 0.0;
+  if (w.size > 1) {
+    results = gather_results(std::move(results), w);
+    gather_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - tg).count();
+    if (w.rank != 0) return CaseResult{};  // written = false
+    if (results.size() != static_cast<std::size_t>(std::max(mc.runs, 0)))
+      throw std::runtime_error("MPI gather: " + std::to_string(results.size()) + " run results, expected " +
+                               std::to_string(mc.runs));
+    for (std::size_t k = 0; k < results.size(); ++k)
+      if (results[k].run != mc.first_run + static_cast<int>(k))
+        throw std::runtime_error("MPI gather: run " + std::to_string(results[k].run) + " at position " +
+                                 std::to_string(k));
+  }
   CaseResult r;
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.written = true;
@@ -94,7 +342,97 @@ CaseResult run_case(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, 
               {"mechanization_cpu_s", mech_s},
               {"ekf_cpu_s", ekf_s},
               {"models_flown", mc.models.size()},
-              {"real_time_factor", flown_s / r.wall_s}};
+              {"real_time_factor", flown_s / r.wall_s},
+              {"mpi_ranks", w.size},
+              {"threads_per_rank", local.threads > 0 ? local.threads
+                                                     : static_cast<int>(std::thread::hardware_concurrency())},
+              {"mpi_gather_s", gather_s}};
+  return r;
+}
+
+/// Whether an MPI launcher started this process (or SDINS_MPI forces the answer).
+bool launched_by_mpi() {
+  if (const char* f = std::getenv("SDINS_MPI"); f && *f) return std::strcmp(f, "0") != 0;
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMI_RANK", "PMIX_RANK"})
+    if (std::getenv(v)) return true;
+  return false;
+}
+
+/// The number of processes the launcher says it started (0: unknown).
+int launcher_size() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+    if (const char* s = std::getenv(v)) return std::atoi(s);
+  return 0;
+}
+
+#if SDINS_WITH_MPI
+void finalize_mpi() {
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (!finalized) MPI_Finalize();
+}
+#endif
+
+}  // namespace
+
+const MpiWorld& mpi_world() {
+  static const MpiWorld world = [] {
+    MpiWorld w;
+    if (!launched_by_mpi()) return w;
+#if SDINS_WITH_MPI
+    int initialized = 0;
+    MPI_Initialized(&initialized);
+    if (!initialized) {
+      int provided = 0;  // only the main thread calls MPI; the run threads never do
+      if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
+        throw std::runtime_error("MPI_Init_thread failed");
+      std::atexit(finalize_mpi);
+    }
+    MPI_Comm_rank(MPI_COMM_WORLD, &w.rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &w.size);
+    w.active = true;
+    if (w.size == 1 && launcher_size() > 1)
+      std::fprintf(stderr,
+                   "sdins: warning: the launcher started %d processes but MPI sees a world of 1 (an mpirun of a "
+                   "different MPI implementation than the one sdins was built with?); each process runs alone\n",
+                   launcher_size());
+#else
+    if (launcher_size() > 1)
+      std::fprintf(stderr,
+                   "sdins: warning: started by an MPI launcher as one of %d processes, but sdins was built without "
+                   "MPI: each process runs everything alone\n",
+                   launcher_size());
+#endif
+    return w;
+  }();
+  return world;
+}
+
+int run_guarded(const std::function<int()>& body) {
+  const MpiWorld& w = mpi_world();
+  if (w.size <= 1) return body();
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "sdins: error on MPI rank %d of %d: %s\n", w.rank, w.size, e.what());
+  } catch (...) {
+    std::fprintf(stderr, "sdins: error on MPI rank %d of %d: unknown exception\n", w.rank, w.size);
+  }
+  std::fflush(stderr);
+  std::fflush(stdout);
+#if SDINS_WITH_MPI
+  MPI_Abort(MPI_COMM_WORLD, 1);
+#endif
+  std::_Exit(1);
+}
+
+CaseResult run_case(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, const std::string& out_dir,
+                    const std::string& prefix) {
+  CaseResult r;
+  run_guarded([&] {
+    r = run_case_impl(sc, mc, out_dir, prefix);
+    return 0;
+  });
   return r;
 }
 
@@ -112,6 +450,9 @@ void print_case(const CaseResult& r) {
   std::printf("wall %.1f s (truth %.2f s; cpu: IMU/GPS models %.1f s, mechanization %.1f s, EKF %.1f s), %.0fx real time\n",
               t["wall_s"].get<double>(), t["truth_generation_s"].get<double>(), t["imu_gps_models_cpu_s"].get<double>(),
               t["mechanization_cpu_s"].get<double>(), t["ekf_cpu_s"].get<double>(), t["real_time_factor"].get<double>());
+  if (t.value("mpi_ranks", 1) > 1)
+    std::printf("MPI: %d ranks x %d threads, gathering the runs on rank 0 took %.2f s\n", t["mpi_ranks"].get<int>(),
+                t["threads_per_rank"].get<int>(), t["mpi_gather_s"].get<double>());
 }
 
 }  // namespace sdins
