@@ -7,8 +7,6 @@
 namespace fsw {
 namespace {
 
-bool finite3(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
-
 using Mat9 = Eigen::Matrix<double, 9, 9>;
 
 /// Navigation-block dynamics matrix (9 x 9) at the given solution and mean specific force.
@@ -54,8 +52,8 @@ Mat9 navigation_dynamics(const NavState& nav, const Vec3& f_n_mps2) {
 template <class Layout>
 Status Ekf<Layout>::init(const EkfConfig& cfg) {
   if (cfg.propagation_substep_frames < 1 || !(cfg.pseudorange_sigma_m > 0.0) ||
-      !(cfg.pseudorange_rate_sigma_mps > 0.0) || !(cfg.gate_chi2 > 0.0) || !finite3(cfg.att_sigma_rad) ||
-      !finite3(cfg.lever_arm_b_m))
+      !(cfg.pseudorange_rate_sigma_mps > 0.0) || !(cfg.gate_chi2 > 0.0) || !cfg.att_sigma_rad.allFinite() ||
+      !cfg.lever_arm_b_m.allFinite())
     return Status::kBadConfig;
   cfg_ = cfg;
   x_.setZero();
@@ -101,7 +99,7 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
 template <class Layout>
 Status Ekf<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
   if (!initialised_) return Status::kNotInitialised;
-  if (!(inc.dt_s > 0.0) || !finite3(inc.dv_sum_mps) || !finite3(inc.dtheta_sum_rad)) return Status::kBadInput;
+  if (!(inc.dt_s > 0.0) || !inc.dv_sum_mps.allFinite() || !inc.dtheta_sum_rad.allFinite()) return Status::kBadInput;
   const Mat3 C = nav.C_b_n();
   sum_C_dt_ += C * inc.dt_s;
   sum_dv_n_ += C * inc.dv_sum_mps;
@@ -303,7 +301,7 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
                            EkfUpdateReport& report) {
   report = EkfUpdateReport{};
   if (!initialised_) return Status::kNotInitialised;
-  if (epoch.n_obs < 0 || epoch.n_obs > kMaxGnssChannels || !std::isfinite(epoch.t_s) || !finite3(omega_ib_b_radps))
+  if (epoch.n_obs < 0 || epoch.n_obs > kMaxGnssChannels || !std::isfinite(epoch.t_s) || !omega_ib_b_radps.allFinite())
     return Status::kBadInput;
   const double lat = nav.llh.x(), lon = nav.llh.y();
   const Mat3 Cne = C_n_e(lat, lon);
@@ -323,7 +321,7 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   for (int k = 0; k < epoch.n_obs; ++k) {
     const GnssObservation& o = epoch.obs[k];
     const double rs = o.sat_pos_ecef_m.norm();
-    if (!finite3(o.sat_pos_ecef_m) || !finite3(o.sat_vel_ecef_mps) || !std::isfinite(o.pseudorange_m) ||
+    if (!o.sat_pos_ecef_m.allFinite() || !o.sat_vel_ecef_mps.allFinite() || !std::isfinite(o.pseudorange_m) ||
         !std::isfinite(o.pseudorange_rate_mps) || rs < 1.0e7 || rs > 1.0e8) {
       ++report.obs_invalid;
       continue;

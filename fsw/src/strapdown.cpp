@@ -1,9 +1,6 @@
 #include "fsw/strapdown.hpp"
 
 namespace fsw {
-namespace {
-bool finite3(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
-}  // namespace
 
 Status FrameBuilder::configure(int samples_per_frame) {
   if (samples_per_frame < 1 || samples_per_frame > kMaxSamplesPerFrame) return Status::kBadConfig;
@@ -25,7 +22,7 @@ void FrameBuilder::reset() {
 }
 
 Status FrameBuilder::add(const ImuSample& s) {
-  if (!finite3(s.dtheta_rad) || !finite3(s.dv_mps) || !std::isfinite(s.dt_s) || !(s.dt_s > 0.0) ||
+  if (!s.dtheta_rad.allFinite() || !s.dv_mps.allFinite() || !std::isfinite(s.dt_s) || !(s.dt_s > 0.0) ||
       !std::isfinite(s.t_s)) {
     return Status::kBadInput;
   }
@@ -62,7 +59,7 @@ Status FrameBuilder::add(const ImuSample& s) {
 }
 
 Status Strapdown::init(const NavState& s) {
-  if (!finite3(s.llh) || !finite3(s.vel_enu_mps) || !std::isfinite(s.q_b_n.w()) || !finite3(s.q_b_n.vec()) ||
+  if (!s.llh.allFinite() || !s.vel_enu_mps.allFinite() || !std::isfinite(s.q_b_n.w()) || !s.q_b_n.vec().allFinite() ||
       std::abs(s.llh.x()) > 0.5 * kPi) {
     return Status::kBadInput;
   }
@@ -76,7 +73,7 @@ Status Strapdown::init(const NavState& s) {
 
 Status Strapdown::step(const FrameIncrement& inc) {
   if (!initialised_) return Status::kNotInitialised;
-  if (!finite3(inc.rotvec_rad) || !finite3(inc.dv_sf_b_mps) || !(inc.dt_s > 0.0) || !std::isfinite(inc.dt_s)) {
+  if (!inc.rotvec_rad.allFinite() || !inc.dv_sf_b_mps.allFinite() || !(inc.dt_s > 0.0) || !std::isfinite(inc.dt_s)) {
     return Status::kBadInput;
   }
   const double T = inc.dt_s;
@@ -130,10 +127,8 @@ Status Strapdown::step(const FrameIncrement& inc) {
 
 Status Strapdown::correct(const Vec3& dpos_enu_m, const Vec3& dvel_enu_mps, const Vec3& phi_enu_rad) {
   if (!initialised_) return Status::kNotInitialised;
-  if (!finite3(dpos_enu_m) || !finite3(dvel_enu_mps) || !finite3(phi_enu_rad)) return Status::kBadInput;
-  const double lat = cur_.llh.x(), h = cur_.llh.z();
-  const Vec3 dllh(dpos_enu_m.y() / (meridian_radius_m(lat) + h),
-                  dpos_enu_m.x() / ((normal_radius_m(lat) + h) * std::cos(lat)), dpos_enu_m.z());
+  if (!dpos_enu_m.allFinite() || !dvel_enu_mps.allFinite() || !phi_enu_rad.allFinite()) return Status::kBadInput;
+  const Vec3 dllh = llh_delta_from_enu(cur_.llh, dpos_enu_m);
   cur_.llh -= dllh;
   cur_.vel_enu_mps -= dvel_enu_mps;
   // C_true = (I - [phi x])^-1 C_hat ~ (I + [phi x]) C_hat: rotate by +phi in n.

@@ -99,9 +99,8 @@ fsw::ImuSample ImuModel::measure(const TruthSample& truth) {
 
 void antenna_truth(const TruthSample& truth, const Vec3& lever_arm_b_m, Vec3& llh_ant, Vec3& vel_ant_enu_mps) {
   const Vec3 d_enu = truth.C_b_n * lever_arm_b_m;
-  const double lat = truth.llh.x(), h = truth.llh.z();
-  llh_ant = truth.llh + Vec3(d_enu.y() / (fsw::meridian_radius_m(lat) + h),
-                             d_enu.x() / ((fsw::normal_radius_m(lat) + h) * std::cos(lat)), d_enu.z());
+  const double lat = truth.llh.x();
+  llh_ant = truth.llh + fsw::llh_delta_from_enu(truth.llh, d_enu);
   // Velocity of the antenna relative to the Earth: v + C_b_n (omega_eb_b x l).
   const Vec3 w_ie_b = truth.C_b_n.transpose() * fsw::omega_ie_n(lat);
   vel_ant_enu_mps = truth.vel_enu_mps + truth.C_b_n * (truth.omega_ib_b_radps - w_ie_b).cross(lever_arm_b_m);

@@ -35,9 +35,7 @@ fsw::NavState nav_from_truth(const sim::TruthSample& t) {
 
 /// Applies an error (estimate minus truth) to a solution.
 fsw::NavState perturb(fsw::NavState s, const Vec3& dp_enu_m, const Vec3& dv_enu_mps, const Vec3& phi_rad) {
-  const double lat = s.llh.x(), h = s.llh.z();
-  s.llh += Vec3(dp_enu_m.y() / (fsw::meridian_radius_m(lat) + h),
-                dp_enu_m.x() / ((fsw::normal_radius_m(lat) + h) * std::cos(lat)), dp_enu_m.z());
+  s.llh += fsw::llh_delta_from_enu(s.llh, dp_enu_m);
   s.vel_enu_mps += dv_enu_mps;
   s.q_b_n = fsw::quat_from_rotvec(-phi_rad) * s.q_b_n;
   return s;

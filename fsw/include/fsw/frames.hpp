@@ -190,6 +190,9 @@ inline Vec3 llh_rate(const Vec3& llh, const Vec3& vel_enu_mps) {
               vel_enu_mps.x() / ((normal_radius_m(lat) + h) * std::cos(lat)), vel_enu_mps.z());
 }
 
+/// Small (lat, lon, h) change for an ENU displacement [m] at llh (the same map as llh_rate).
+inline Vec3 llh_delta_from_enu(const Vec3& llh, const Vec3& d_enu_m) { return llh_rate(llh, d_enu_m); }
+
 /// Geodetic (lat, lon, h) -> ECEF [m].
 inline Vec3 ecef_from_llh(const Vec3& llh) {
   const double lat = llh.x(), lon = llh.y(), h = llh.z();

@@ -211,8 +211,7 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   for (int i = 0; i < 3; ++i) dv(i) = rng.normal() * mc.init_vel_sigma_mps;
   fsw::NavState init;
   init.t_s = t0.t_s + errors.time_offset_s;
-  init.llh = t0.llh + Vec3(dp.y() / (fsw::meridian_radius_m(lat) + t0.llh.z()),
-                           dp.x() / ((fsw::normal_radius_m(lat) + t0.llh.z()) * std::cos(lat)), dp.z());
+  init.llh = t0.llh + fsw::llh_delta_from_enu(t0.llh, dp);
   init.vel_enu_mps = t0.vel_enu_mps + dv;
   init.q_b_n = fsw::quat_from_rotvec(-phi0) * fsw::Quat(t0.C_b_n);
   init.q_b_n.normalize();
