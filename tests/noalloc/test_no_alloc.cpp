@@ -5,13 +5,19 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <memory>
 #include <new>
 #include <vector>
 
 #include "fsw/alignment.hpp"
+#include "fsw/executive.hpp"
 #include "fsw/strapdown.hpp"
+#include "sim/almanac.hpp"
+#include "sim/gps_model.hpp"
+#include "sim/imu_model.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
+#include "tools/montecarlo.hpp"
 
 extern "C" void* __libc_malloc(std::size_t);
 extern "C" void* __libc_calloc(std::size_t, std::size_t);
@@ -118,6 +124,88 @@ TEST(NoAlloc, MechanizationAndAlignmentStepsDoNotAllocate) {
   }
   EXPECT_EQ(frames, 24000);
   EXPECT_EQ(g_allocs.load(), 0) << "fsw steps allocated " << g_allocs.load() << " times";
+}
+
+// The whole executive (200 Hz and 1 Hz groups: mechanization, EKF accumulate, propagate, update
+// with real GPS epochs, feedback) for every layout, on 60 s of the SIL inputs (truth -> IMU and GPS
+// error models) prepared before arming.
+struct SilInputs {
+  std::vector<std::vector<fsw::ImuSample>> frames;
+  std::vector<fsw::GnssEpoch> epochs;  ///< per frame; n_obs < 0: no epoch in that frame
+  fsw::ExecutiveConfig cfg15, cfg24, cfg15full, cfg24full;
+  fsw::NavState init;
+};
+
+SilInputs prepare_sil(double duration_s) {
+  sim::Scenario sc;
+  sc.duration_s = duration_s;
+  const tools::TruthTrack truth = tools::TruthTrack::generate(sc);
+  const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
+  EXPECT_TRUE(alm.ok()) << alm.error;
+  SilInputs in;
+  tools::MonteCarloConfig mc;
+  mc.model_gps_errors = false;
+  in.cfg15 = in.cfg24 = tools::executive_config(sc, mc);
+  mc.model_gps_errors = true;
+  in.cfg15full = in.cfg24full = tools::executive_config(sc, mc);
+  const sim::ImuErrors errors = sim::draw_imu_errors(sc.imu, sc.effects, sc.seed);
+  sim::ImuModel imu(errors, sc.seed);
+  sim::GpsModel gps(sc.gps, *alm.almanac, sc.effects, sc.seed);
+  in.init = tools::initial_nav_state(truth, errors, mc, sc.seed);
+  const int spf = in.cfg15.imu_samples_per_frame;
+  std::vector<fsw::ImuSample> frame;
+  fsw::GnssEpoch none;
+  none.n_obs = -1;
+  for (std::size_t j = 0; j < truth.imu.size(); ++j) {
+    sim::TruthSample ts;
+    ts.t_s = truth.imu[j].t_s;
+    ts.dt_s = truth.imu[j].dt_s;
+    ts.dtheta_rad = truth.imu[j].dtheta_rad;
+    ts.dv_mps = truth.imu[j].dv_mps;
+    frame.push_back(imu.measure(ts));
+    const bool is_epoch = (j + 1) % static_cast<std::size_t>(truth.samples_per_epoch) == 0;
+    fsw::GnssEpoch e = none;
+    if (is_epoch) gps.measure(truth.epochs[(j + 1) / static_cast<std::size_t>(truth.samples_per_epoch)], e);
+    if (static_cast<int>(frame.size()) < spf) continue;
+    in.frames.push_back(frame);
+    in.epochs.push_back(e);
+    frame.clear();
+  }
+  return in;
+}
+
+template <class Layout>
+void fly_armed(const SilInputs& sil, const fsw::ExecutiveConfig& cfg, const char* name) {
+  auto exec = std::make_unique<fsw::Executive<Layout>>();
+  ASSERT_EQ(exec->init(cfg, sil.init), fsw::Status::kOk) << name;
+  fsw::FrameOutput out;
+  long ticks_ok = 0;
+  {
+    Armed a;
+    for (std::size_t f = 0; f < sil.frames.size(); ++f) {
+      fsw::FrameInput in;
+      in.imu = sil.frames[f].data();
+      in.n_imu = static_cast<int>(sil.frames[f].size());
+      in.gnss = sil.epochs[f].n_obs >= 0 ? &sil.epochs[f] : nullptr;
+      in.prev_tick_exec_s = 1e-6;
+      if (exec->tick(in, out) == fsw::Status::kOk) ++ticks_ok;
+    }
+  }
+  EXPECT_EQ(g_allocs.load(), 0) << name << ": the executive allocated " << g_allocs.load() << " times";
+  EXPECT_EQ(ticks_ok, static_cast<long>(sil.frames.size())) << name;
+  EXPECT_EQ(exec->health().fsw_errors, 0u) << name;
+  EXPECT_GE(exec->health().ekf_updates, 59u) << name;  // every path really ran
+  EXPECT_GT(exec->health().pr_used, 100u) << name;
+  EXPECT_GT(exec->health().prr_used, 100u) << name;
+}
+
+TEST(NoAlloc, ExecutiveTicksWithEkfDoNotAllocateForAnyLayout) {
+  const SilInputs sil = prepare_sil(60.0);
+  ASSERT_EQ(sil.frames.size(), 12000u);
+  fly_armed<fsw::Layout15>(sil, sil.cfg15, "Layout15");
+  fly_armed<fsw::Layout24>(sil, sil.cfg24, "Layout24");
+  fly_armed<fsw::Layout15Full>(sil, sil.cfg15full, "Layout15Full");
+  fly_armed<fsw::Layout24Full>(sil, sil.cfg24full, "Layout24Full");
 }
 
 }  // namespace
