@@ -46,4 +46,4 @@ arm-none-eabi-size -A "$elf" | awk '
   $1 == ".stack" { stack = $2 }
   END { printf "sdins_fsw_m7.elf: flash %d B, static RAM %d B (.data + .bss), stack reserved %d B\n", flash, ram, stack }'
 arm-none-eabi-size -t "$build/fsw/libsdins_fsw.a" | awk '/\(TOTALS\)/ { printf "libsdins_fsw.a (Cortex-M7): text %d B, static RAM %d B (.data %d + .bss %d)\n", $1, $2 + $3, $2, $3 }'
-arm-none-eabi-nm -S -C "$elf" | awk '$4 ~ /g_exec(24|15)$/ { printf "  %s: %d B\n", $4, strtonum("0x" $2) }'
+arm-none-eabi-nm -S -C --radix=d "$elf" | awk '/g_exec(24|15)$/ { n = $NF; sub(/^.*::/, "", n); printf "  %s (static): %d B\n", n, $2 + 0 }'
