@@ -12,7 +12,7 @@
 # Normal build (tests on): executable fuzz_replay_<name> = the same target + fuzz/replay_main.cpp,
 #   and CTest fuzz_replay_<name> that runs every seed and every fuzz/regressions/<name>/ input once
 #   (in the asan preset: under AddressSanitizer and UBSan).
-set(SDINS_FUZZ_SECONDS 25 CACHE STRING "seconds each fuzz target runs in its CTest (fuzz build)")
+set(SDINS_FUZZ_SECONDS 20 CACHE STRING "seconds each fuzz target runs in its CTest (fuzz build)")
 
 function(sdins_add_fuzz_target)
   cmake_parse_arguments(F "" "NAME;SOURCE;DICT" "LIBS;CORPUS" ${ARGN})
