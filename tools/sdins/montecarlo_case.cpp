@@ -258,7 +258,10 @@ json health_json(const fsw::ExecutiveHealth& h) {
   return json{{"ekf_runs", h.ekf_runs},         {"ekf_updates", h.ekf_updates}, {"ekf_without_gnss", h.ekf_without_gnss},
               {"imu_rejected", h.imu_rejected}, {"gnss_epochs", h.gnss_epochs}, {"gnss_stale", h.gnss_stale},
               {"pr_used", h.pr_used},           {"prr_used", h.prr_used},       {"pr_rejected", h.pr_rejected},
-              {"prr_rejected", h.prr_rejected}, {"obs_invalid", h.obs_invalid}, {"fsw_errors", h.fsw_errors}};
+              {"prr_rejected", h.prr_rejected}, {"obs_invalid", h.obs_invalid}, {"fsw_errors", h.fsw_errors},
+              {"cov_checks", h.ekf.cov_checks}, {"cov_repairs", h.ekf.cov_repairs},
+              {"nonfinite_rejected", h.ekf.nonfinite_rejected}, {"nis_divergence_windows", h.ekf.divergence_windows},
+              {"gating_runaway_epochs", h.ekf.gating_runaway_epochs}, {"filter_resets", h.ekf.resets}};
 }
 
 CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, const std::string& out_dir,

@@ -85,6 +85,25 @@ struct EkfConfig {
   Vec3 lever_arm_b_m = Vec3::Zero();  ///< IMU reference point -> GNSS antenna, body axes
 
   int propagation_substep_frames = 10;  ///< navigation frames per transition-matrix sub-step
+
+  // Divergence guard. NIS window for the consistency test, and the gating runaway: when more than
+  // half of an epoch's pseudoranges (or of its rates; at least 4 of them) fail the gate for
+  // runaway_epochs epochs in a row, the filter
+  // no longer accepts the data that would correct it; the navigation and clock covariance is then
+  // re-inflated to its initial values (counted in EkfHealth::resets). 0 disables the reset.
+  int nis_window = 10;
+  int runaway_epochs = 5;
+};
+
+/// One satellite's innovations in an update (y = predicted - measured, before the update).
+struct EkfInnovation {
+  std::uint8_t prn = 0;
+  double pr_innov_m = 0.0;
+  double pr_nis = 0.0;         ///< y^2 / (H P H^T + R)
+  bool pr_accepted = false;
+  double prr_innov_mps = 0.0;
+  double prr_nis = 0.0;
+  bool prr_accepted = false;
 };
 
 /// What one measurement update did.
@@ -96,6 +115,26 @@ struct EkfUpdateReport {
   int obs_invalid = 0;   ///< non-finite or implausible observation data, not used
   int obs_no_channel = 0;  ///< more satellites than error-state channels: used with the white model
   bool clock_initialised = false;  ///< this epoch set the clock estimate from the measurements
+  int n_innov = 0;                 ///< valid entries of innov (the satellites that were processed)
+  std::array<EkfInnovation, kMaxGnssChannels> innov{};
+  double nis_sum = 0.0;            ///< sum of the NIS of the accepted scalar measurements ...
+  int nis_dof = 0;                 ///< ... and their number
+};
+
+/// Numerical and statistical health of the filter (F Prime style counters, never asserts).
+struct EkfHealth {
+  std::uint32_t cov_checks = 0;       ///< covariance SPD checks (one per epoch)
+  std::uint32_t cov_repairs = 0;      ///< checks that found P not symmetric positive definite and repaired it
+  std::uint32_t nonfinite_rejected = 0;  ///< inputs with NaN/Inf stopped before the state
+  /// NIS test over a sliding window of nis_window epochs: the windowed NIS sum against the upper
+  /// 99.9% chi-square quantile of its degrees of freedom (false-alarm rate 1e-3 per window).
+  double nis_window_sum = 0.0;
+  int nis_window_dof = 0;
+  double nis_window_bound = 0.0;      ///< the chi-square quantile the sum is compared with
+  bool diverging = false;             ///< the last window failed the NIS test
+  std::uint32_t divergence_windows = 0;  ///< windows that failed it
+  std::uint32_t gating_runaway_epochs = 0;  ///< consecutive epochs with most measurements gated
+  std::uint32_t resets = 0;           ///< navigation covariance re-inflated after a gating runaway
 };
 
 template <class Layout>
@@ -126,6 +165,10 @@ class Ekf {
   /// Applies the estimate to the solution and the IMU compensation and resets it to zero.
   Status feedback(Strapdown& ins, ImuCompensation& comp);
 
+  /// Replaces the covariance (restoring a saved filter, tests); symmetrised and checked like every
+  /// epoch's (a non-positive-definite P is repaired and counted). kBadInput for NaN/Inf.
+  Status set_covariance(const Mat& P);
+
   const Vec& x() const { return x_; }
   const Mat& P() const { return P_; }
   /// Transition matrix of the interval closed by the last propagate().
@@ -136,10 +179,16 @@ class Ekf {
   /// PRN bound to each measurement-error channel (0: free); only for layouts with kRangeError.
   const std::array<std::uint8_t, kGnssErrorChannels>& channel_prn() const { return slot_prn_; }
   const EkfConfig& config() const { return cfg_; }
+  const EkfHealth& health() const { return health_; }
 
  private:
   void flush_substep(const NavState& nav);
-  bool scalar_update(const RowVec& h, double y, double r);
+  /// Gated scalar update; returns whether it was applied, nis = nu^2 / S (before the update).
+  bool scalar_update(const RowVec& h, double y, double r, double& nu_out, double& nis);
+  /// Symmetrises P in place and checks it is positive definite; repairs (counted) if not.
+  void check_covariance();
+  void symmetrise();
+  void track_consistency(const EkfUpdateReport& report);
   int bind_channel(std::uint8_t prn);
   void reset_channel_state(int state, double sigma);
 
@@ -149,6 +198,16 @@ class Ekf {
   Mat P_ = Mat::Zero();
   Mat Phi_ = Mat::Identity();  ///< transition since the last propagate()
   Mat last_Phi_ = Mat::Identity();
+  Mat work_ = Mat::Zero();     ///< scratch (Phi P, Cholesky): a member, so it is not on the task's stack
+  Eigen::Matrix<double, 9, N> top_ = Eigen::Matrix<double, 9, N>::Zero();  ///< scratch of flush_substep
+  EkfHealth health_{};
+  static constexpr int kMaxNisWindow = 64;
+  std::array<double, kMaxNisWindow> nis_hist_{};
+  std::array<int, kMaxNisWindow> dof_hist_{};
+  int nis_head_ = 0;
+  int nis_count_ = 0;
+  int runaway_count_ = 0;
+  Vec init_var_ = Vec::Zero();  ///< initial variances (covariance repair, resets)
   double interval_s_ = 0.0;    ///< time covered by Phi_
   // Sub-step sums.
   int sub_frames_ = 0;

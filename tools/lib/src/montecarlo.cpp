@@ -414,6 +414,12 @@ ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, Model m
     a.prr_rejected += h.prr_rejected;
     a.obs_invalid += h.obs_invalid;
     a.fsw_errors += h.fsw_errors;
+    a.ekf.cov_checks += h.ekf.cov_checks;
+    a.ekf.cov_repairs += h.ekf.cov_repairs;
+    a.ekf.nonfinite_rejected += h.ekf.nonfinite_rejected;
+    a.ekf.divergence_windows += h.ekf.divergence_windows;
+    a.ekf.gating_runaway_epochs += h.ekf.gating_runaway_epochs;
+    a.ekf.resets += h.ekf.resets;
   }
   return s;
 }
