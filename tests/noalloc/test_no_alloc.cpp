@@ -9,7 +9,11 @@
 #include <vector>
 
 #include "fsw/alignment.hpp"
+#include "fsw/executive.hpp"
+#include "fsw/gps_orbit.hpp"
 #include "fsw/strapdown.hpp"
+#include "sim/almanac.hpp"
+#include "sim/gps_model.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
 
@@ -119,5 +123,98 @@ TEST(NoAlloc, MechanizationAndAlignmentStepsDoNotAllocate) {
   EXPECT_EQ(frames, 24000);
   EXPECT_EQ(g_allocs.load(), 0) << "fsw steps allocated " << g_allocs.load() << " times";
 }
+
+/// 120 s of the bank-to-turn flight (a whole turn) as the flight software receives it: 1 kHz IMU
+/// samples and 1 Hz raw GPS epochs, prepared before counting is armed.
+struct FlightInputs {
+  std::vector<fsw::ImuSample> imu;
+  std::vector<fsw::GnssRawEpoch> raw;  ///< raw[k] arrives with the frame ending at k + 1 s
+  std::vector<sim::AlmanacEntry> almanac;
+  fsw::NavState init{};
+};
+
+const FlightInputs& flight_inputs() {
+  static const FlightInputs in = [] {
+    FlightInputs f;
+    sim::Scenario sc;
+    sc.duration_s = 121.0;
+    std::string err;
+    auto motion = sim::FlightMotion::create(sc, err);
+    EXPECT_TRUE(motion) << err;
+    const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::default_almanac_path());
+    EXPECT_TRUE(alm.ok()) << alm.error;
+    f.almanac = *alm.almanac;
+    sim::GpsModel gps(sc.gps, f.almanac, sc.effects, 1);
+    sim::TruthGenerator gen(*motion, 1000.0);
+    f.init.t_s = gen.current().t_s;
+    f.init.llh = gen.current().llh;
+    f.init.vel_enu_mps = gen.current().vel_enu_mps;
+    f.init.q_b_n = fsw::Quat(gen.current().C_b_n);
+    for (int i = 0; i < 120000; ++i) {
+      const sim::TruthSample& t = gen.next();
+      f.imu.push_back({t.t_s, t.dt_s, t.dtheta_rad, t.dv_mps});
+      if ((i + 1) % 1000 == 0) {
+        fsw::GnssEpoch e;
+        gps.measure(t, e);
+        fsw::GnssRawEpoch r;
+        gps.raw(e, r);
+        f.raw.push_back(r);
+      }
+    }
+    return f;
+  }();
+  return in;
+}
+
+template <class Layout>
+void fly_executive_without_allocating() {
+  const FlightInputs& in = flight_inputs();
+  ASSERT_EQ(in.raw.size(), 120u);
+  // The executive and the almanac table are static storage, as on the target.
+  static fsw::Executive<Layout> exec;
+  static fsw::GpsAlmanacTable table;
+  ASSERT_EQ(exec.init(fsw::ExecutiveConfig{}, in.init), fsw::Status::kOk);
+  fsw::ImuSample bad = in.imu[0];
+  bad.dtheta_rad.y() = std::nan("");
+  fsw::GnssRawEpoch bad_epoch = in.raw[0];
+  bad_epoch.n_meas = 99;
+  int updates = 0;
+  {
+    Armed a;
+    table.clear();
+    for (const auto& e : in.almanac) table.set(e);
+    fsw::GnssEpoch epoch;
+    fsw::GnssConversionStats conv;
+    fsw::FrameOutput out;
+    for (std::size_t k = 0; k + 5 <= in.imu.size(); k += 5) {
+      fsw::FrameInput fi;
+      fi.imu = &in.imu[k];
+      fi.n_imu = 5;
+      const std::size_t ms = k + 5;
+      if (ms % 1000 == 0) {
+        const fsw::Vec3 hint = exec.ins().state().llh;
+        if (fsw::gnss_epoch_from_raw(in.raw[ms / 1000 - 1], table, &hint, epoch, conv) == fsw::Status::kOk)
+          fi.gnss = &epoch;
+      }
+      exec.tick(fi, out);
+      if (out.ekf_updated) ++updates;
+    }
+    // Rejection paths.
+    fsw::FrameInput fi;
+    fi.imu = &bad;
+    fi.n_imu = 1;
+    exec.tick(fi, out);
+    fsw::gnss_epoch_from_raw(bad_epoch, table, nullptr, epoch, conv);
+  }
+  EXPECT_GE(updates, 110);
+  EXPECT_EQ(exec.health().fsw_errors, 0u);
+  EXPECT_EQ(g_allocs.load(), 0) << "executive (" << Layout::kSize << " states) allocated " << g_allocs.load()
+                                << " times";
+}
+
+TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate15) { fly_executive_without_allocating<fsw::Layout15>(); }
+TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate24) { fly_executive_without_allocating<fsw::Layout24>(); }
+TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate15Full) { fly_executive_without_allocating<fsw::Layout15Full>(); }
+TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate24Full) { fly_executive_without_allocating<fsw::Layout24Full>(); }
 
 }  // namespace
