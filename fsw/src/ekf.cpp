@@ -617,5 +617,6 @@ template class Ekf<Layout15>;
 template class Ekf<Layout24>;
 template class Ekf<Layout15Full>;
 template class Ekf<Layout24Full>;
+template class Ekf<Layout15Conv>;
 
 }  // namespace fsw

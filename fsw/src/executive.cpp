@@ -132,5 +132,6 @@ template class Executive<Layout15>;
 template class Executive<Layout24>;
 template class Executive<Layout15Full>;
 template class Executive<Layout24Full>;
+template class Executive<Layout15Conv>;
 
 }  // namespace fsw

@@ -229,5 +229,6 @@ extern template class Ekf<Layout15>;
 extern template class Ekf<Layout24>;
 extern template class Ekf<Layout15Full>;
 extern template class Ekf<Layout24Full>;
+extern template class Ekf<Layout15Conv>;
 
 }  // namespace fsw

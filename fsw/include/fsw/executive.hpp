@@ -108,5 +108,6 @@ extern template class Executive<Layout15>;
 extern template class Executive<Layout24>;
 extern template class Executive<Layout15Full>;
 extern template class Executive<Layout24Full>;
+extern template class Executive<Layout15Conv>;
 
 }  // namespace fsw

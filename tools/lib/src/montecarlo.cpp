@@ -241,7 +241,9 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   std::vector<std::unique_ptr<ModelRunner>> runners;
   for (std::size_t m = 0; m < n_models; ++m) {
     const bool is15 = mc.models[m] == Model::k15;
-    if (mc.model_gps_errors)
+    if (mc.models[m] == Model::k15c)
+      runners.push_back(std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout15Conv>));
+    else if (mc.model_gps_errors)
       runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout15Full>)
                              : std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout24Full>));
     else

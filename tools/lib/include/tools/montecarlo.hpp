@@ -37,8 +37,10 @@ struct TruthTrack {
   static TruthTrack generate(const sim::Scenario& sc);
 };
 
-enum class Model { k15, k24 };
-inline const char* model_name(Model m) { return m == Model::k15 ? "15" : "24"; }
+/// k15: the 15-state model with the misalignments as Schmidt consider states (consistent);
+/// k15c: the conventional 15-state model that ignores them (the paper's); k24: 24 states.
+enum class Model { k15, k24, k15c };
+inline const char* model_name(Model m) { return m == Model::k15 ? "15" : m == Model::k24 ? "24" : "15c"; }
 
 struct MonteCarloConfig {
   int runs = 100;
