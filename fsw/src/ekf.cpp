@@ -242,12 +242,12 @@ Status Ekf<Layout>::propagate() {
 }
 
 template <class Layout>
-bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r) {
+bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu, double& S) {
   Vec s = Vec::Zero();  // P h^T over the few non-zeros of h
   for (int j = 0; j < N; ++j)
     if (h(j) != 0.0) s.noalias() += h(j) * P_.col(j);
-  const double S = h.dot(s) + r;
-  const double nu = y - h.dot(x_);
+  S = h.dot(s) + r;
+  nu = y - h.dot(x_);
   if (!(S > 0.0) || !(nu * nu <= cfg_.gate_chi2 * S)) return false;
   Vec K = s / S;
   // Consider states get no gain; the Joseph form below stays exact for this suboptimal gain.
@@ -318,12 +318,16 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   bool valid[kMaxGnssChannels] = {};
   double sum_b = 0.0, sum_d = 0.0;
   int n_valid = 0;
+  report.n_obs = epoch.n_obs;
   for (int k = 0; k < epoch.n_obs; ++k) {
     const GnssObservation& o = epoch.obs[k];
+    report.obs[k].prn = o.prn;
     const double rs = o.sat_pos_ecef_m.norm();
     if (!o.sat_pos_ecef_m.allFinite() || !o.sat_vel_ecef_mps.allFinite() || !std::isfinite(o.pseudorange_m) ||
         !std::isfinite(o.pseudorange_rate_mps) || rs < 1.0e7 || rs > 1.0e8) {
       ++report.obs_invalid;
+      report.obs[k].pr_outcome = InnovationOutcome::kInvalid;
+      report.obs[k].prr_outcome = InnovationOutcome::kInvalid;
       continue;
     }
     geo[k] = gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r_ant, v_ant);
@@ -375,10 +379,15 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
         range_err = range_err_hat_(slot);
       }
     }
-    if (scalar_update(h, geo[k].range_m + clk_b + range_err - o.pseudorange_m, r_pr))
+    ObservationInnovation& inn = report.obs[k];
+    if (scalar_update(h, geo[k].range_m + clk_b + range_err - o.pseudorange_m, r_pr, inn.pr_innovation_m,
+                      inn.pr_variance_m2)) {
       ++report.pr_used;
-    else
+      inn.pr_outcome = InnovationOutcome::kUsed;
+    } else {
       ++report.pr_rejected;
+      inn.pr_outcome = InnovationOutcome::kGated;
+    }
     if (!cfg_.use_pseudorange_rate) continue;
     h.setZero();
     h.template segment<3>(3) = -e_n.transpose();
@@ -389,10 +398,14 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
         rate_err = rate_err_hat_(slot);
       }
     }
-    if (scalar_update(h, geo[k].range_rate_mps + clock_drift_mps_ + rate_err - o.pseudorange_rate_mps, r_prr))
+    if (scalar_update(h, geo[k].range_rate_mps + clock_drift_mps_ + rate_err - o.pseudorange_rate_mps, r_prr,
+                      inn.prr_innovation_mps, inn.prr_variance_m2ps2)) {
       ++report.prr_used;
-    else
+      inn.prr_outcome = InnovationOutcome::kUsed;
+    } else {
       ++report.prr_rejected;
+      inn.prr_outcome = InnovationOutcome::kGated;
+    }
   }
   P_ = 0.5 * (P_ + P_.transpose()).eval();
   return Status::kOk;

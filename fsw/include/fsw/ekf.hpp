@@ -87,6 +87,26 @@ struct EkfConfig {
   int propagation_substep_frames = 10;  ///< navigation frames per transition-matrix sub-step
 };
 
+/// What happened to one scalar measurement (pseudorange or pseudorange rate) of an epoch.
+enum class InnovationOutcome : std::uint8_t {
+  kNotProcessed = 0,  ///< not reached (epoch used to initialise the clock, rates disabled, update not run)
+  kUsed,              ///< passed the gate and updated the state
+  kGated,             ///< failed the innovation gate (or a non-positive innovation variance)
+  kInvalid,           ///< the observation's data were non-finite or implausible
+};
+
+/// Innovations of one observation of the epoch. Innovation = predicted minus measured, after the
+/// earlier scalar updates of the same epoch; variance = H P H^T + R of that scalar update.
+struct ObservationInnovation {
+  std::uint8_t prn = 0;
+  InnovationOutcome pr_outcome = InnovationOutcome::kNotProcessed;
+  InnovationOutcome prr_outcome = InnovationOutcome::kNotProcessed;
+  double pr_innovation_m = 0.0;
+  double pr_variance_m2 = 0.0;
+  double prr_innovation_mps = 0.0;
+  double prr_variance_m2ps2 = 0.0;
+};
+
 /// What one measurement update did.
 struct EkfUpdateReport {
   int pr_used = 0;
@@ -96,6 +116,8 @@ struct EkfUpdateReport {
   int obs_invalid = 0;   ///< non-finite or implausible observation data, not used
   int obs_no_channel = 0;  ///< more satellites than error-state channels: used with the white model
   bool clock_initialised = false;  ///< this epoch set the clock estimate from the measurements
+  int n_obs = 0;                   ///< entries of obs: the epoch's observations, in epoch order
+  std::array<ObservationInnovation, kMaxGnssChannels> obs{};
 };
 
 template <class Layout>
@@ -139,7 +161,8 @@ class Ekf {
 
  private:
   void flush_substep(const NavState& nav);
-  bool scalar_update(const RowVec& h, double y, double r);
+  /// One gated scalar update; nu and S receive the innovation and its variance.
+  bool scalar_update(const RowVec& h, double y, double r, double& nu, double& S);
   int bind_channel(std::uint8_t prn);
   void reset_channel_state(int state, double sigma);
 
