@@ -24,6 +24,16 @@ if "$sdins" log export "$log" --channel FOREIGN --csv "$out/foreign.csv" 2> "$ou
   echo "export of a channel without a known type should fail"; exit 1
 fi
 grep -q "no message of a known type" "$out/foreign.err"
+if "$sdins" log export "$log" --channel EKF_MIXED --csv "$out/mixed.csv" 2> "$out/mixed.err"; then
+  echo "export of a channel whose EKF model changes should fail"; exit 1
+fi
+grep -q "different field layout" "$out/mixed.err"
+[ ! -e "$out/mixed.csv" ] && [ ! -e "$out/foreign.csv" ] || { echo "a failed export left its CSV behind"; exit 1; }
+echo keep > "$out/existing.csv"
+if "$sdins" log export "$out/does-not-exist.lcmlog" --channel IMU --csv "$out/existing.csv" 2> /dev/null; then
+  echo "export of a missing log should fail"; exit 1
+fi
+grep -q keep "$out/existing.csv" || { echo "a failed export destroyed an existing file it never wrote"; exit 1; }
 if "$sdins" log info "$out/does-not-exist.lcmlog" 2> "$out/missing.err"; then
   echo "info on a missing log should fail"; exit 1
 fi
@@ -52,8 +62,8 @@ assert ch["FOREIGN"]["messages"] == 3 and ch["FOREIGN"]["type"] == "unknown(0x42
 assert ch["FOREIGN"]["unknown_type"] == 3 and ch["FOREIGN"]["wrong_type"] == 0, ch["FOREIGN"]
 assert ch["IMU"]["t_first_s"] == 0.001 and ch["IMU"]["t_last_s"] == 0.1, ch["IMU"]
 assert ch["NAV_SOLUTION"]["t_first_s"] == 0.005 and ch["NAV_SOLUTION"]["t_last_s"] == 0.1
-assert info["event_timestamp_min_us"] == 0 and info["event_timestamp_max_us"] == 100000, info
-assert info["events"] == 102 + 3 + 2 + 20 + 20 + 2 + 2 + 3, info["events"]
+assert info["event_timestamp_min_us"] == 0 and info["event_timestamp_max_us"] == 200000, info
+assert info["events"] == 102 + 3 + 2 + 20 + 20 + 2 + 2 + 3 + 2, info["events"]
 rej = info["reader_rejections"]
 assert rej["no_sync"] == 1 and rej["truncated_event"] == 1 and info["reader_rejections_total"] == 2, rej
 assert info["bytes_skipped"] == 50 + 28 + 3 + 20, info["bytes_skipped"]

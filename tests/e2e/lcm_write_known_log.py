@@ -115,6 +115,15 @@ for t in (0.05, 0.1):
 for k in range(3):
     add("FOREIGN", bytes([0x42] * (10 + k)), 0.001 * k)
 
+# Two EKF models on one channel: cannot be one CSV.
+for n_states, offsets in ((17, layout15), (26, [0, 3, 6, 9, 12, 15, 18, -1, -1, 24, -1, -1])):
+    s = ekf_state_t()
+    s.n_states = n_states
+    s.block_offset = offsets
+    s.sigma = [1.0] * 64
+    s.channel_prn = [0] * 12
+    add("EKF_MIXED", s.encode(), 0.2)
+
 with open(out_path, "wb") as f:
     n = 0
     for channel, data, ts in events:

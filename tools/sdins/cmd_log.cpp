@@ -182,11 +182,14 @@ int run_info() {
   return 0;
 }
 
-int run_export() {
+bool csv_created = false;
+
+int export_channel() {
   hal::LcmLogReader reader;
   open_log(reader, opt.log);
   std::ofstream csv(opt.csv);
   if (!csv) throw std::runtime_error("cannot write " + opt.csv);
+  csv_created = true;
   const hal::LcmTypeInfo* expected = hal::lcm_channel_type(opt.channel);
   const hal::LcmTypeInfo* type = nullptr;
   std::vector<std::string> header;
@@ -235,6 +238,16 @@ int run_export() {
   if (rows == 0)
     throw std::runtime_error("no message of a known type on channel '" + opt.channel + "' (see sdins log info)");
   return 0;
+}
+
+/// Exports, or removes the partial CSV it created and rethrows.
+int run_export() {
+  try {
+    return export_channel();
+  } catch (...) {
+    if (csv_created) std::remove(opt.csv.c_str());
+    throw;
+  }
 }
 
 }  // namespace
