@@ -273,14 +273,12 @@ Status Ekf<Layout>::propagate() {
 }
 
 template <class Layout>
-bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu_out, double& nis) {
+bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu, double& S) {
   Vec s = Vec::Zero();  // P h^T over the few non-zeros of h
   for (int j = 0; j < N; ++j)
     if (h(j) != 0.0) s.noalias() += h(j) * P_.col(j);
-  const double S = h.dot(s) + r;
-  const double nu = y - h.dot(x_);
-  nu_out = nu;
-  nis = S > 0.0 ? nu * nu / S : 0.0;
+  S = h.dot(s) + r;
+  nu = y - h.dot(x_);
   if (!(S > 0.0) || !(nu * nu <= cfg_.gate_chi2 * S)) return false;
   Vec K = s / S;
   // Consider states get no gain; the Joseph form below stays exact for this suboptimal gain.
@@ -354,12 +352,16 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   bool valid[kMaxGnssChannels] = {};
   double sum_b = 0.0, sum_d = 0.0;
   int n_valid = 0;
+  report.n_obs = epoch.n_obs;
   for (int k = 0; k < epoch.n_obs; ++k) {
     const GnssObservation& o = epoch.obs[k];
+    report.obs[k].prn = o.prn;
     const double rs = o.sat_pos_ecef_m.norm();
     if (!o.sat_pos_ecef_m.allFinite() || !o.sat_vel_ecef_mps.allFinite() || !std::isfinite(o.pseudorange_m) ||
         !std::isfinite(o.pseudorange_rate_mps) || rs < 1.0e7 || rs > 1.0e8) {
       ++report.obs_invalid;
+      report.obs[k].pr_outcome = InnovationOutcome::kInvalid;
+      report.obs[k].prr_outcome = InnovationOutcome::kInvalid;
       continue;
     }
     geo[k] = gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r_ant, v_ant);
@@ -389,8 +391,7 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   for (int k = 0; k < epoch.n_obs; ++k) {
     if (!valid[k]) continue;
     const GnssObservation& o = epoch.obs[k];
-    EkfInnovation& inn = report.innov[static_cast<std::size_t>(report.n_innov++)];
-    inn.prn = o.prn;
+    ObservationInnovation& inn = report.obs[static_cast<std::size_t>(k)];
     const int slot = kChannels ? bind_channel(o.prn) : -1;
     double r_pr = cfg_.pseudorange_sigma_m * cfg_.pseudorange_sigma_m;
     double r_prr = cfg_.pseudorange_rate_sigma_mps * cfg_.pseudorange_rate_sigma_mps;
@@ -413,14 +414,15 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
         range_err = range_err_hat_(slot);
       }
     }
-    inn.pr_accepted = scalar_update(h, geo[k].range_m + clk_b + range_err - o.pseudorange_m, r_pr, inn.pr_innov_m,
-                                    inn.pr_nis);
-    if (inn.pr_accepted) {
+    if (scalar_update(h, geo[k].range_m + clk_b + range_err - o.pseudorange_m, r_pr, inn.pr_innovation_m,
+                      inn.pr_variance_m2)) {
       ++report.pr_used;
-      report.nis_sum += inn.pr_nis;
+      inn.pr_outcome = InnovationOutcome::kUsed;
+      report.nis_sum += inn.pr_innovation_m * inn.pr_innovation_m / inn.pr_variance_m2;
       ++report.nis_dof;
     } else {
       ++report.pr_rejected;
+      inn.pr_outcome = InnovationOutcome::kGated;
     }
     if (!cfg_.use_pseudorange_rate) continue;
     h.setZero();
@@ -432,14 +434,15 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
         rate_err = rate_err_hat_(slot);
       }
     }
-    inn.prr_accepted = scalar_update(h, geo[k].range_rate_mps + clock_drift_mps_ + rate_err - o.pseudorange_rate_mps,
-                                     r_prr, inn.prr_innov_mps, inn.prr_nis);
-    if (inn.prr_accepted) {
+    if (scalar_update(h, geo[k].range_rate_mps + clock_drift_mps_ + rate_err - o.pseudorange_rate_mps, r_prr,
+                      inn.prr_innovation_mps, inn.prr_variance_m2ps2)) {
       ++report.prr_used;
-      report.nis_sum += inn.prr_nis;
+      inn.prr_outcome = InnovationOutcome::kUsed;
+      report.nis_sum += inn.prr_innovation_mps * inn.prr_innovation_mps / inn.prr_variance_m2ps2;
       ++report.nis_dof;
     } else {
       ++report.prr_rejected;
+      inn.prr_outcome = InnovationOutcome::kGated;
     }
   }
   check_covariance();

@@ -8,10 +8,18 @@
 #include <new>
 #include <vector>
 
+#include <unistd.h>
+
+#include <cstdio>
+#include <string>
+
 #include "fsw/alignment.hpp"
+#include "fsw/ekf.hpp"
 #include "fsw/executive.hpp"
 #include "fsw/gps_orbit.hpp"
 #include "fsw/strapdown.hpp"
+#include "hal/lcm_convert.hpp"
+#include "hal/lcm_log_sink.hpp"
 #include "sim/almanac.hpp"
 #include "sim/gps_model.hpp"
 #include "sim/scenario.hpp"
@@ -216,5 +224,63 @@ TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate15) { fly_executive_without_allocat
 TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate24) { fly_executive_without_allocating<fsw::Layout24>(); }
 TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate15Full) { fly_executive_without_allocating<fsw::Layout15Full>(); }
 TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate24Full) { fly_executive_without_allocating<fsw::Layout24Full>(); }
+
+// The flight side of LCM telemetry: encoding every output message into the sink's buffer,
+// publishing it on udpm (when multicast can be created here) and writing it to the log, and the
+// input side's decode + validation, all without touching the heap once the sink is open and
+// warmed up (the first write allocates stdio's file buffer).
+TEST(NoAlloc, LcmSinkAndInputDecodingDoNotAllocate) {
+  const std::string log = "/tmp/sdins_noalloc_" + std::to_string(::getpid()) + ".lcmlog";
+  hal::LcmLogSink sink;
+  hal::LcmTelemetryConfig cfg;
+  cfg.lcm_url = "udpm://239.255.76.67:" + std::to_string(23000 + ::getpid() % 20000) + "?ttl=0";
+  cfg.log_path = log;
+  ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
+  fsw::Ekf<fsw::Layout24Full> ekf;
+  ASSERT_EQ(ekf.init(fsw::EkfConfig{}), fsw::Status::kOk);
+  fsw::ImuCompensation comp;
+  fsw::NavState nav;
+  nav.llh = fsw::Vec3(0.6, 2.2, 1000.0);
+  fsw::ExecutiveHealth health;
+  fsw::FrameOutput frame;
+  frame.report.n_obs = 8;
+  fsw::GnssRawEpoch raw;
+  raw.n_meas = 8;
+  raw.gps_tow_s = 1000.0;
+  fsw::ImuSample imu{0.001, 0.001, fsw::Vec3(1e-5, 2e-5, 3e-5), fsw::Vec3(1e-3, 0.0, -9.8e-3)};
+  sdins::imu_sample_t imu_msg{};
+  hal::to_msg(hal::ImuRecord{imu, 0, 0}, imu_msg);
+  std::uint8_t imu_bytes[256];
+  const int imu_len = imu_msg.encode(imu_bytes, 0, sizeof(imu_bytes));
+  ASSERT_GT(imu_len, 0);
+  const auto one_round = [&]() {
+    sink.write_imu(imu);
+    sink.write_gnss(raw);
+    sink.write_nav(nav, true, false);
+    sink.write_ekf(ekf, comp, nav.t_s);
+    sink.write_health(nav.t_s, health, fsw::GnssConversionStats{}, frame, 10.83);
+    sink.write_truth(nav.t_s, nav.llh, nav.vel_enu_mps, fsw::Mat3::Identity());
+    sdins::imu_sample_t in{};
+    hal::ImuRecord rec;
+    hal::decode_exact(imu_bytes, static_cast<std::size_t>(imu_len), in);
+    hal::from_msg(in, rec);
+  };
+  one_round();  // warm-up: stdio buffer, LCM's first send
+  long n = 0;
+  {
+    Armed a;
+    for (int k = 0; k < 200; ++k) one_round();
+    n = g_allocs;
+  }
+  EXPECT_EQ(n, 0) << "LCM sink / input decoding allocated " << n << " times (network "
+                  << (sink.telemetry().network_active() ? "on" : "off") << ")";
+  EXPECT_EQ(sink.telemetry().logged(), 201u * 6u);
+  std::printf("LCM sink: udpm %s, %llu messages published, %llu logged\n",
+              sink.telemetry().network_active() ? "on" : "unavailable (log only)",
+              static_cast<unsigned long long>(sink.telemetry().published()),
+              static_cast<unsigned long long>(sink.telemetry().logged()));
+  sink.close();
+  std::remove(log.c_str());
+}
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <functional>
 #include <random>
@@ -245,6 +246,68 @@ TEST(Ekf, SequentialUpdateEqualsBatchKalmanFormula) {
       EXPECT_NEAR(ekf.P()(i, j), P(i, j), 1e-9 * std::sqrt(P0(i, i) * P0(j, j))) << i << "," << j;
   }
   EXPECT_EQ((ekf.P() - ekf.P().transpose()).cwiseAbs().maxCoeff(), 0.0);
+}
+
+// The report carries every observation's outcome and innovation: the clock-initialising epoch
+// processes nothing, then an outlier is gated, a non-finite observation is invalid, and the first
+// scalar update's innovation and variance are the prior ones (x = 0, P0).
+TEST(Ekf, ReportsPerObservationInnovations) {
+  using Ekf = fsw::Ekf<Layout15>;
+  fsw::EkfConfig cfg;
+  Ekf ekf;
+  ASSERT_EQ(ekf.init(cfg), fsw::Status::kOk);
+  fsw::NavState nav;
+  nav.llh = Vec3(35.0 * fsw::kDegToRad, 127.0 * fsw::kDegToRad, 5000.0);
+  nav.vel_enu_mps = Vec3(0.0, 250.0, 0.0);
+  const Vec3 r_rx = fsw::ecef_from_llh(nav.llh);
+  const Mat3 Cne = fsw::C_n_e(nav.llh.x(), nav.llh.y());
+  fsw::GnssEpoch ep;
+  const double az[6] = {0.3, 1.4, 2.5, 3.6, 4.7, 5.8}, el[6] = {0.3, 0.6, 0.9, 1.2, 0.5, 0.8};
+  ep.n_obs = 6;
+  for (int k = 0; k < 6; ++k) {
+    const Vec3 u_n(std::cos(el[k]) * std::sin(az[k]), std::cos(el[k]) * std::cos(az[k]), std::sin(el[k]));
+    auto& o = ep.obs[k];
+    o.prn = static_cast<std::uint8_t>(10 + k);
+    o.sat_pos_ecef_m = r_rx + Cne * u_n * 2.2e7;
+    o.sat_vel_ecef_mps = Vec3(1000.0 * k, -500.0, 2000.0);
+    const fsw::GnssGeometry g = fsw::gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r_rx, Cne * nav.vel_enu_mps);
+    o.pseudorange_m = g.range_m + 100.0 + 2.0 * (k - 2.5);
+    o.pseudorange_rate_mps = g.range_rate_mps + 2.0 + 0.05 * (k - 2.5);
+  }
+  fsw::EkfUpdateReport rep;
+  ASSERT_EQ(ekf.update(ep, nav, Vec3::Zero(), rep), fsw::Status::kOk);
+  ASSERT_TRUE(rep.clock_initialised);
+  ASSERT_EQ(rep.n_obs, 6);
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_EQ(rep.obs[k].prn, 10 + k);
+    EXPECT_EQ(rep.obs[k].pr_outcome, fsw::InnovationOutcome::kNotProcessed);
+    EXPECT_EQ(rep.obs[k].prr_outcome, fsw::InnovationOutcome::kNotProcessed);
+  }
+  const double b0 = ekf.clock_bias_m();
+  const double p_pos = ekf.P()(0, 0), p_clk = ekf.P()(15, 15);
+  ep.obs[2].pseudorange_m += 2000.0;  // far outside the gate
+  ep.obs[4].pseudorange_m = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_EQ(ekf.update(ep, nav, Vec3::Zero(), rep), fsw::Status::kOk);
+  EXPECT_EQ(rep.pr_used, 4);
+  EXPECT_EQ(rep.pr_rejected, 1);
+  EXPECT_EQ(rep.obs_invalid, 1);
+  EXPECT_EQ(rep.obs[0].pr_outcome, fsw::InnovationOutcome::kUsed);
+  EXPECT_EQ(rep.obs[2].pr_outcome, fsw::InnovationOutcome::kGated);
+  EXPECT_EQ(rep.obs[2].prr_outcome, fsw::InnovationOutcome::kUsed);
+  EXPECT_EQ(rep.obs[4].pr_outcome, fsw::InnovationOutcome::kInvalid);
+  EXPECT_EQ(rep.obs[4].prr_outcome, fsw::InnovationOutcome::kInvalid);
+  const double nu2 = rep.obs[2].pr_innovation_m;
+  EXPECT_GT(nu2 * nu2, cfg.gate_chi2 * rep.obs[2].pr_variance_m2);
+  EXPECT_LT(nu2, -1900.0);  // predicted minus measured: the measurement is 2000 m long
+  // First scalar update of the epoch: prior innovation and variance.
+  const auto& o0 = ep.obs[0];
+  const fsw::GnssGeometry g0 = fsw::gnss_geometry(o0.sat_pos_ecef_m, o0.sat_vel_ecef_mps, r_rx, Cne * nav.vel_enu_mps);
+  EXPECT_NEAR(rep.obs[0].pr_innovation_m, g0.range_m + b0 - o0.pseudorange_m, 1e-6);
+  const Vec3 e_n = Cne.transpose() * g0.los_ecef;
+  const double var0 = e_n.squaredNorm() * p_pos + p_clk + cfg.pseudorange_sigma_m * cfg.pseudorange_sigma_m;
+  EXPECT_NEAR(rep.obs[0].pr_variance_m2, var0, 1e-9 * var0);
+  for (int k = 0; k < 6; ++k)
+    if (k != 4) EXPECT_GT(rep.obs[k].prr_variance_m2ps2, 0.0);
 }
 
 namespace {

@@ -95,15 +95,25 @@ struct EkfConfig {
   int runaway_epochs = 5;
 };
 
-/// One satellite's innovations in an update (y = predicted - measured, before the update).
-struct EkfInnovation {
+/// What happened to one scalar measurement (pseudorange or pseudorange rate) of an epoch.
+enum class InnovationOutcome : std::uint8_t {
+  kNotProcessed = 0,  ///< not reached (epoch used to initialise the clock, rates disabled, update not run)
+  kUsed,              ///< passed the gate and updated the state
+  kGated,             ///< failed the innovation gate (or a non-positive innovation variance)
+  kInvalid,           ///< the observation's data were non-finite or implausible
+};
+
+/// Innovations of one observation of the epoch. Innovation = predicted minus measured, after the
+/// earlier scalar updates of the same epoch; variance = H P H^T + R of that scalar update (the
+/// NIS is innovation^2 / variance).
+struct ObservationInnovation {
   std::uint8_t prn = 0;
-  double pr_innov_m = 0.0;
-  double pr_nis = 0.0;         ///< y^2 / (H P H^T + R)
-  bool pr_accepted = false;
-  double prr_innov_mps = 0.0;
-  double prr_nis = 0.0;
-  bool prr_accepted = false;
+  InnovationOutcome pr_outcome = InnovationOutcome::kNotProcessed;
+  InnovationOutcome prr_outcome = InnovationOutcome::kNotProcessed;
+  double pr_innovation_m = 0.0;
+  double pr_variance_m2 = 0.0;
+  double prr_innovation_mps = 0.0;
+  double prr_variance_m2ps2 = 0.0;
 };
 
 /// What one measurement update did.
@@ -115,8 +125,8 @@ struct EkfUpdateReport {
   int obs_invalid = 0;   ///< non-finite or implausible observation data, not used
   int obs_no_channel = 0;  ///< more satellites than error-state channels: used with the white model
   bool clock_initialised = false;  ///< this epoch set the clock estimate from the measurements
-  int n_innov = 0;                 ///< valid entries of innov (the satellites that were processed)
-  std::array<EkfInnovation, kMaxGnssChannels> innov{};
+  int n_obs = 0;                   ///< entries of obs: the epoch's observations, in epoch order
+  std::array<ObservationInnovation, kMaxGnssChannels> obs{};
   double nis_sum = 0.0;            ///< sum of the NIS of the accepted scalar measurements ...
   int nis_dof = 0;                 ///< ... and their number
 };
@@ -183,8 +193,8 @@ class Ekf {
 
  private:
   void flush_substep(const NavState& nav);
-  /// Gated scalar update; returns whether it was applied, nis = nu^2 / S (before the update).
-  bool scalar_update(const RowVec& h, double y, double r, double& nu_out, double& nis);
+  /// One gated scalar update; nu and S receive the innovation and its variance.
+  bool scalar_update(const RowVec& h, double y, double r, double& nu, double& S);
   /// Symmetrises P in place and checks it is positive definite; repairs (counted) if not.
   void check_covariance();
   void symmetrise();
