@@ -54,6 +54,7 @@ bool to_int(double x, double lo, double hi, std::int64_t& out) {
 constexpr double kI32Min = -2147483648.0, kI32Max = 2147483647.0;
 constexpr double kU32Max = 4294967295.0;
 constexpr double kI40Min = -549755813888.0, kI40Max = 549755813887.0;
+constexpr double kU40Max = 1099511627775.0;
 constexpr double kI64Lim = 9.2e18;  // inside the int64 range, far beyond any time tag
 
 // IMU_SAMPLE layout (byte offsets)
@@ -63,8 +64,8 @@ constexpr int kEpSeq = 0, kEpWeek = 2, kEpTow = 4, kEpTime = 12, kEpNMeas = 20, 
 // GPS_MEAS
 constexpr int kMsSeq = 0, kMsIndex = 2, kMsPrn = 3, kMsPr = 4, kMsPrr = 9, kMsCn0 = 13;
 // GPS_ALMANAC
-constexpr int kAlPrn = 0, kAlHealth = 1, kAlWeek = 2, kAlToa = 4, kAlEcc = 8, kAlDeltaI = 12, kAlOmegaDot = 16,
-              kAlSqrtA = 20, kAlOmega0 = 24, kAlArgPerigee = 28, kAlM0 = 32, kAlAf0 = 36, kAlAf1 = 40;
+constexpr int kAlPrn = 0, kAlHealth = 1, kAlWeek = 2, kAlToa = 4, kAlEcc = 8, kAlDeltaI = 12, kAlOmegaDot = 17,
+              kAlSqrtA = 22, kAlOmega0 = 27, kAlArgPerigee = 32, kAlM0 = 37, kAlAf0 = 42, kAlAf1 = 47;
 
 constexpr double kSecondsPerWeek = 604800.0;
 
@@ -302,15 +303,15 @@ CodecStatus encode_gps_almanac(const fsw::GpsAlmanac& a, CanFrame& out) {
   std::int64_t toa = 0, ecc = 0, di = 0, odot = 0, sqa = 0, om0 = 0, w = 0, m0 = 0, af0 = 0, af1 = 0;
   const double di_sc = a.inclination_rad / kSemicircle_rad - kAlmInclinationRef_sc;
   if (!to_int(a.toa_s / kAlmToaLsb_s, 0.0, kU32Max, toa) || !to_int(a.eccentricity / kAlmEccLsb, 0.0, kU32Max, ecc) ||
-      !to_int(di_sc / kAlmAngleLsb_sc, kI32Min, kI32Max, di) ||
-      !to_int(a.omega_dot_radps / kSemicircle_rad / kAlmOmegaDotLsb_scps, kI32Min, kI32Max, odot) ||
-      !to_int(a.sqrt_a_sqrtm / kAlmSqrtALsb, 0.0, kU32Max, sqa) ||
-      !to_int(a.af0_s / kAlmAf0Lsb_s, kI32Min, kI32Max, af0) || !to_int(a.af1_sps / kAlmAf1Lsb_sps, kI32Min, kI32Max, af1))
+      !to_int(di_sc / kAlmAngleLsb_sc, kI40Min, kI40Max, di) ||
+      !to_int(a.omega_dot_radps / kSemicircle_rad / kAlmOmegaDotLsb_scps, kI40Min, kI40Max, odot) ||
+      !to_int(a.sqrt_a_sqrtm / kAlmSqrtALsb, 0.0, kU40Max, sqa) ||
+      !to_int(a.af0_s / kAlmAf0Lsb_s, kI40Min, kI40Max, af0) || !to_int(a.af1_sps / kAlmAf1Lsb_sps, kI40Min, kI40Max, af1))
     return CodecStatus::kOutOfRange;
   // Periodic angles: [-1, 1) semicircles; a value that rounds up to +1 semicircle wraps to -1.
   auto angle = [](double rad) {
     std::int64_t q = static_cast<std::int64_t>(std::nearbyint(wrap_semicircles(rad) / kAlmAngleLsb_sc));
-    if (q > static_cast<std::int64_t>(kI32Max)) q -= std::int64_t{1} << 32;
+    if (q > static_cast<std::int64_t>(kI40Max)) q -= std::int64_t{1} << 40;
     return q;
   };
   om0 = angle(a.omega0_rad);
@@ -323,14 +324,14 @@ CodecStatus encode_gps_almanac(const fsw::GpsAlmanac& a, CanFrame& out) {
   put_u(out, kAlWeek, 2, static_cast<std::uint64_t>(a.week_mod_1024));
   put_u(out, kAlToa, 4, static_cast<std::uint64_t>(toa));
   put_u(out, kAlEcc, 4, static_cast<std::uint64_t>(ecc));
-  put_s(out, kAlDeltaI, 4, di);
-  put_s(out, kAlOmegaDot, 4, odot);
-  put_u(out, kAlSqrtA, 4, static_cast<std::uint64_t>(sqa));
-  put_s(out, kAlOmega0, 4, om0);
-  put_s(out, kAlArgPerigee, 4, w);
-  put_s(out, kAlM0, 4, m0);
-  put_s(out, kAlAf0, 4, af0);
-  put_s(out, kAlAf1, 4, af1);
+  put_s(out, kAlDeltaI, 5, di);
+  put_s(out, kAlOmegaDot, 5, odot);
+  put_u(out, kAlSqrtA, 5, static_cast<std::uint64_t>(sqa));
+  put_s(out, kAlOmega0, 5, om0);
+  put_s(out, kAlArgPerigee, 5, w);
+  put_s(out, kAlM0, 5, m0);
+  put_s(out, kAlAf0, 5, af0);
+  put_s(out, kAlAf1, 5, af1);
   seal_frame(out);
   return CodecStatus::kOk;
 }
@@ -344,14 +345,14 @@ CodecStatus decode_gps_almanac(const CanFrame& f, fsw::GpsAlmanac& a) {
   a.week_mod_1024 = static_cast<int>(get_u(f, kAlWeek, 2));
   a.toa_s = static_cast<double>(get_u(f, kAlToa, 4)) * kAlmToaLsb_s;
   a.eccentricity = static_cast<double>(get_u(f, kAlEcc, 4)) * kAlmEccLsb;
-  a.inclination_rad = (kAlmInclinationRef_sc + static_cast<double>(get_s(f, kAlDeltaI, 4)) * kAlmAngleLsb_sc) * kSemicircle_rad;
-  a.omega_dot_radps = static_cast<double>(get_s(f, kAlOmegaDot, 4)) * kAlmOmegaDotLsb_scps * kSemicircle_rad;
-  a.sqrt_a_sqrtm = static_cast<double>(get_u(f, kAlSqrtA, 4)) * kAlmSqrtALsb;
-  a.omega0_rad = static_cast<double>(get_s(f, kAlOmega0, 4)) * kAlmAngleLsb_sc * kSemicircle_rad;
-  a.arg_perigee_rad = static_cast<double>(get_s(f, kAlArgPerigee, 4)) * kAlmAngleLsb_sc * kSemicircle_rad;
-  a.mean_anomaly_rad = static_cast<double>(get_s(f, kAlM0, 4)) * kAlmAngleLsb_sc * kSemicircle_rad;
-  a.af0_s = static_cast<double>(get_s(f, kAlAf0, 4)) * kAlmAf0Lsb_s;
-  a.af1_sps = static_cast<double>(get_s(f, kAlAf1, 4)) * kAlmAf1Lsb_sps;
+  a.inclination_rad = (kAlmInclinationRef_sc + static_cast<double>(get_s(f, kAlDeltaI, 5)) * kAlmAngleLsb_sc) * kSemicircle_rad;
+  a.omega_dot_radps = static_cast<double>(get_s(f, kAlOmegaDot, 5)) * kAlmOmegaDotLsb_scps * kSemicircle_rad;
+  a.sqrt_a_sqrtm = static_cast<double>(get_u(f, kAlSqrtA, 5)) * kAlmSqrtALsb;
+  a.omega0_rad = static_cast<double>(get_s(f, kAlOmega0, 5)) * kAlmAngleLsb_sc * kSemicircle_rad;
+  a.arg_perigee_rad = static_cast<double>(get_s(f, kAlArgPerigee, 5)) * kAlmAngleLsb_sc * kSemicircle_rad;
+  a.mean_anomaly_rad = static_cast<double>(get_s(f, kAlM0, 5)) * kAlmAngleLsb_sc * kSemicircle_rad;
+  a.af0_s = static_cast<double>(get_s(f, kAlAf0, 5)) * kAlmAf0Lsb_s;
+  a.af1_sps = static_cast<double>(get_s(f, kAlAf1, 5)) * kAlmAf1Lsb_sps;
   return CodecStatus::kOk;
 }
 

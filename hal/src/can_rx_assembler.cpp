@@ -7,11 +7,11 @@
 namespace hal {
 namespace {
 
-// Physical plausibility limits: beyond any aircraft IMU / GPS receiver, so only corrupted or
-// wrongly scaled data trips them.
+// Physical plausibility limits: beyond any aircraft IMU / GPS receiver (and beyond the IMU fields'
+// range at 1 kHz, so saturated samples pass), so only corrupted or wrongly scaled data trips them.
 constexpr double kMaxImuDt_s = 0.1;
 constexpr double kMaxRate_radps = 100.0;
-constexpr double kMaxSpecificForce_mps2 = 2000.0;
+constexpr double kMaxSpecificForce_mps2 = 5000.0;
 constexpr double kMinPseudorange_m = 1.0e7;
 constexpr double kMaxPseudorange_m = 5.0e7;
 constexpr double kMaxRangeRate_mps = 2.0e4;

@@ -14,6 +14,7 @@ void register_scenario(CLI::App& app);
 void register_fly(CLI::App& app);
 void register_montecarlo(CLI::App& app);
 void register_paper(CLI::App& app);
+void register_can(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -23,6 +24,7 @@ int run_scenario_check();
 int run_fly();
 int run_montecarlo();
 int run_paper();
+int run_can();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

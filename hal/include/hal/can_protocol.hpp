@@ -14,7 +14,7 @@
 //   0x020  GPS_EPOCH     24  GPS rate (1 Hz)   epoch sequence, week, tow (receiver clock), IMU-time
 //                                              receive time, number of measurement frames, status
 //   0x021  GPS_MEAS      20  per satellite     epoch sequence, index, PRN, pseudorange, rate, C/N0
-//   0x030  GPS_ALMANAC   48  per PRN           all fsw::GpsAlmanac elements, IS-GPS-200 units
+//   0x030  GPS_ALMANAC   64  per PRN           all fsw::GpsAlmanac elements, IS-GPS-200 units
 //
 // Decimal scale factors are applied as integer = round(value * N), value = integer / N (N an
 // exactly representable power of ten), binary ones as exact multiplications by powers of two, so
@@ -42,7 +42,7 @@ inline constexpr std::uint32_t kIdGpsAlmanac = 0x030;
 inline constexpr int kLenImuSample = 48;
 inline constexpr int kLenGpsEpoch = 24;
 inline constexpr int kLenGpsMeas = 20;
-inline constexpr int kLenGpsAlmanac = 48;
+inline constexpr int kLenGpsAlmanac = 64;
 
 enum class MessageKind : std::uint8_t { kUnknown, kImuSample, kGpsEpoch, kGpsMeas, kGpsAlmanac };
 
@@ -69,16 +69,18 @@ inline constexpr double kPseudorangePerM = 1e4;     ///< pseudorange: 0.1 mm, in
 inline constexpr double kRangeRatePerMps = 1e4;     ///< pseudorange rate: 0.1 mm/s, int32 (+-2.1e5 m/s)
 inline constexpr double kCn0PerDbHz = 100.0;        ///< C/N0: 0.01 dB-Hz, uint16 (0..655 dB-Hz)
 inline constexpr double kPseudorangeMax_m = 549755813887.0 / kPseudorangePerM;  ///< (2^39 - 1) LSB
-// Almanac, IS-GPS-200 subframe units (semicircles, powers of two) at the ephemeris resolutions of
-// Table 20-III (finer than the almanac's Table 20-VI, whose values are all exact multiples).
+// Almanac: IS-GPS-200 units (semicircles, powers of two) with fields 2^12 ... 2^20 times finer
+// than the almanac's (Table 20-VI), so every IS-GPS-200 almanac value is carried exactly and
+// arbitrary elements (e.g. a simulator's) so finely that the orbit and clock computed from the
+// decoded elements stay within a millimetre of the original ones for a day.
 inline constexpr double kAlmToaLsb_s = 0x1p-8;              ///< uint32
 inline constexpr double kAlmEccLsb = 0x1p-33;               ///< uint32, [0, 0.5)
-inline constexpr double kAlmAngleLsb_sc = 0x1p-31;          ///< int32, semicircles: i0 - 0.3, Omega0, omega, M0
+inline constexpr double kAlmAngleLsb_sc = 0x1p-39;          ///< int40, semicircles: i0 - 0.3, Omega0, omega, M0
 inline constexpr double kAlmInclinationRef_sc = 0.3;        ///< i0 = 0.3 semicircles + delta-i (IS-GPS-200)
-inline constexpr double kAlmOmegaDotLsb_scps = 0x1p-43;     ///< int32, semicircles/s
-inline constexpr double kAlmSqrtALsb = 0x1p-19;             ///< uint32, m^0.5
-inline constexpr double kAlmAf0Lsb_s = 0x1p-31;             ///< int32
-inline constexpr double kAlmAf1Lsb_sps = 0x1p-43;           ///< int32
+inline constexpr double kAlmOmegaDotLsb_scps = 0x1p-56;     ///< int40, semicircles/s
+inline constexpr double kAlmSqrtALsb = 0x1p-27;             ///< uint40, m^0.5, [0, 8192)
+inline constexpr double kAlmAf0Lsb_s = 0x1p-39;             ///< int40, [-1, 1) s
+inline constexpr double kAlmAf1Lsb_sps = 0x1p-55;           ///< int40, [-1.5e-5, 1.5e-5)
 inline constexpr double kSemicircle_rad = 3.141592653589793238462643383279502884;  ///< IS-GPS-200 pi
 
 // ---- status bits -----------------------------------------------------------------------------

@@ -12,7 +12,7 @@
 //    dropped. A jump of more than kImuResyncSamples either way is a restart of the sender: counted,
 //    and the counter is taken as the new reference. Samples the IMU flags unusable (gyro/accel
 //    fail, invalid) and samples with absurd values (dt outside (0, 0.1] s, rate above 100 rad/s,
-//    specific force above 2000 m/s^2) are counted and not delivered; saturated ones are delivered
+//    specific force above 5000 m/s^2) are counted and not delivered; saturated ones are delivered
 //    and counted. A time tag that disagrees with the counter (by more than half a dt) is counted.
 //  - GPS: an epoch is delivered when its header and all announced measurement frames have arrived
 //    (measurement frames may arrive before their header), or, incomplete and counted, when a newer
