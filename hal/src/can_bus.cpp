@@ -49,6 +49,7 @@ CanBusStatus CanBus::open(const std::string& name) {
   close();
   name_ = name;
   error_.clear();
+  errno_ = 0;
   const std::size_t colon = name.find(':');
   if (colon == std::string::npos || colon + 1 >= name.size()) {
     error_ = "bus name '" + name + "': expected socketcan:IFACE, udp:PORT, udp:GROUP:PORT or loop:NAME";
@@ -69,6 +70,7 @@ CanBusStatus CanBus::open(const std::string& name) {
   const CanBusStatus st = t->open(arg);
   if (st != CanBusStatus::kOk) {
     error_ = name + ": " + t->error;
+    errno_ = t->sys_errno;
     return st;
   }
   t_ = std::move(t);
@@ -97,7 +99,7 @@ void CanBus::close() {
 }
 
 const std::string& CanBus::last_error() const { return t_ && !t_->error.empty() ? t_->error : error_; }
-int CanBus::last_errno() const { return t_ ? t_->sys_errno : 0; }
+int CanBus::last_errno() const { return t_ ? t_->sys_errno : errno_; }
 const CanBusStats& CanBus::stats() const {
   static const CanBusStats kNone{};
   return t_ ? t_->stats : kNone;

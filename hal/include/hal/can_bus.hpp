@@ -93,7 +93,8 @@ class CanBus {
  private:
   std::unique_ptr<CanTransport> t_;
   std::string name_;
-  std::string error_;  ///< errors before a transport exists (bad name)
+  std::string error_;  ///< why the last open() failed
+  int errno_ = 0;      ///< errno of the last failed open()
 };
 
 /// Send timeout of the socket transports [s].
