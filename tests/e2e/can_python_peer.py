@@ -23,7 +23,7 @@ import time
 
 import can
 
-GROUP = "ff15:7079:7468:6f6e:6465:6d6f:6d63:6173"  # python-can's default udp_multicast channel
+GROUPS = ["ff15:7079:7468:6f6e:6465:6d6f:6d63:6173", "239.74.163.2"]  # python-can's IPv6 / IPv4 defaults
 
 
 def frames_of(path):
@@ -77,6 +77,24 @@ def check_decodes(sdins, log, n_imu, what):
           f"{h['almanac_delivered']} almanac entries, no rejections")
 
 
+def usable_group(port):
+    """The first python-can default group on which two python-can buses on this host reach each
+    other (the IPv6 default needs a multicast-capable interface; an isolated lo only does IPv4
+    after `ip route add 224.0.0.0/4 dev lo`), or None and the reasons."""
+    reasons = []
+    for group in GROUPS:
+        try:
+            with can.Bus(interface="udp_multicast", channel=group, port=port) as a, \
+                    can.Bus(interface="udp_multicast", channel=group, port=port) as b:
+                a.send(can.Message(arbitration_id=0x7FF, is_extended_id=False, data=b"probe"))
+                if b.recv(timeout=1.0) is not None:
+                    return group, ""
+                reasons.append(f"{group}: sent datagram not received within 1 s")
+        except Exception as e:  # noqa: BLE001 - any failure means: not usable here
+            reasons.append(f"{group}: {e!r}")
+    return None, "; ".join(reasons)
+
+
 def main():
     sdins, work = sys.argv[1], sys.argv[2]
     os.makedirs(work, exist_ok=True)
@@ -86,20 +104,19 @@ def main():
     sent = frames_of(src)
     n_imu = sum(1 for m in sent if m.arbitration_id == 0x010)
 
-    try:
-        probe = can.Bus(interface="udp_multicast", channel=GROUP, port=base)
-        probe.shutdown()
-    except Exception as e:  # noqa: BLE001 - any failure means: no multicast here
-        print(f"SKIP: python-can udp_multicast unavailable on this host: {e!r}")
+    group, why = usable_group(base)
+    if group is None:
+        print(f"SKIP: python-can udp_multicast cannot deliver on this host: {why}")
         return 77
+    print(f"multicast group {group}")
 
     # 1. python-can Bus -> sdins can record
     port = base
     rx_log = os.path.join(work, "from_python.log")
-    rec = subprocess.Popen([sdins, "can", "record", "--can", f"udp:{port}", "--out", rx_log, "--count",
+    rec = subprocess.Popen([sdins, "can", "record", "--can", f"udp:[{group}]:{port}", "--out", rx_log, "--count",
                             str(len(sent)), "--timeout", "10"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     wait_for_line(rec, rec.stderr, "listening", 10)
-    with can.Bus(interface="udp_multicast", channel=GROUP, port=port) as bus:
+    with can.Bus(interface="udp_multicast", channel=group, port=port) as bus:
         for i, m in enumerate(sent):
             bus.send(m)
             if i % 20 == 19:
@@ -112,8 +129,8 @@ def main():
     # 2. sdins can play -> python-can Bus
     port = base + 1
     got = []
-    with can.Bus(interface="udp_multicast", channel=GROUP, port=port) as bus:
-        play = subprocess.Popen([sdins, "can", "play", src, "--can", f"udp:{port}", "--gap", "0.0001"],
+    with can.Bus(interface="udp_multicast", channel=group, port=port) as bus:
+        play = subprocess.Popen([sdins, "can", "play", src, "--can", f"udp:[{group}]:{port}", "--gap", "0.0001"],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         deadline = time.time() + 20
         while len(got) < len(sent) and time.time() < deadline:
@@ -130,10 +147,10 @@ def main():
     # 3. python -m can.player -> sdins can record
     port = base + 2
     rx_log = os.path.join(work, "from_player.log")
-    rec = subprocess.Popen([sdins, "can", "record", "--can", f"udp:{port}", "--out", rx_log, "--count",
+    rec = subprocess.Popen([sdins, "can", "record", "--can", f"udp:[{group}]:{port}", "--out", rx_log, "--count",
                             str(len(sent)), "--timeout", "10"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     wait_for_line(rec, rec.stderr, "listening", 10)
-    subprocess.run([sys.executable, "-m", "can.player", "-i", "udp_multicast", "-c", GROUP, f"--port={port}", src],
+    subprocess.run([sys.executable, "-m", "can.player", "-i", "udp_multicast", "-c", group, f"--port={port}", src],
                    check=True, timeout=60, stdout=subprocess.DEVNULL)
     rec.wait(timeout=30)
     assert rec.returncode == 0, f"sdins can record failed: {rec.stdout.read().decode()}"
@@ -142,10 +159,10 @@ def main():
     # 4. sdins can play -> python -m can.logger
     port = base + 3
     py_log = os.path.join(work, "by_can_logger.log")
-    logger = subprocess.Popen([sys.executable, "-u", "-m", "can.logger", "-i", "udp_multicast", "-c", GROUP,
+    logger = subprocess.Popen([sys.executable, "-u", "-m", "can.logger", "-i", "udp_multicast", "-c", group,
                                f"--port={port}", "-f", py_log], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     wait_for_line(logger, logger.stdout, "Can Logger", 15)
-    subprocess.run([sdins, "can", "play", src, "--can", f"udp:{port}", "--gap", "0.0001"], check=True, timeout=60,
+    subprocess.run([sdins, "can", "play", src, "--can", f"udp:[{group}]:{port}", "--gap", "0.0001"], check=True, timeout=60,
                    stdout=subprocess.DEVNULL)
     time.sleep(0.5)
     logger.send_signal(signal.SIGINT)

@@ -11,6 +11,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <vector>
 
@@ -293,20 +294,81 @@ TEST(CanBusUdp, PackMatchesPythonCanLayoutAndUnpacks) {
   EXPECT_EQ(g.data[1], 255);
 }
 
-/// Opens a UDP bus or explains why multicast is unavailable here.
-bool open_udp(CanBus& bus, const std::string& name, std::string& why) {
-  const CanBusStatus st = bus.open(name);
-  if (st == CanBusStatus::kOk) return true;
-  why = std::string(hal::to_string(st)) + ": " + bus.last_error();
-  return false;
+/// Whether this host delivers multicast on a group to its own sockets, asked with plain sockets set
+/// up like python-can's (independent of the transport under test): join on the default interface,
+/// send one datagram, wait up to 1 s.
+bool host_multicast_works(const std::string& group, int port, std::string& why) {
+  const bool v6 = group.find(':') != std::string::npos;
+  const int fam = v6 ? AF_INET6 : AF_INET;
+  const int rx = ::socket(fam, SOCK_DGRAM, 0), tx = ::socket(fam, SOCK_DGRAM, 0);
+  bool ok = false;
+  const int on = 1;
+  sockaddr_storage dst{};
+  socklen_t len = 0;
+  setsockopt(rx, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on);
+  if (v6) {
+    sockaddr_in6 b{};
+    b.sin6_family = AF_INET6;
+    b.sin6_port = htons(static_cast<std::uint16_t>(port));
+    ipv6_mreq m{};
+    inet_pton(AF_INET6, group.c_str(), &m.ipv6mr_multiaddr);
+    if (::bind(rx, reinterpret_cast<sockaddr*>(&b), sizeof b) < 0 ||
+        setsockopt(rx, IPPROTO_IPV6, IPV6_JOIN_GROUP, &m, sizeof m) < 0) {
+      why = "join " + group + ": " + std::strerror(errno);
+    } else {
+      b.sin6_addr = m.ipv6mr_multiaddr;
+      std::memcpy(&dst, &b, sizeof b);
+      len = sizeof b;
+    }
+  } else {
+    sockaddr_in b{};
+    b.sin_family = AF_INET;
+    b.sin_port = htons(static_cast<std::uint16_t>(port));
+    ip_mreq m{};
+    inet_pton(AF_INET, group.c_str(), &m.imr_multiaddr);
+    if (::bind(rx, reinterpret_cast<sockaddr*>(&b), sizeof b) < 0 ||
+        setsockopt(rx, IPPROTO_IP, IP_ADD_MEMBERSHIP, &m, sizeof m) < 0) {
+      why = "join " + group + ": " + std::strerror(errno);
+    } else {
+      b.sin_addr = m.imr_multiaddr;
+      std::memcpy(&dst, &b, sizeof b);
+      len = sizeof b;
+    }
+  }
+  if (len > 0) {
+    const char probe[] = "probe";
+    if (::sendto(tx, probe, sizeof probe, 0, reinterpret_cast<sockaddr*>(&dst), len) < 0) {
+      why = "send to " + group + ": " + std::strerror(errno);
+    } else {
+      pollfd p{rx, POLLIN, 0};
+      ok = ::poll(&p, 1, 1000) == 1;
+      if (!ok) why = "a datagram sent to " + group + " did not come back within 1 s";
+    }
+  }
+  ::close(rx);
+  ::close(tx);
+  return ok;
+}
+
+/// The bus name of a multicast group this host delivers (python-can's IPv6 default first, then
+/// its IPv4 default), or "" with the reasons: then the test is skipped, never failed.
+std::string usable_udp_bus(int port, std::string& why) {
+  std::string why6, why4;
+  if (host_multicast_works(hal::kUdpDefaultGroupV6, port, why6)) return "udp:" + std::to_string(port);
+  if (host_multicast_works(hal::kUdpDefaultGroupV4, port, why4))
+    return std::string("udp:") + hal::kUdpDefaultGroupV4 + ":" + std::to_string(port);
+  why = "no multicast delivery on this host (IPv6: " + why6 + "; IPv4: " + why4 +
+        "); see README: ip link set lo multicast on; ip route add 224.0.0.0/4 dev lo";
+  return "";
 }
 
 TEST(CanBusUdp, TwoNodesExchangeFramesAndOwnFramesAreFiltered) {
-  const std::string name = "udp:" + std::to_string(test_port(0));
-  CanBus a, b;
   std::string why;
-  if (!open_udp(a, name, why)) GTEST_SKIP() << "UDP multicast unavailable on this host: " << why;
-  ASSERT_TRUE(open_udp(b, name, why)) << why;
+  const std::string name = usable_udp_bus(test_port(0), why);
+  if (name.empty()) GTEST_SKIP() << why;
+  CanBus a, b;
+  ASSERT_EQ(a.open(name), CanBusStatus::kOk) << a.last_error();
+  ASSERT_EQ(b.open(name), CanBusStatus::kOk) << b.last_error();
   EXPECT_GE(a.fd(), 0);
   for (int k = 0; k < 200; ++k) {
     const CanFrame f = fd_frame(0x010, 48, static_cast<std::uint8_t>(k));
@@ -329,22 +391,33 @@ TEST(CanBusUdp, TwoNodesExchangeFramesAndOwnFramesAreFiltered) {
 
 TEST(CanBusUdp, MalformedDatagramsAreCountedAndSkipped) {
   const int port = test_port(1);
-  CanBus rx;
   std::string why;
-  if (!open_udp(rx, "udp:" + std::to_string(port), why)) GTEST_SKIP() << "UDP multicast unavailable: " << why;
+  const std::string name = usable_udp_bus(port, why);
+  if (name.empty()) GTEST_SKIP() << why;
+  CanBus rx, tx;
+  ASSERT_EQ(rx.open(name), CanBusStatus::kOk) << rx.last_error();
+  ASSERT_EQ(tx.open(name), CanBusStatus::kOk) << tx.last_error();
   // A foreign sender on the group: a junk datagram, then a valid frame.
-  CanBus tx;
-  ASSERT_TRUE(open_udp(tx, "udp:" + std::to_string(port), why)) << why;
-  const int s = ::socket(AF_INET6, SOCK_DGRAM, 0);
+  const bool v6 = name == "udp:" + std::to_string(port);
+  const int s = ::socket(v6 ? AF_INET6 : AF_INET, SOCK_DGRAM, 0);
   ASSERT_GE(s, 0);
-  sockaddr_in6 dst{};
-  dst.sin6_family = AF_INET6;
-  dst.sin6_port = htons(static_cast<std::uint16_t>(port));
-  inet_pton(AF_INET6, hal::kUdpDefaultGroupV6, &dst.sin6_addr);
-  const int hops = 1;
-  setsockopt(s, IPPROTO_IPV6, IPV6_MULTICAST_HOPS, &hops, sizeof hops);
+  sockaddr_storage dst{};
+  socklen_t dst_len = 0;
+  if (v6) {
+    auto& d = reinterpret_cast<sockaddr_in6&>(dst);
+    d.sin6_family = AF_INET6;
+    d.sin6_port = htons(static_cast<std::uint16_t>(port));
+    inet_pton(AF_INET6, hal::kUdpDefaultGroupV6, &d.sin6_addr);
+    dst_len = sizeof d;
+  } else {
+    auto& d = reinterpret_cast<sockaddr_in&>(dst);
+    d.sin_family = AF_INET;
+    d.sin_port = htons(static_cast<std::uint16_t>(port));
+    inet_pton(AF_INET, hal::kUdpDefaultGroupV4, &d.sin_addr);
+    dst_len = sizeof d;
+  }
   const char junk[] = "not msgpack at all";
-  ASSERT_EQ(::sendto(s, junk, sizeof junk, 0, reinterpret_cast<sockaddr*>(&dst), sizeof dst),
+  ASSERT_EQ(::sendto(s, junk, sizeof junk, 0, reinterpret_cast<sockaddr*>(&dst), dst_len),
             static_cast<ssize_t>(sizeof junk));
   ::close(s);
   const CanFrame f = fd_frame(0x010, 48, 1);
@@ -358,11 +431,12 @@ TEST(CanBusUdp, MalformedDatagramsAreCountedAndSkipped) {
 }
 
 TEST(CanBusUdp, SilAndHilOverUdpMulticastGiveBitIdenticalInputs) {
-  const std::string name = "udp:" + std::to_string(test_port(2));
-  CanBus tx, rx;
   std::string why;
-  if (!open_udp(tx, name, why)) GTEST_SKIP() << "UDP multicast unavailable on this host: " << why;
-  ASSERT_TRUE(open_udp(rx, name, why)) << why;
+  const std::string name = usable_udp_bus(test_port(2), why);
+  if (name.empty()) GTEST_SKIP() << why;
+  CanBus tx, rx;
+  ASSERT_EQ(tx.open(name), CanBusStatus::kOk) << tx.last_error();
+  ASSERT_EQ(rx.open(name), CanBusStatus::kOk) << rx.last_error();
   const std::vector<CanFrame> frames = sim_frames(2.0);
   const Decoded sil = decode_direct(frames);
   const Decoded hil = decode_through(tx, rx, frames);
@@ -370,18 +444,26 @@ TEST(CanBusUdp, SilAndHilOverUdpMulticastGiveBitIdenticalInputs) {
   expect_bit_identical(sil, hil);
 }
 
-TEST(CanBusUdp, Ipv4GroupWorksWhereRouted) {
-  const std::string name = std::string("udp:") + hal::kUdpDefaultGroupV4 + ":" + std::to_string(test_port(3));
-  CanBus a, b;
-  std::string why;
-  if (!open_udp(a, name, why)) GTEST_SKIP() << "IPv4 multicast unavailable (ip route add 224.0.0.0/4 dev lo): " << why;
-  ASSERT_TRUE(open_udp(b, name, why)) << why;
-  const CanFrame f = fd_frame(0x030, 64, 7);
-  ASSERT_EQ(a.send(f), CanBusStatus::kOk);
-  CanFrame g;
-  ASSERT_EQ(b.receive(g, 2.0), CanBusStatus::kOk) << b.last_error();
-  EXPECT_TRUE(hal::can_frame_equal(f, g));
-  EXPECT_EQ(a.receive(g, 0.1), CanBusStatus::kTimeout);
+TEST(CanBusUdp, BothPythonCanDefaultGroupsWorkWhereTheHostRoutesThem) {
+  for (const char* group : {hal::kUdpDefaultGroupV6, hal::kUdpDefaultGroupV4}) {
+    const int port = test_port(3);
+    std::string why;
+    if (!host_multicast_works(group, port, why)) {
+      std::printf("[ INFO     ] group %s not usable on this host (%s): transport not checked on it\n", group, why.c_str());
+      continue;
+    }
+    const std::string name = std::string("udp:[") + group + "]:" + std::to_string(port);
+    CanBus a, b;
+    ASSERT_EQ(a.open(name), CanBusStatus::kOk) << a.last_error();
+    ASSERT_EQ(b.open(name), CanBusStatus::kOk) << b.last_error();
+    const CanFrame f = fd_frame(0x030, 64, 7);
+    ASSERT_EQ(a.send(f), CanBusStatus::kOk);
+    CanFrame g;
+    ASSERT_EQ(b.receive(g, 2.0), CanBusStatus::kOk) << group << ": " << b.last_error();
+    EXPECT_TRUE(hal::can_frame_equal(f, g));
+    EXPECT_EQ(a.receive(g, 0.1), CanBusStatus::kTimeout);
+    EXPECT_EQ(a.stats().own_dropped, 1u);
+  }
 }
 
 // ---- SocketCAN ----------------------------------------------------------------------------------
