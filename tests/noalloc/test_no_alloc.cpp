@@ -22,6 +22,8 @@
 #include "hal/lcm_log_sink.hpp"
 #include "sim/almanac.hpp"
 #include "sim/gps_model.hpp"
+#include "hal/can_protocol.hpp"
+#include "hal/can_rx_assembler.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
 
@@ -281,6 +283,68 @@ TEST(NoAlloc, LcmSinkAndInputDecodingDoNotAllocate) {
               static_cast<unsigned long long>(sink.telemetry().logged()));
   sink.close();
   std::remove(log.c_str());
+}
+
+TEST(NoAlloc, CanCodecAndReceiveAssemblerDoNotAllocate) {
+  // The flight side of the CAN bus: encoders, decoders and the receive assembler, including the
+  // rejection paths (corrupted frame, unknown ID, counter gap, incomplete epoch).
+  std::vector<fsw::ImuSample> samples(2000);
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    samples[k].t_s = 1e-3 * static_cast<double>(k + 1);
+    samples[k].dt_s = 1e-3;
+    samples[k].dtheta_rad = fsw::Vec3(1e-5, -2e-6, 3e-7 * static_cast<double>(k % 7));
+    samples[k].dv_mps = fsw::Vec3(1e-4, 2e-5, -9.81e-3);
+  }
+  fsw::GnssRawEpoch epoch;
+  epoch.t_s = 1.0;
+  epoch.gps_week = 1455;
+  epoch.gps_tow_s = 589825.0;
+  epoch.n_meas = 8;
+  for (int i = 0; i < 8; ++i) epoch.meas[static_cast<std::size_t>(i)] = {static_cast<std::uint8_t>(i + 1), 2.1e7 + i, 10.0, 40.0};
+  fsw::GpsAlmanac alm;
+  alm.prn = 3;
+  alm.eccentricity = 0.01;
+  alm.toa_s = 589824.0;
+  alm.inclination_rad = 0.95;
+  alm.sqrt_a_sqrtm = 5153.6;
+  alm.week_mod_1024 = 431;
+  auto* rx = new hal::CanRxAssembler();
+  hal::can::ImuEncoder imu_enc;
+  hal::can::GpsEncoder gps_enc;
+  hal::CanFrame f, gps[hal::can::GpsEncoder::kMaxFrames];
+  int delivered = 0, epochs = 0, alms = 0;
+  {
+    Armed a;
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      if (imu_enc.encode(samples[k], f) != hal::can::CodecStatus::kOk) continue;
+      if (k == 500) f.data[20] ^= 1;  // corrupted
+      if (k == 700) continue;         // lost: a counter gap
+      if (k == 900) f.id = 0x123;     // unknown
+      rx->push(f, 0.0);
+      fsw::ImuSample s;
+      while (rx->pop_imu(s)) ++delivered;
+      if (k % 1000 == 999) {
+        int n = 0, skipped = 0;
+        gps_enc.encode(epoch, gps, n, skipped);
+        for (int i = 0; i < n - (k == 999 ? 1 : 0); ++i) rx->push(gps[i], 0.0);  // first epoch incomplete
+        hal::can::encode_gps_almanac(alm, f);
+        rx->push(f, 0.0);
+      }
+    }
+    rx->flush();
+    fsw::GnssRawEpoch e;
+    while (rx->pop_gps(e)) ++epochs;
+    fsw::GpsAlmanac x;
+    while (rx->pop_almanac(x)) ++alms;
+  }
+  EXPECT_EQ(g_allocs.load(), 0) << "CAN codec / assembler allocated " << g_allocs.load() << " times";
+  EXPECT_EQ(delivered, 1997);
+  EXPECT_EQ(epochs, 2);
+  EXPECT_EQ(alms, 2);
+  EXPECT_EQ(rx->health().bad_crc, 1u);
+  EXPECT_EQ(rx->health().imu_missing, 3u);  // the corrupted, lost and unknown-ID samples
+  EXPECT_EQ(rx->health().gps_epochs_incomplete, 1u);
+  delete rx;
 }
 
 }  // namespace

@@ -15,6 +15,7 @@ void register_fly(CLI::App& app);
 void register_montecarlo(CLI::App& app);
 void register_paper(CLI::App& app);
 void register_log(CLI::App& app);
+void register_can(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -25,6 +26,7 @@ int run_fly();
 int run_montecarlo();
 int run_paper();
 int run_log();
+int run_can();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

@@ -38,6 +38,7 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("montecarlo")) return run_montecarlo();
   if (app.got_subcommand("paper")) return run_paper();
   if (app.got_subcommand("log")) return run_log();
+  if (app.got_subcommand("can")) return run_can();
   return 1;
 }
 

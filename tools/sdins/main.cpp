@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   sdins::register_montecarlo(app);
   sdins::register_paper(app);
   sdins::register_log(app);
+  sdins::register_can(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

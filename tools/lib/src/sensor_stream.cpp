@@ -47,4 +47,21 @@ bool SensorStream::next(SensorEvent& ev, sim::TruthSample* truth) {
   return true;
 }
 
+bool SensorStream::next(SensorStep& step) {
+  almanac_sent_ = almanac_.size();
+  step.imu.clear();
+  step.has_epoch = false;
+  SensorEvent ev;
+  while (next(ev)) {
+    if (ev.kind == SensorEvent::Kind::kImu) {
+      step.imu.push_back(ev.imu);
+    } else if (ev.kind == SensorEvent::Kind::kGnss) {
+      step.has_epoch = true;
+      step.epoch = ev.gnss;
+      return true;
+    }
+  }
+  return !step.imu.empty();
+}
+
 }  // namespace tools

@@ -26,8 +26,18 @@ struct SensorEvent {
   fsw::GnssRawEpoch gnss{};
 };
 
+/// One GPS interval of the stream: the IMU samples of (t - 1/gps_rate, t] and the epoch at t
+/// (has_epoch false only for a short last step). The almanac is not part of a step: almanac().
+struct SensorStep {
+  std::vector<fsw::ImuSample> imu;
+  bool has_epoch = false;
+  fsw::GnssRawEpoch epoch{};
+};
+
 class SensorStream {
  public:
+  /// The scenario's own seed.
+  explicit SensorStream(const sim::Scenario& sc) : SensorStream(sc, sc.seed) {}
   /// Throws std::runtime_error for a scenario the simulator rejects or an unreadable almanac.
   /// seed: the run's seed (IMU errors, noise, GPS errors, clock).
   SensorStream(const sim::Scenario& sc, std::uint64_t seed);
@@ -35,6 +45,12 @@ class SensorStream {
   /// The next event; false at the end of the scenario (duration reached). `truth` (optional)
   /// receives the truth sample of an IMU event's time.
   bool next(SensorEvent& ev, sim::TruthSample* truth = nullptr);
+  /// The next GPS interval (one stream is read either by event or by step, not both); false at
+  /// the end. The almanac events are skipped: take them from almanac().
+  bool next(SensorStep& step);
+
+  const std::vector<fsw::GpsAlmanac>& almanac() const { return almanac_; }
+  int samples_per_epoch() const { return samples_per_epoch_; }
 
   const sim::ImuErrors& imu_errors() const { return imu_->errors(); }
   const sim::Scenario& scenario() const { return sc_; }
