@@ -16,6 +16,8 @@ void register_montecarlo(CLI::App& app);
 void register_paper(CLI::App& app);
 void register_log(CLI::App& app);
 void register_can(CLI::App& app);
+void register_sil(CLI::App& app);
+void register_replay(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -23,6 +25,8 @@ int run_analyze();
 int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gamma_arcsec, bool plots);
 int run_scenario_check();
 int run_fly();
+int run_sil();
+int run_replay();
 int run_montecarlo();
 int run_paper();
 int run_log();

@@ -39,6 +39,8 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("paper")) return run_paper();
   if (app.got_subcommand("log")) return run_log();
   if (app.got_subcommand("can")) return run_can();
+  if (app.got_subcommand("sil")) return run_sil();
+  if (app.got_subcommand("replay")) return run_replay();
   return 1;
 }
 

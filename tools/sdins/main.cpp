@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
   sdins::register_fly(app);
   sdins::register_montecarlo(app);
   sdins::register_paper(app);
+  sdins::register_sil(app);
+  sdins::register_replay(app);
   sdins::register_log(app);
   sdins::register_can(app);
   try {
