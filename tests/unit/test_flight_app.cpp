@@ -124,3 +124,55 @@ TEST(FlightApp, InitialisesInMotionAndNavigatesThroughATurn) {
 }
 
 }  // namespace
+
+namespace {
+
+// GPS absent for 30 s (epochs with zero satellites, then with one): the flight software keeps
+// navigating on the INS, counts the empty epochs, and takes the GPS back when it returns.
+TEST(FlightApp, CoastsThroughAGpsOutageAndRecovers) {
+  sim::Scenario sc;
+  sc.duration_s = 160.0;
+  tools::SensorStream stream(sc, 5);
+  fsw::FlightAppConfig cfg;
+  cfg.exec = tools::executive_config(sc, tools::MonteCarloConfig{});
+  static fsw::FlightApp<fsw::Layout15Full> app;
+  ASSERT_EQ(app.init(cfg), fsw::Status::kOk);
+  tools::SensorEvent ev;
+  sim::TruthSample truth;
+  fsw::FrameOutput out;
+  double worst_pos_in_outage = 0.0, pos_before = 0.0;
+  std::uint32_t updates_before = 0, updates_after_outage = 0;
+  tools::NavErrors last{};
+  while (stream.next(ev, &truth)) {
+    if (ev.kind == tools::SensorEvent::Kind::kAlmanac) app.on_almanac(ev.almanac);
+    if (ev.kind == tools::SensorEvent::Kind::kGnss) {
+      const double t = ev.gnss.t_s;
+      if (t > 100.0 && t <= 120.0) ev.gnss.n_meas = 0;  // no satellite
+      if (t > 120.0 && t <= 130.0) ev.gnss.n_meas = 1;  // one satellite
+      app.on_gnss(ev.gnss);
+    }
+    if (ev.kind != tools::SensorEvent::Kind::kImu) continue;
+    ASSERT_NE(app.on_imu(ev.imu, out), fsw::Status::kBadInput);
+    if (!out.nav_valid) continue;
+    last = tools::nav_errors(out.nav, truth);
+    if (std::abs(truth.t_s - 100.5) < 1e-9) {  // after the last full epoch (t = 100) was used
+      pos_before = last.pos_enu_m.norm();
+      updates_before = app.executive().health().pr_used;
+    }
+    if (truth.t_s > 100.0 && truth.t_s <= 130.0) worst_pos_in_outage = std::max(worst_pos_in_outage, last.pos_enu_m.norm());
+    if (std::abs(truth.t_s - 130.5) < 1e-9) updates_after_outage = app.executive().health().pr_used;
+  }
+  const fsw::ExecutiveHealth& h = app.executive().health();
+  std::printf("GPS outage 100..130 s: position error %.2f m before, worst %.2f m during, %.2f m at the end\n", pos_before,
+              worst_pos_in_outage, last.pos_enu_m.norm());
+  ASSERT_TRUE(app.health().initialised);
+  EXPECT_EQ(h.fsw_errors, 0u);
+  // 20 empty epochs used nothing; the 10 single-satellite ones updated with that one satellite.
+  EXPECT_LE(updates_after_outage - updates_before, 10u);
+  EXPECT_GE(h.ekf_runs, 155u);  // the 1 Hz group kept running (propagation) through the outage
+  EXPECT_LT(worst_pos_in_outage, 40.0);  // 30 s of INS coasting with the calibrated IMU
+  EXPECT_LT(last.pos_enu_m.norm(), 15.0);  // and the GPS taken back afterwards
+  EXPECT_GT(h.pr_used - updates_after_outage, 250u);
+}
+
+}  // namespace
