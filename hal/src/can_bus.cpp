@@ -126,14 +126,31 @@ Hub& hub() {
   return h;
 }
 
-/// Milliseconds for poll(): -1 for a negative timeout, else rounded up.
-int poll_ms(double timeout_s) {
+}  // namespace
+
+int can_poll_ms(double timeout_s) {
   if (timeout_s < 0.0) return -1;
   const double ms = std::ceil(timeout_s * 1000.0);
   return ms > 2.0e9 ? 2000000000 : static_cast<int>(ms);
 }
 
-}  // namespace
+CanBusStatus can_wait_readable(int fd, double timeout_s, double deadline_s, int& sys_errno, std::string& error) {
+  if (errno == EINTR) return CanBusStatus::kOk;
+  if (errno != EAGAIN && errno != EWOULDBLOCK) {
+    sys_errno = errno;
+    error = std::string("recvmsg: ") + std::strerror(errno);
+    return CanBusStatus::kIoError;
+  }
+  const double left = timeout_s < 0.0 ? -1.0 : deadline_s - can_wall_time_s();
+  if (timeout_s >= 0.0 && left <= 0.0) return CanBusStatus::kTimeout;
+  pollfd p{fd, POLLIN, 0};
+  if (::poll(&p, 1, can_poll_ms(left)) < 0 && errno != EINTR) {
+    sys_errno = errno;
+    error = std::string("poll: ") + std::strerror(errno);
+    return CanBusStatus::kIoError;
+  }
+  return CanBusStatus::kOk;
+}
 
 LoopbackTransport::LoopbackTransport() = default;
 LoopbackTransport::~LoopbackTransport() { close(); }
@@ -196,7 +213,7 @@ CanBusStatus LoopbackTransport::receive(CanFrame& f, double timeout_s) {
     const double left = timeout_s < 0.0 ? -1.0 : deadline - can_wall_time_s();
     if (timeout_s >= 0.0 && left <= 0.0) return CanBusStatus::kTimeout;
     pollfd p{ep_->efd, POLLIN, 0};
-    const int r = ::poll(&p, 1, poll_ms(left));
+    const int r = ::poll(&p, 1, can_poll_ms(left));
     if (r < 0 && errno != EINTR) {
       sys_errno = errno;
       error = std::string("poll: ") + std::strerror(errno);

@@ -17,16 +17,6 @@
 #include "hal/can_transports.hpp"
 
 namespace hal {
-namespace {
-
-int poll_ms(double timeout_s) {
-  if (timeout_s < 0.0) return -1;
-  const double ms = std::ceil(timeout_s * 1000.0);
-  return ms > 2.0e9 ? 2000000000 : static_cast<int>(ms);
-}
-
-}  // namespace
-
 int to_linux_frame(const CanFrame& f, canfd_frame& out) {
   if (!can_frame_valid(f)) return 0;
   std::memset(&out, 0, sizeof out);
@@ -173,20 +163,8 @@ CanBusStatus SocketCanTransport::receive(CanFrame& f, double timeout_s) {
       ++stats.received;
       return CanBusStatus::kOk;
     }
-    if (errno == EINTR) continue;
-    if (errno != EAGAIN && errno != EWOULDBLOCK) {
-      sys_errno = errno;
-      error = std::string("recvmsg: ") + std::strerror(errno);
-      return CanBusStatus::kIoError;
-    }
-    const double left = timeout_s < 0.0 ? -1.0 : deadline - can_wall_time_s();
-    if (timeout_s >= 0.0 && left <= 0.0) return CanBusStatus::kTimeout;
-    pollfd p{fd_, POLLIN, 0};
-    if (::poll(&p, 1, poll_ms(left)) < 0 && errno != EINTR) {
-      sys_errno = errno;
-      error = std::string("poll: ") + std::strerror(errno);
-      return CanBusStatus::kIoError;
-    }
+    const CanBusStatus w = can_wait_readable(fd_, timeout_s, deadline, sys_errno, error);
+    if (w != CanBusStatus::kOk) return w;
   }
 }
 

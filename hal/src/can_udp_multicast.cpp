@@ -25,12 +25,6 @@
 namespace hal {
 namespace {
 
-int poll_ms(double timeout_s) {
-  if (timeout_s < 0.0) return -1;
-  const double ms = std::ceil(timeout_s * 1000.0);
-  return ms > 2.0e9 ? 2000000000 : static_cast<int>(ms);
-}
-
 struct VecBuffer {
   std::vector<std::uint8_t>* v;
   void write(const char* p, std::size_t n) {
@@ -424,20 +418,8 @@ CanBusStatus UdpMulticastTransport::receive(CanFrame& f, double timeout_s) {
       ++stats.received;
       return CanBusStatus::kOk;
     }
-    if (errno == EINTR) continue;
-    if (errno != EAGAIN && errno != EWOULDBLOCK) {
-      sys_errno = errno;
-      error = std::string("recvmsg: ") + std::strerror(errno);
-      return CanBusStatus::kIoError;
-    }
-    const double left = timeout_s < 0.0 ? -1.0 : deadline - can_wall_time_s();
-    if (timeout_s >= 0.0 && left <= 0.0) return CanBusStatus::kTimeout;
-    pollfd p{rx_fd_, POLLIN, 0};
-    if (::poll(&p, 1, poll_ms(left)) < 0 && errno != EINTR) {
-      sys_errno = errno;
-      error = std::string("poll: ") + std::strerror(errno);
-      return CanBusStatus::kIoError;
-    }
+    const CanBusStatus w = can_wait_readable(rx_fd_, timeout_s, deadline, sys_errno, error);
+    if (w != CanBusStatus::kOk) return w;
   }
 }
 

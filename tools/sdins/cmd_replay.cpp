@@ -14,11 +14,7 @@ namespace sdins {
 namespace {
 struct Options {
   std::string in;
-  std::string model = "24";
-  std::string log;
-  std::string lcm_url = "none";
-  std::string json;
-  int nav_decimation = 10;
+  FswRunOptions run;
 } opt;
 }  // namespace
 
@@ -27,25 +23,14 @@ void register_replay(CLI::App& app) {
       "replay", "Re-run the flight software on a log's IMU, GNSS_RAW and GPS_ALMANAC channels; prints the summary and "
                 "the navigation digest, optionally writes a new log (inputs and outputs).");
   sub->add_option("LOG", opt.in, "LCM log with the input channels")->required();
-  sub->add_option("--model", opt.model, "filter model")->check(CLI::IsMember({"15", "24"}))->capture_default_str();
-  sub->add_option("--log", opt.log, "write an LCM log of the replay");
-  sub->add_option("--lcm-url", opt.lcm_url, "LCM URL for live telemetry ('none': no network)")->capture_default_str();
-  sub->add_option("--nav-decimation", opt.nav_decimation, "NAV_SOLUTION every n-th 200 Hz frame")
-      ->check(CLI::Range(1, 200))
-      ->capture_default_str();
-  sub->add_option("--json", opt.json, "write the end-of-run summary as JSON");
+  add_fsw_run_options(sub, opt.run, "none");
 }
 
 int run_replay() {
   hal::LcmReplayReader reader;
   const hal::LcmLogStatus os = reader.open(opt.in);
   if (os != hal::LcmLogStatus::kOk) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
-  hal::FswNodeConfig cfg;
-  if (!hal::parse_fsw_model(opt.model, cfg.model)) throw std::runtime_error("--model: 15 or 24");
-  cfg.app = hal::default_flight_config();
-  cfg.telemetry.lcm_url = opt.lcm_url;
-  cfg.telemetry.log_path = opt.log;
-  cfg.nav_decimation = opt.nav_decimation;
+  const hal::FswNodeConfig cfg = opt.run.node_config();
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
@@ -68,10 +53,10 @@ int run_replay() {
               static_cast<unsigned long long>(st.other_events), static_cast<unsigned long long>(ls.events),
               static_cast<unsigned long long>(ls.total_rejections()));
   tools::print_fsw_summary(node);
-  if (!opt.json.empty()) {
+  if (!opt.run.json.empty()) {
     nlohmann::json j = tools::fsw_summary_json(node);
     j["mode"] = "replay";
-    j["model"] = opt.model;
+    j["model"] = opt.run.model;
     j["input_log"] = opt.in;
     j["inputs"] = {{"delivered", st.delivered},
                    {"imu_accepted", st.imu.accepted()},
@@ -83,8 +68,8 @@ int run_replay() {
                    {"other_events", st.other_events},
                    {"log_events", ls.events},
                    {"log_rejections", ls.total_rejections()}};
-    std::ofstream f(opt.json);
-    if (!f) throw std::runtime_error("cannot write " + opt.json);
+    std::ofstream f(opt.run.json);
+    if (!f) throw std::runtime_error("cannot write " + opt.run.json);
     f << j.dump(2) << "\n";
   }
   return node.summary().initialised ? 0 : 2;

@@ -18,11 +18,7 @@ namespace sdins {
 namespace {
 struct Options {
   ScenarioOptions scenario;
-  std::string model = "24";
-  std::string log;
-  std::string lcm_url;
-  std::string json;
-  int nav_decimation = 10;
+  FswRunOptions run;
 } opt;
 }  // namespace
 
@@ -31,25 +27,13 @@ void register_sil(CLI::App& app) {
       "sil", "Software in the loop: simulator -> CAN frames (in-process) -> flight software (in-motion init, 1 Hz "
              "EKF, 200 Hz mechanization) -> LCM telemetry and log. Same frames and outputs as a lockstep HIL run.");
   add_scenario_options(sub, opt.scenario);
-  sub->add_option("--model", opt.model, "filter model")->check(CLI::IsMember({"15", "24"}))->capture_default_str();
-  sub->add_option("--log", opt.log, "write an LCM log of the run (inputs, outputs, truth)");
-  sub->add_option("--lcm-url", opt.lcm_url, "LCM URL for live telemetry (default: $LCM_DEFAULT_URL or "
-                                            "udpm://239.255.76.67:7667?ttl=0; 'none': no network)");
-  sub->add_option("--nav-decimation", opt.nav_decimation, "NAV_SOLUTION every n-th 200 Hz frame")
-      ->check(CLI::Range(1, 200))
-      ->capture_default_str();
-  sub->add_option("--json", opt.json, "write the end-of-run summary as JSON");
+  add_fsw_run_options(sub, opt.run, "");
 }
 
 int run_sil() {
   const sim::Scenario sc = opt.scenario.load();
   tools::SensorStream stream(sc);
-  hal::FswNodeConfig cfg;
-  if (!hal::parse_fsw_model(opt.model, cfg.model)) throw std::runtime_error("--model: 15 or 24");
-  cfg.app = hal::default_flight_config();
-  cfg.telemetry.lcm_url = opt.lcm_url;
-  cfg.telemetry.log_path = opt.log;
-  cfg.nav_decimation = opt.nav_decimation;
+  const hal::FswNodeConfig cfg = opt.run.node_config();
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
@@ -79,7 +63,7 @@ int run_sil() {
   if (!node.close(err)) throw std::runtime_error(err);
 
   std::printf("sil: %s, %.0f s, seed %llu, %s-state model; %llu CAN frames (%d not encodable), %u rejected on receive\n",
-              sc.name.c_str(), sc.duration_s, static_cast<unsigned long long>(sc.seed), opt.model.c_str(),
+              sc.name.c_str(), sc.duration_s, static_cast<unsigned long long>(sc.seed), opt.run.model.c_str(),
               static_cast<unsigned long long>(n_frames), encode_rejected, input.health().rejections());
   tools::print_fsw_summary(node);
   nlohmann::json j = tools::fsw_summary_json(node);
@@ -97,16 +81,16 @@ int run_sil() {
                          {e.att_phi_enu_rad.x() * fsw::kRadToDeg, e.att_phi_enu_rad.y() * fsw::kRadToDeg,
                           e.att_phi_enu_rad.z() * fsw::kRadToDeg}}};
   }
-  if (!opt.json.empty()) {
+  if (!opt.run.json.empty()) {
     j["mode"] = "sil";
-    j["model"] = opt.model;
+    j["model"] = opt.run.model;
     j["scenario"] = sc.name;
     j["duration_s"] = sc.duration_s;
     j["seed"] = sc.seed;
     j["can_frames"] = n_frames;
     j["can_rx"] = tools::can_rx_json(input.health());
-    std::ofstream f(opt.json);
-    if (!f) throw std::runtime_error("cannot write " + opt.json);
+    std::ofstream f(opt.run.json);
+    if (!f) throw std::runtime_error("cannot write " + opt.run.json);
     f << j.dump(2) << "\n";
   }
   return node.summary().initialised ? 0 : 2;

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "hal/fsw_node.hpp"
 #include "sim/scenario.hpp"
 
 namespace sdins {
@@ -42,6 +43,19 @@ struct ScenarioOptions {
   sim::Scenario load() const;
 };
 void add_scenario_options(CLI::App* sub, ScenarioOptions& opt);
+
+/// The options of every command that runs the flight software (sil, replay, fsw): --model,
+/// --log, --lcm-url, --nav-decimation, --json.
+struct FswRunOptions {
+  std::string model = "24";
+  std::string log;
+  std::string lcm_url;  ///< "": $LCM_DEFAULT_URL or LCM's default group; "none": no network
+  std::string json;
+  int nav_decimation = 10;
+  /// The flight-software node's configuration (hal::default_flight_config()); throws on a bad model.
+  hal::FswNodeConfig node_config() const;
+};
+void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& default_lcm_url);
 
 /// Runs a plotting script with the Python that has matplotlib (SDINS_PYTHON). Returns its exit code.
 int run_plot_script(const std::string& script, const std::string& args);

@@ -101,4 +101,12 @@ class LoopbackTransport final : public CanTransport {
 /// Wall-clock time [s since the Unix epoch] as transports stamp frames.
 double can_wall_time_s();
 
+/// Milliseconds for poll(): -1 for a negative timeout, else rounded up.
+int can_poll_ms(double timeout_s);
+
+/// The common tail of the socket transports' receive loops, after a non-blocking receive returned
+/// -1 with errno set: kOk to try the receive again (EINTR, or fd became readable), kTimeout past
+/// deadline_s (timeout_s >= 0 only), kIoError with sys_errno and error filled otherwise.
+CanBusStatus can_wait_readable(int fd, double timeout_s, double deadline_s, int& sys_errno, std::string& error);
+
 }  // namespace hal
