@@ -60,6 +60,7 @@ bool later(const std::pair<double, std::uint64_t>& a, const std::pair<double, st
 
 LcmLogStatus LcmReplayReader::open(const std::string& path, const LcmReplayConfig& cfg) {
   cfg_ = cfg;
+  if (!(cfg_.reorder_window_s >= 0.0)) cfg_.reorder_window_s = 0.0;  // NaN or negative: no reordering
   stats_ = LcmReplayStats{};
   pending_.clear();
   seq_ = 0;
