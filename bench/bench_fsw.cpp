@@ -11,6 +11,8 @@
 //   ekf_accumulate/<layout>   Ekf::accumulate, one frame per iteration (every 10th flushes a sub-step)
 //   ekf_propagate/<layout>    Ekf::propagate after 200 accumulated frames (the 1 Hz step)
 //   ekf_update/<layout>       Ekf::update with a 10-satellite epoch (20 scalar measurements)
+//   ekf_update_1sat/<layout>  Ekf::update with one satellite (pseudorange + rate: 2 scalar measurements)
+//   ekf_update_12sat/<layout> Ekf::update with 12 satellites (24 scalar measurements: a full receiver)
 //   exec_tick/<layout>/nav    Executive::tick, a minor frame without the 1 Hz group
 //   exec_tick/<layout>/ekf    Executive::tick, the minor frame that runs the 1 Hz group
 //                             (propagate + update + feedback)
@@ -111,6 +113,7 @@ constexpr double kImuRate_hz = 1000.0;
 constexpr double kStart_s = 70.0;         // inside the first turn (roll-in ends at 65 s)
 constexpr double kEnd_s = 100.0;
 constexpr int kSatellites = 10;
+constexpr int kMaxSatellites = 12;        // the constellation; the standard epochs use the first 10
 constexpr double kClockBias0_m = 120.0;   // receiver clock of the synthetic epochs
 constexpr double kClockDrift_mps = 0.4;
 
@@ -141,6 +144,8 @@ struct FlightData {
   std::vector<Vec3> truth_llh, truth_vel;  ///< truth at each frame end
   std::vector<Satellite> sats;
   std::vector<fsw::GnssEpoch> epochs;      ///< epochs[s]: at the end of frame epoch_frame(s), t = kStart_s + s + 1
+  std::vector<fsw::GnssEpoch> epochs1;     ///< the same epochs with only the first satellite
+  std::vector<fsw::GnssEpoch> epochs12;    ///< ... with all 12 satellites
 
   int frames() const { return static_cast<int>(inc.size()); }
   static int epoch_frame(int s) { return kFramesPerEkf * (s + 1) - 1; }
@@ -149,14 +154,14 @@ struct FlightData {
 
 /// 10 satellites on a 26,560 km orbit radius, spread in azimuth and elevation around llh.
 std::vector<Satellite> make_constellation(const Vec3& llh) {
-  static constexpr double kElevationDeg[kSatellites] = {15, 62, 35, 80, 25, 50, 20, 70, 40, 30};
-  static constexpr std::uint8_t kPrn[kSatellites] = {2, 5, 7, 9, 13, 16, 21, 24, 27, 30};
+  static constexpr double kElevationDeg[kMaxSatellites] = {15, 62, 35, 80, 25, 50, 20, 70, 40, 30, 55, 45};
+  static constexpr std::uint8_t kPrn[kMaxSatellites] = {2, 5, 7, 9, 13, 16, 21, 24, 27, 30, 31, 32};
   const Vec3 r0 = fsw::ecef_from_llh(llh);
   const fsw::Mat3 Cne = fsw::C_n_e(llh.x(), llh.y());
   const double orbit_m = 26'560e3;
   std::vector<Satellite> sats;
-  for (int k = 0; k < kSatellites; ++k) {
-    const double az = (10.0 + 36.0 * k) * fsw::kDegToRad, el = kElevationDeg[k] * fsw::kDegToRad;
+  for (int k = 0; k < kMaxSatellites; ++k) {
+    const double az = (10.0 + 36.0 * k + 17.0 * (k / 10)) * fsw::kDegToRad, el = kElevationDeg[k] * fsw::kDegToRad;
     const Vec3 u = Cne * Vec3(std::cos(el) * std::sin(az), std::cos(el) * std::cos(az), std::sin(el));
     const double b = r0.dot(u);
     const double rho = -b + std::sqrt(b * b - (r0.squaredNorm() - orbit_m * orbit_m));
@@ -171,7 +176,9 @@ std::vector<Satellite> make_constellation(const Vec3& llh) {
 }
 
 /// Epoch of the fixed constellation seen from the true receiver state at t.
-fsw::GnssEpoch make_epoch(double t_s, const Vec3& llh, const Vec3& vel_enu, const std::vector<Satellite>& sats) {
+fsw::GnssEpoch make_epoch(double t_s, const Vec3& llh, const Vec3& vel_enu, const std::vector<Satellite>& all_sats,
+                          int n_sats) {
+  const std::vector<Satellite> sats(all_sats.begin(), all_sats.begin() + n_sats);
   fsw::GnssEpoch e;
   e.t_s = t_s;
   e.gps_week = 1455;
@@ -248,7 +255,9 @@ FlightData prepare_flight() {
   d.sats = make_constellation(d.truth_llh[static_cast<std::size_t>(mid)]);
   for (int s = 0; FlightData::epoch_frame(s) < d.frames(); ++s) {
     const auto f = static_cast<std::size_t>(FlightData::epoch_frame(s));
-    d.epochs.push_back(make_epoch(kStart_s + s + 1, d.truth_llh[f], d.truth_vel[f], d.sats));
+    d.epochs.push_back(make_epoch(kStart_s + s + 1, d.truth_llh[f], d.truth_vel[f], d.sats, kSatellites));
+    d.epochs1.push_back(make_epoch(kStart_s + s + 1, d.truth_llh[f], d.truth_vel[f], d.sats, 1));
+    d.epochs12.push_back(make_epoch(kStart_s + s + 1, d.truth_llh[f], d.truth_vel[f], d.sats, kMaxSatellites));
   }
   return d;
 }
@@ -400,7 +409,8 @@ fsw::EkfConfig ekf_config() {
 /// filter in steady operation, at the end of frame epoch_frame(kCycles - 1).
 constexpr int kWarmCycles = 3;
 template <class L>
-bool warm_up(const FlightData& d, fsw::Ekf<L>& ekf, std::string& err) {
+bool warm_up(const FlightData& d, fsw::Ekf<L>& ekf, std::string& err, const std::vector<fsw::GnssEpoch>* epochs = nullptr) {
+  const std::vector<fsw::GnssEpoch>& ep = epochs != nullptr ? *epochs : d.epochs;
   if (ekf.init(ekf_config()) != Status::kOk) {
     err = "Ekf::init failed";
     return false;
@@ -417,7 +427,7 @@ bool warm_up(const FlightData& d, fsw::Ekf<L>& ekf, std::string& err) {
     const auto fe = static_cast<std::size_t>(FlightData::epoch_frame(s));
     fsw::EkfUpdateReport rep;
     if (ekf.propagate() != Status::kOk ||
-        ekf.update(d.epochs[static_cast<std::size_t>(s)], d.nav[fe], d.omega_ib_b[fe], rep) != Status::kOk ||
+        ekf.update(ep[static_cast<std::size_t>(s)], d.nav[fe], d.omega_ib_b[fe], rep) != Status::kOk ||
         ekf.feedback(ins, comp) != Status::kOk) {
       err = "EKF warm-up cycle failed";
       return false;
@@ -538,6 +548,45 @@ void BM_EkfUpdate(benchmark::State& state) {
     state.SetIterationTime(dt);
   }
   finish(state, allocs, 2.0 * kSatellites, total_s);  // items: scalar measurements
+}
+
+/// Ekf::update with an epoch of n_sats satellites (1: the cost of one satellite's pseudorange and
+/// rate; 12: a full receiver), after a warm-up on epochs of the same satellites, on a fresh copy
+/// each iteration.
+template <class L, int n_sats>
+void BM_EkfUpdateSats(benchmark::State& state) {
+  static_assert(n_sats == 1 || n_sats == kMaxSatellites);
+  const FlightData& d = flight();
+  const std::vector<fsw::GnssEpoch>& epochs = n_sats == 1 ? d.epochs1 : d.epochs12;
+  auto pre = std::make_unique<fsw::Ekf<L>>();
+  auto ekf = std::make_unique<fsw::Ekf<L>>();
+  std::string err;
+  if (!d.error.empty() || !warm_up(d, *pre, err, &epochs)) return fail(state, d.error.empty() ? err : d.error);
+  if (!accumulate_next_cycle(d, *pre) || pre->propagate() != Status::kOk) return fail(state, "propagation failed");
+  const auto fe = static_cast<std::size_t>(FlightData::epoch_frame(kWarmCycles));
+  const fsw::GnssEpoch& epoch = epochs[static_cast<std::size_t>(kWarmCycles)];
+  fsw::EkfUpdateReport rep;
+  {
+    *ekf = *pre;
+    if (ekf->update(epoch, d.nav[fe], d.omega_ib_b[fe], rep) != Status::kOk || rep.pr_used != n_sats ||
+        rep.prr_used != n_sats || rep.obs_no_channel != 0 || rep.clock_initialised)
+      return fail(state, "the " + std::to_string(n_sats) + "-satellite epoch is not fully used: pr " +
+                             std::to_string(rep.pr_used) + ", prr " + std::to_string(rep.prr_used));
+  }
+  double total_s = 0.0;
+  AllocScope allocs;
+  for (auto _ : state) {
+    *ekf = *pre;
+    benchmark::ClobberMemory();
+    const auto t0 = Clock::now();
+    Status st = ekf->update(epoch, d.nav[fe], d.omega_ib_b[fe], rep);
+    benchmark::DoNotOptimize(st);
+    benchmark::ClobberMemory();
+    const double dt = seconds_since(t0);
+    total_s += dt;
+    state.SetIterationTime(dt);
+  }
+  finish(state, allocs, 2.0 * n_sats, total_s);
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -664,6 +713,12 @@ void register_layout() {
       ->UseManualTime()
       ->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark(("ekf_update/" + n).c_str(), BM_EkfUpdate<L>)
+      ->UseManualTime()
+      ->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark(("ekf_update_1sat/" + n).c_str(), BM_EkfUpdateSats<L, 1>)
+      ->UseManualTime()
+      ->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark(("ekf_update_12sat/" + n).c_str(), BM_EkfUpdateSats<L, kMaxSatellites>)
       ->UseManualTime()
       ->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark(("exec_tick/" + n + "/nav").c_str(), BM_ExecTickNav<L>)->UseManualTime();

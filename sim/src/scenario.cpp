@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <initializer_list>
@@ -37,6 +38,76 @@ std::string almanac_path(const GpsConfig& cfg) { return cfg.almanac.empty() ? de
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// TOML 1.0 allows non-ASCII text only inside strings and comments. Position ("line:col") of the
+/// first non-ASCII byte anywhere else, or empty. Checked before toml::parse because toml++ 3.3.0
+/// (Debian 12) runs into __builtin_unreachable() (undefined behaviour) when it meets some non-ASCII
+/// code points in syntax positions (its is_non_ascii_horizontal_whitespace() for U+00A1..U+0499,
+/// U+2C6E..U+3067 and U+FB26..U+FEFE); found by fuzz/fuzz_scenario.cpp, regression input in
+/// fuzz/regressions/scenario/.
+std::string non_ascii_outside_strings(const std::string& text) {
+  enum class State { kCode, kComment, kBasic, kLiteral, kMultiBasic, kMultiLiteral };
+  State st = State::kCode;
+  int line = 1, col = 0;
+  const auto starts = [&text](std::size_t i, const char* s) { return text.compare(i, std::strlen(s), s) == 0; };
+  const std::size_t bom = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;  // a leading UTF-8 BOM is allowed
+  for (std::size_t i = bom; i < text.size(); ++i) {
+    const char c = text[i];
+    ++col;
+    if (c == '\n') {
+      ++line;
+      col = 0;
+      if (st == State::kComment || st == State::kBasic || st == State::kLiteral) st = State::kCode;
+      continue;
+    }
+    std::size_t skip = 0;  // further bytes consumed by this step
+    switch (st) {
+      case State::kCode:
+        if (static_cast<unsigned char>(c) >= 0x80) return std::to_string(line) + ":" + std::to_string(col);
+        if (c == '#') {
+          st = State::kComment;
+        } else if (starts(i, "\"\"\"")) {
+          st = State::kMultiBasic;
+          skip = 2;
+        } else if (starts(i, "'''")) {
+          st = State::kMultiLiteral;
+          skip = 2;
+        } else if (c == '"') {
+          st = State::kBasic;
+        } else if (c == '\'') {
+          st = State::kLiteral;
+        }
+        break;
+      case State::kComment:
+        break;
+      case State::kBasic:
+      case State::kMultiBasic:
+        if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n') {
+          skip = 1;  // an escaped character (\" included) never ends the string
+        } else if (st == State::kBasic && c == '"') {
+          st = State::kCode;
+        } else if (st == State::kMultiBasic && starts(i, "\"\"\"")) {
+          st = State::kCode;
+          skip = 2;  // and up to two more quotes, which belong to the content (""""" ends "" + """)
+          while (skip < 4 && i + skip + 1 < text.size() && text[i + skip + 1] == '"') ++skip;
+        }
+        break;
+      case State::kLiteral:
+        if (c == '\'') st = State::kCode;
+        break;
+      case State::kMultiLiteral:
+        if (starts(i, "'''")) {
+          st = State::kCode;
+          skip = 2;
+          while (skip < 4 && i + skip + 1 < text.size() && text[i + skip + 1] == '\'') ++skip;
+        }
+        break;
+    }
+    i += skip;
+    col += static_cast<int>(skip);
+  }
+  return "";
+}
 
 std::string format_number(double v) {
   std::ostringstream os;
@@ -134,7 +205,9 @@ class Parser {
   bool fields(const toml::table& t, const std::string& prefix, std::initializer_list<Field> known) {
     for (auto&& [key, node] : t) {
       const std::string path = prefix + std::string(key.str());
-      const auto field = std::find_if(known.begin(), known.end(), [&](const Field& f) { return f.key == key.str(); });
+      // Compared through a named copy: clang before 16 cannot capture a structured binding.
+      const std::string_view name = key.str();
+      const auto field = std::find_if(known.begin(), known.end(), [&](const Field& f) { return f.key == name; });
       if (field == known.end()) return fail(key, "unknown key '" + path + "'");
       if (!field->handle(node, path)) return false;
     }
@@ -361,6 +434,9 @@ class Parser {
 }  // namespace
 
 ScenarioParseResult parse_scenario_text(const std::string& toml_text, const std::string& source_name) {
+  if (const std::string at = non_ascii_outside_strings(toml_text); !at.empty())
+    return {std::nullopt, source_name + ":" + at +
+                              ": non-ASCII character outside a string or comment (TOML allows it only there)"};
   toml::table root;
   try {
     root = toml::parse(std::string_view(toml_text), std::string_view(source_name));

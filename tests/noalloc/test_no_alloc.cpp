@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <memory>
 #include <new>
 #include <vector>
 
@@ -26,6 +27,7 @@
 #include "hal/can_rx_assembler.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
+#include "tools/montecarlo.hpp"
 
 extern "C" void* __libc_malloc(std::size_t);
 extern "C" void* __libc_calloc(std::size_t, std::size_t);

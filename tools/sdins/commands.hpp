@@ -19,6 +19,7 @@ void register_log(CLI::App& app);
 void register_can(CLI::App& app);
 void register_sil(CLI::App& app);
 void register_replay(CLI::App& app);
+void register_audit(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -32,6 +33,7 @@ int run_montecarlo();
 int run_paper();
 int run_log();
 int run_can();
+int run_audit();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

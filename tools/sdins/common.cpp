@@ -65,6 +65,7 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("can")) return run_can();
   if (app.got_subcommand("sil")) return run_sil();
   if (app.got_subcommand("replay")) return run_replay();
+  if (app.got_subcommand("audit")) return run_audit();
   return 1;
 }
 

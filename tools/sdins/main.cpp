@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   sdins::register_replay(app);
   sdins::register_log(app);
   sdins::register_can(app);
+  sdins::register_audit(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

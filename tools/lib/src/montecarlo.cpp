@@ -208,16 +208,8 @@ fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloC
   return cfg;
 }
 
-RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
-                  const MonteCarloConfig& mc, int run) {
-  RunResult res;
-  res.run = run;
-  res.seed = sc.seed + static_cast<std::uint64_t>(run);
-  const std::uint64_t seed = res.seed;
-  const sim::ImuErrors errors = sim::draw_imu_errors(sc.imu, sc.effects, seed);
-  sim::ImuModel imu(errors, seed);
-  sim::GpsModel gps(sc.gps, almanac, sc.effects, seed);
-
+fsw::NavState initial_nav_state(const TruthTrack& truth, const sim::ImuErrors& errors, const MonteCarloConfig& mc,
+                                std::uint64_t seed) {
   // Initial errors: the attitude that self-alignment leaves for this run's biases (at the start
   // attitude), plus drawn position and velocity errors.
   const sim::TruthSample& t0 = truth.epochs.front();
@@ -234,6 +226,19 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   init.vel_enu_mps = t0.vel_enu_mps + dv;
   init.q_b_n = fsw::quat_from_rotvec(-phi0) * fsw::Quat(t0.C_b_n);
   init.q_b_n.normalize();
+  return init;
+}
+
+RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
+                  const MonteCarloConfig& mc, int run) {
+  RunResult res;
+  res.run = run;
+  res.seed = sc.seed + static_cast<std::uint64_t>(run);
+  const std::uint64_t seed = res.seed;
+  const sim::ImuErrors errors = sim::draw_imu_errors(sc.imu, sc.effects, seed);
+  sim::ImuModel imu(errors, seed);
+  sim::GpsModel gps(sc.gps, almanac, sc.effects, seed);
+  const fsw::NavState init = initial_nav_state(truth, errors, mc, seed);
 
   const fsw::ExecutiveConfig cfg = executive_config(sc, mc);
   const std::size_t n_models = mc.models.size();

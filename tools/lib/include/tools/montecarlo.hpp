@@ -15,6 +15,7 @@
 
 #include "fsw/executive.hpp"
 #include "sim/almanac.hpp"
+#include "sim/imu_model.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
 
@@ -61,6 +62,12 @@ struct MonteCarloConfig {
 /// The executive configuration a scenario implies for a model (rates, initial sigmas from the
 /// scenario's sensor sigmas and the alignment formulas, measurement noise from the GPS model).
 fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloConfig& mc);
+
+/// The executive's initial solution for a run: truth at t = 0 with the attitude error that
+/// self-alignment leaves for the run's IMU biases and drawn position / velocity errors (seed: the
+/// run's seed).
+fsw::NavState initial_nav_state(const TruthTrack& truth, const sim::ImuErrors& errors, const MonteCarloConfig& mc,
+                                std::uint64_t seed);
 
 /// Per-epoch quantities of one run and one model, after the epoch's feedback.
 struct EpochRecord {

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Stack budget gate (README "Audits"): `sdins audit stack` builds fsw/ in the stack-audit
+# configuration and computes each task's worst-case stack. This test checks the JSON report's
+# structure and consistency, then FAILS when any task is unbounded or over its budget, listing
+# those tasks with their numbers, the reasons and the deepest call path.
+set -uo pipefail
+sdins=${1:?usage: audit_stack.sh SDINS OUTDIR [BUILD_DIR]}
+out=${2:?usage: audit_stack.sh SDINS OUTDIR [BUILD_DIR]}
+build=${3:-}
+rm -rf "$out" && mkdir -p "$out"
+args=(audit stack --json "$out/stack.json")
+[ -n "$build" ] && args+=(--build-dir "$build")
+"$sdins" "${args[@]}" > "$out/stack.txt" 2> "$out/stack.err"
+rc=$?
+cat "$out/stack.err"
+if [ $rc -ne 0 ] && [ $rc -ne 3 ]; then
+  cat "$out/stack.txt"
+  echo "sdins audit stack failed (exit $rc)"
+  exit 1
+fi
+/usr/bin/python3 - "$out/stack.json" "$rc" <<'PY'
+import json, sys
+j = json.load(open(sys.argv[1]))
+rc = int(sys.argv[2])
+layouts = ["Layout15", "Layout24", "Layout15Full", "Layout24Full"]
+names = [t["name"] for t in j["tasks"]]
+want = [f"{k}/{l}" for l in layouts for k in ("mech_200hz", "ekf_1hz")]
+assert names == want, names
+assert isinstance(j["static_ram_bytes"], int) and j["static_ram_bytes"] >= 0
+assert j["static_ram_bytes"] == j["static_ram"]["data"] + j["static_ram"]["bss"]
+assert j["static_ram"]["text"] > 0
+assert all(c["pass"] for c in j["self_check"]), j["self_check"]
+assert len(j["self_check"]) >= 6
+assert j["cross_check"]["differences"] == [] and j["cross_check"]["ci_records"] == j["cross_check"]["su_records"] > 0
+budget = j["budget_bytes"]
+failing = []
+for t in j["tasks"]:
+    assert isinstance(t["stack_bytes"], int) and t["stack_bytes"] > 0, t["name"]
+    assert isinstance(t["bounded"], bool) and t["budget_bytes"] == budget
+    assert t["bounded"] == (len(t["unbounded_reasons"]) == 0), t["name"]
+    assert t["deepest_path"] and sum(s["frame_bytes"] for s in t["deepest_path"]) == t["stack_bytes"], t["name"]
+    assert t["within_budget"] == (t["bounded"] and t["stack_bytes"] <= budget), t["name"]
+    if not t["within_budget"]:
+        failing.append(t)
+by = {t["name"]: t for t in j["tasks"]}
+for l in layouts:  # the 1 Hz frame contains the 200 Hz one
+    assert by[f"ekf_1hz/{l}"]["stack_bytes"] >= by[f"mech_200hz/{l}"]["stack_bytes"], l
+assert (rc == 3) == bool(failing) and j["all_within_budget"] == (not failing), (rc, len(failing))
+print(f"stack audit report consistent: {len(j['tasks'])} tasks, budget {budget} B, static RAM {j['static_ram_bytes']} B")
+if failing:
+    print(f"\nSTACK BUDGET GATE FAILS: {len(failing)} of {len(j['tasks'])} tasks over {budget} B or unbounded")
+    for t in failing:
+        state = "unbounded" if not t["bounded"] else "over budget"
+        print(f"  {t['name']:<24} {t['stack_bytes']:>8} B  {state}")
+        for f in t["unbounded_via"]:
+            print(f"      {f['reason'][:160]}")
+            print(f"        via {' -> '.join(v[:70] for v in f['via'])}")
+        print("      deepest path: " + " -> ".join(f"{s['short'][:60]} {s['frame_bytes']}" for s in t["deepest_path"]))
+    sys.exit(1)
+print("all tasks bounded and within budget")
+PY

@@ -1,0 +1,112 @@
+// Timing audit of the flight-software tasks (`sdins audit timing`, README "Audits"): the fsw
+// executive flies a whole scenario on the SIL wiring of the Monte Carlo (truth simulator -> IMU and
+// GPS error models -> Executive<Layout>::tick, run 0's seed) and every tick is timed with the
+// steady clock.
+//
+// Tasks, per layout:
+//   mech_200hz/<L>  ticks that do not run the 1 Hz group: IMU compensation, coning/sculling,
+//                   strapdown step, Ekf::accumulate (every 10th frame also a transition sub-step);
+//   ekf_1hz/<L>     ticks that run the 1 Hz group: the same 200 Hz work of that minor frame, then
+//                   Ekf::propagate, update with the epoch (up to 12 satellites, pseudorange and rate)
+//                   and feedback (the executive runs both groups in one tick, so this is what the
+//                   frame that carries the EKF costs).
+// and any per-frame stage registered in TimingAuditConfig::frame_stages (the extension point for
+// the HAL's bus decode, see there).
+//
+// Each layout flies in its own pass over identical inputs (same seed), so no executive evicts
+// another's state from the cache between ticks. The timer's own cost (median of back-to-back
+// clock reads) is subtracted from every sample.
+//
+// Preemption: on a time-shared host a tick during which the scheduler ran another thread measures
+// the host, not the task (the scheduler tick is 4 ms). The thread's context-switch counters
+// (getrusage RUSAGE_THREAD) are read around every timed call, outside the timed interval; samples
+// with a switch are counted (`preempted`) and left out of the statistics, and their wall time
+// is kept in max_including_preempted_us.
+//
+// Release jitter: in the SIL every tick is released at its exact virtual time (the IMU time tags on
+// the 5 ms grid), so virtual-time release jitter is zero by construction. What is reported instead
+// is the start delay each tick would see on one core at real time, with the measured execution
+// times, if ticks ran back to back on their 5 ms grid: start_k = max(k * 5 ms, finish_(k-1)),
+// jitter = start_k - k * 5 ms (non-zero only when the previous tick overran its frame); a preempted
+// sample enters the schedule with its task's largest unpreempted time. Interrupts,
+// cache effects of other software and the HAL are not modelled. For the 1 Hz group the interval
+// between its runs in navigation frames (200 nominal; more when it had to wait for a late epoch) is
+// reported too.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "fsw/executive.hpp"
+#include "sim/scenario.hpp"
+
+namespace tools {
+
+struct TimingStats {
+  long n = 0;
+  double min_us = 0, median_us = 0, p99_us = 0, p999_us = 0, max_us = 0, mean_us = 0;
+  double total_s = 0;  ///< sum of all samples
+};
+
+/// Order statistics (nearest rank) of execution times in seconds.
+TimingStats timing_stats(std::vector<double> samples_s);
+
+/// A per-frame stage timed as its own task: run once per minor frame, before the executive's tick.
+/// EXTENSION POINT (bus decode, HAL issue): the HAL's decoder plugs in here with `prepare` encoding
+/// the frame's IMU samples and GNSS epoch into bus frames the way the simulated bus would carry
+/// them (untimed: that is the sensor side) and `run` decoding them into the flight software's
+/// input (timed: that is flight code), named "bus_decode".
+struct FrameStage {
+  std::string name;
+  std::function<void(const fsw::FrameInput&)> prepare;  ///< untimed; may be empty
+  std::function<void()> run;                            ///< timed
+};
+
+struct TimingAuditConfig {
+  /// Layouts to fly: any of Layout15, Layout24, Layout15Full, Layout24Full. The plain layouts run
+  /// with white measurement noise, the Full ones with the GPS error states (as sdins montecarlo).
+  std::vector<std::string> layouts{"Layout15", "Layout24", "Layout15Full", "Layout24Full"};
+  std::vector<FrameStage> frame_stages;
+  int run = 0;  ///< Monte Carlo run index whose seed draws the errors (seed = scenario seed + run)
+};
+
+struct TaskTiming {
+  std::string name;         ///< "mech_200hz/Layout24", "ekf_1hz/Layout24", or a stage's name
+  std::string layout;       ///< empty for frame stages
+  std::string description;
+  double nominal_rate_hz = 0;
+  TimingStats stats;                ///< samples without a context switch
+  long preempted = 0;               ///< samples left out: the thread was switched out during the call
+  double max_including_preempted_us = 0;
+  double cpu_share = 0;             ///< total execution time / flight duration: fraction of one core at real time
+  double release_jitter_max_us = 0; ///< single-core schedule at real time (see the file comment)
+  double release_jitter_p99_us = 0;
+  long deadline_misses = 0;         ///< releases whose tick finished after the next frame's release
+  int interval_frames_min = 0;      ///< ekf_1hz only: navigation frames between runs
+  int interval_frames_max = 0;
+};
+
+struct LayoutTiming {
+  std::string layout;
+  double fsw_cpu_share = 0;  ///< all of this layout's tasks (and the frame stages)
+  long ekf_updates = 0;
+  long fsw_errors = 0;
+  int sats_min = 0, sats_median = 0, sats_max = 0;  ///< satellites in the epochs the EKF used
+  double wall_s = 0;
+};
+
+struct TimingAuditResult {
+  std::string scenario;
+  double flight_s = 0;
+  long frames = 0;       ///< minor frames (ticks) per layout
+  double timer_overhead_ns = 0;
+  std::vector<TaskTiming> tasks;
+  std::vector<LayoutTiming> layouts;
+};
+
+/// Flies the scenario once per layout. Throws std::runtime_error for an unknown layout, a
+/// scenario the SIL cannot fly or an executive that fails to initialise.
+TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditConfig& cfg);
+
+}  // namespace tools
