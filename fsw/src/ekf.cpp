@@ -141,7 +141,7 @@ void Ekf<Layout>::flush_substep(const NavState& nav) {
   const double T = sub_T_;
   const Mat9 FT = navigation_dynamics(nav, sum_dv_n_ / T) * T;
   Mat9 A = Mat9::Identity() + FT;
-  A.noalias() += 0.5 * FT * FT;
+  A.noalias() += 0.5 * FT.lazyProduct(FT);  // coefficient-based: no GEMM blocking (alloca/malloc)
 
   // Phi_nav <- A Phi_nav + (I + FT / 2) B, B the integrated sensor-error columns of the
   // navigation rows (sparse: added block by block, never formed). top_ is member scratch.

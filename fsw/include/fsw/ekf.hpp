@@ -199,7 +199,9 @@ class Ekf {
   void check_covariance();
   void symmetrise();
   void track_consistency(const EkfUpdateReport& report);
-  int bind_channel(std::uint8_t prn);
+  // noinline: a partially inlined clone (.part.0) folded by identical-code folding leaves the
+  // stack audit without a frame size for it.
+  [[gnu::noinline]] int bind_channel(std::uint8_t prn);
   void reset_channel_state(int state, double sigma);
 
   EkfConfig cfg_{};
