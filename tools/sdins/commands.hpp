@@ -16,6 +16,8 @@ void register_montecarlo(CLI::App& app);
 void register_paper(CLI::App& app);
 void register_log(CLI::App& app);
 void register_can(CLI::App& app);
+void register_bus_sim(CLI::App& app);
+void register_fsw(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -27,6 +29,8 @@ int run_montecarlo();
 int run_paper();
 int run_log();
 int run_can();
+int run_bus_sim();
+int run_fsw();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

@@ -39,6 +39,8 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("paper")) return run_paper();
   if (app.got_subcommand("log")) return run_log();
   if (app.got_subcommand("can")) return run_can();
+  if (app.got_subcommand("bus-sim")) return run_bus_sim();
+  if (app.got_subcommand("fsw")) return run_fsw();
   return 1;
 }
 
