@@ -27,8 +27,8 @@ void CanFswInput::on_control(const CanFrame& f) {
     ++control_rejected_;
     return;
   }
-  ++control_frames_;
   if (c.command == can::SimCommand::kStart) {
+    ++control_frames_;
     if (run_started_ && c.run_id == run_.run_id) return;  // a repeated start of the current run
     run_started_ = true;
     end_received_ = false;
@@ -45,6 +45,7 @@ void CanFswInput::on_control(const CanFrame& f) {
     ++control_rejected_;
     return;
   }
+  ++control_frames_;
   if (!end_received_) control_changed_ = true;
   end_received_ = true;
   end_ = c;

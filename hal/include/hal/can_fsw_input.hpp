@@ -39,8 +39,8 @@ class CanFswInput {
   bool control_changed() const { return control_changed_; }
   /// The FSW_ACK content for the current run (counts since its start).
   can::FswAckFrame ack() const;
-  std::uint64_t control_frames() const { return control_frames_; }      ///< valid SIM_CONTROL frames
-  std::uint64_t control_rejected() const { return control_rejected_; }  ///< SIM_CONTROL with bad length/CRC/content
+  std::uint64_t control_frames() const { return control_frames_; }      ///< SIM_CONTROL frames obeyed (starts, repeats included; this run's end)
+  std::uint64_t control_rejected() const { return control_rejected_; }  ///< SIM_CONTROL with bad length/CRC/content, or an end of another run
   std::uint64_t foreign_acks() const { return foreign_acks_; }          ///< FSW_ACK frames seen (ignored)
   std::uint64_t data_frames() const { return data_frames_; }            ///< frames passed to the assembler
   std::uint64_t imu_frames() const { return imu_frames_; }              ///< ... with the IMU_SAMPLE identifier
