@@ -67,6 +67,12 @@ constexpr int kMsSeq = 0, kMsIndex = 2, kMsPrn = 3, kMsPr = 4, kMsPrr = 9, kMsCn
 constexpr int kAlPrn = 0, kAlHealth = 1, kAlWeek = 2, kAlToa = 4, kAlEcc = 8, kAlDeltaI = 12, kAlOmegaDot = 17,
               kAlSqrtA = 22, kAlOmega0 = 27, kAlArgPerigee = 32, kAlM0 = 37, kAlAf0 = 42, kAlAf1 = 47;
 
+// SIM_CONTROL
+constexpr int kScCommand = 0, kScMode = 1, kScWindow = 2, kScRunId = 4, kScSeed = 8, kScSteps = 16, kScImu = 20,
+              kScFrames = 24;
+// FSW_ACK
+constexpr int kAkRunId = 0, kAkImuFrames = 4, kAkFrames = 8, kAkImuDelivered = 12, kAkNavFrames = 16, kAkFlags = 20;
+
 constexpr double kSecondsPerWeek = 604800.0;
 
 /// Angle [rad] -> semicircles in [-1, 1).
@@ -400,6 +406,70 @@ double can_fd_frame_time_s(int payload_len, double nominal_bps, double data_bps)
   const int crc = n <= 16 ? 17 : 21;
   const double data_bits = dyn + std::ceil(dyn / 4.0) + 4 + crc + std::ceil((4 + crc) / 4.0);
   return nominal_bits / nominal_bps + data_bits / data_bps;
+}
+
+// ---- lockstep flow control ----------------------------------------------------------------------
+
+namespace {
+bool sim_control_valid(std::uint64_t command, std::uint64_t mode) {
+  return (command == static_cast<std::uint64_t>(SimCommand::kStart) ||
+          command == static_cast<std::uint64_t>(SimCommand::kEnd)) &&
+         (mode == static_cast<std::uint64_t>(SimMode::kLockstep) || mode == static_cast<std::uint64_t>(SimMode::kRealtime));
+}
+}  // namespace
+
+CodecStatus encode_sim_control(const SimControlFrame& c, CanFrame& out) {
+  if (!sim_control_valid(static_cast<std::uint64_t>(c.command), static_cast<std::uint64_t>(c.mode)))
+    return CodecStatus::kBadInput;
+  start_frame(out, kIdSimControl, kLenSimControl);
+  put_u(out, kScCommand, 1, static_cast<std::uint64_t>(c.command));
+  put_u(out, kScMode, 1, static_cast<std::uint64_t>(c.mode));
+  put_u(out, kScWindow, 2, c.window_imu);
+  put_u(out, kScRunId, 4, c.run_id);
+  put_u(out, kScSeed, 8, c.seed);
+  put_u(out, kScSteps, 4, c.steps);
+  put_u(out, kScImu, 4, c.imu_samples);
+  put_u(out, kScFrames, 4, c.frames);
+  seal_frame(out);
+  return CodecStatus::kOk;
+}
+
+CodecStatus decode_sim_control(const CanFrame& f, SimControlFrame& out) {
+  const CodecStatus st = check_kind(f, MessageKind::kSimControl);
+  if (st != CodecStatus::kOk) return st;
+  const std::uint64_t cmd = get_u(f, kScCommand, 1), mode = get_u(f, kScMode, 1);
+  out.command = static_cast<SimCommand>(cmd);
+  out.mode = static_cast<SimMode>(mode);
+  out.window_imu = static_cast<std::uint16_t>(get_u(f, kScWindow, 2));
+  out.run_id = static_cast<std::uint32_t>(get_u(f, kScRunId, 4));
+  out.seed = get_u(f, kScSeed, 8);
+  out.steps = static_cast<std::uint32_t>(get_u(f, kScSteps, 4));
+  out.imu_samples = static_cast<std::uint32_t>(get_u(f, kScImu, 4));
+  out.frames = static_cast<std::uint32_t>(get_u(f, kScFrames, 4));
+  return sim_control_valid(cmd, mode) ? CodecStatus::kOk : CodecStatus::kBadInput;
+}
+
+void encode_fsw_ack(const FswAckFrame& a, CanFrame& out) {
+  start_frame(out, kIdFswAck, kLenFswAck);
+  put_u(out, kAkRunId, 4, a.run_id);
+  put_u(out, kAkImuFrames, 4, a.imu_frames);
+  put_u(out, kAkFrames, 4, a.frames);
+  put_u(out, kAkImuDelivered, 4, a.imu_delivered);
+  put_u(out, kAkNavFrames, 4, a.nav_frames);
+  put_u(out, kAkFlags, 1, a.flags);
+  seal_frame(out);
+}
+
+CodecStatus decode_fsw_ack(const CanFrame& f, FswAckFrame& out) {
+  const CodecStatus st = check_kind(f, MessageKind::kFswAck);
+  if (st != CodecStatus::kOk) return st;
+  out.run_id = static_cast<std::uint32_t>(get_u(f, kAkRunId, 4));
+  out.imu_frames = static_cast<std::uint32_t>(get_u(f, kAkImuFrames, 4));
+  out.frames = static_cast<std::uint32_t>(get_u(f, kAkFrames, 4));
+  out.imu_delivered = static_cast<std::uint32_t>(get_u(f, kAkImuDelivered, 4));
+  out.nav_frames = static_cast<std::uint32_t>(get_u(f, kAkNavFrames, 4));
+  out.flags = static_cast<std::uint8_t>(get_u(f, kAkFlags, 1));
+  return CodecStatus::kOk;
 }
 
 double can_classic_frame_time_s(int payload_len, double bps) {

@@ -74,6 +74,8 @@ can::CodecStatus CanRxAssembler::push(const CanFrame& f, double rx_time_s) {
       on_almanac(a);
       break;
     }
+    case can::MessageKind::kSimControl:
+    case can::MessageKind::kFswAck: ++h_.control_frames; break;  // flow control, no sensor data
     case can::MessageKind::kUnknown: ++h_.unknown_id; return can::CodecStatus::kUnknownId;
   }
   return can::CodecStatus::kOk;

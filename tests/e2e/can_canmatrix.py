@@ -31,7 +31,9 @@ def main():
 
     db = canmatrix.formats.loadp_flat(dbc)
     frames = {f.arbitration_id.id: f for f in db.frames}
-    assert sorted(frames) == [0x010, 0x020, 0x021, 0x030], sorted(frames)
+    # Sensor frames, and the lockstep flow control (SIM_CONTROL, FSW_ACK: decoded from a recorded HIL
+    # run by tests/e2e/hil.py lockstep).
+    assert sorted(frames) == [0x010, 0x020, 0x021, 0x030, 0x040, 0x041], sorted(frames)
     for f in frames.values():
         assert f.is_fd, f"{f.name} is not marked CAN FD in the DBC"
 

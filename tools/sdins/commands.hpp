@@ -20,6 +20,8 @@ void register_can(CLI::App& app);
 void register_sil(CLI::App& app);
 void register_replay(CLI::App& app);
 void register_audit(CLI::App& app);
+void register_bus_sim(CLI::App& app);
+void register_fsw(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -34,6 +36,8 @@ int run_paper();
 int run_log();
 int run_can();
 int run_audit();
+int run_bus_sim();
+int run_fsw();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

@@ -66,6 +66,8 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("sil")) return run_sil();
   if (app.got_subcommand("replay")) return run_replay();
   if (app.got_subcommand("audit")) return run_audit();
+  if (app.got_subcommand("bus-sim")) return run_bus_sim();
+  if (app.got_subcommand("fsw")) return run_fsw();
   return 1;
 }
 

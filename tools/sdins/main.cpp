@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
   sdins::register_log(app);
   sdins::register_can(app);
   sdins::register_audit(app);
+  sdins::register_bus_sim(app);
+  sdins::register_fsw(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

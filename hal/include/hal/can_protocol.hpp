@@ -15,6 +15,13 @@
 //                                              receive time, number of measurement frames, status
 //   0x021  GPS_MEAS      20  per satellite     epoch sequence, index, PRN, pseudorange, rate, C/N0
 //   0x030  GPS_ALMANAC   64  per PRN           all fsw::GpsAlmanac elements, IS-GPS-200 units
+//   0x040  SIM_CONTROL   32  run start / end   bus simulator -> fsw: run id, mode, window, seed, totals
+//   0x041  FSW_ACK       24  every minor frame fsw -> bus simulator: IMU frames / frames consumed
+//
+// SIM_CONTROL and FSW_ACK are the lockstep flow control of HIL runs (README "Lockstep protocol");
+// they carry no sensor data, so the receive assembler only counts them (control_frames) and
+// hal::CanFswInput takes them out before it. Their IDs are the lowest priority on the bus: a
+// control frame never delays a sensor frame in arbitration.
 //
 // Decimal scale factors are applied as integer = round(value * N), value = integer / N (N an
 // exactly representable power of ten), binary ones as exact multiplications by powers of two, so
@@ -38,13 +45,17 @@ inline constexpr std::uint32_t kIdImuSample = 0x010;
 inline constexpr std::uint32_t kIdGpsEpoch = 0x020;
 inline constexpr std::uint32_t kIdGpsMeas = 0x021;
 inline constexpr std::uint32_t kIdGpsAlmanac = 0x030;
+inline constexpr std::uint32_t kIdSimControl = 0x040;
+inline constexpr std::uint32_t kIdFswAck = 0x041;
 
 inline constexpr int kLenImuSample = 48;
 inline constexpr int kLenGpsEpoch = 24;
 inline constexpr int kLenGpsMeas = 20;
 inline constexpr int kLenGpsAlmanac = 64;
+inline constexpr int kLenSimControl = 32;
+inline constexpr int kLenFswAck = 24;
 
-enum class MessageKind : std::uint8_t { kUnknown, kImuSample, kGpsEpoch, kGpsMeas, kGpsAlmanac };
+enum class MessageKind : std::uint8_t { kUnknown, kImuSample, kGpsEpoch, kGpsMeas, kGpsAlmanac, kSimControl, kFswAck };
 
 struct MessageInfo {
   std::uint32_t id;
@@ -57,6 +68,8 @@ inline constexpr MessageInfo kMessages[] = {
     {kIdGpsEpoch, MessageKind::kGpsEpoch, "GPS_EPOCH", kLenGpsEpoch},
     {kIdGpsMeas, MessageKind::kGpsMeas, "GPS_MEAS", kLenGpsMeas},
     {kIdGpsAlmanac, MessageKind::kGpsAlmanac, "GPS_ALMANAC", kLenGpsAlmanac},
+    {kIdSimControl, MessageKind::kSimControl, "SIM_CONTROL", kLenSimControl},
+    {kIdFswAck, MessageKind::kFswAck, "FSW_ACK", kLenFswAck},
 };
 /// The message of a frame's identifier (extended identifiers are never ours), nullptr if unknown.
 const MessageInfo* message_info(const CanFrame& f);
@@ -147,6 +160,43 @@ CodecStatus decode_imu(const CanFrame& f, ImuFrame& out);
 CodecStatus decode_gps_epoch(const CanFrame& f, GpsEpochFrame& out);
 CodecStatus decode_gps_meas(const CanFrame& f, GpsMeasFrame& out);
 CodecStatus decode_gps_almanac(const CanFrame& f, fsw::GpsAlmanac& out);
+
+// ---- lockstep flow control (HIL) ---------------------------------------------------------------
+enum class SimCommand : std::uint8_t { kStart = 1, kEnd = 2 };
+enum class SimMode : std::uint8_t { kLockstep = 0, kRealtime = 1 };
+/// SIM_CONTROL, bus simulator -> flight software. Start: the planned run (steps = GPS intervals,
+/// imu_samples = IMU samples; frames = 0); the simulator repeats it until an FSW_ACK with its
+/// run_id answers. End: what was actually sent before it (steps, IMU_SAMPLE frames, data frames).
+struct SimControlFrame {
+  SimCommand command = SimCommand::kStart;
+  SimMode mode = SimMode::kLockstep;
+  std::uint16_t window_imu = 0;  ///< lockstep: IMU samples the simulator may run ahead of the last ack
+  std::uint32_t run_id = 0;      ///< chosen by the simulator, echoed in FSW_ACK (non-zero)
+  std::uint64_t seed = 0;        ///< the scenario seed of the run
+  std::uint32_t steps = 0;
+  std::uint32_t imu_samples = 0;
+  std::uint32_t frames = 0;
+};
+/// FSW_ACK flags.
+enum FswAckFlag : std::uint8_t {
+  kAckInitialised = 1u << 0,  ///< the flight software has initialised (navigating)
+  kAckEndReceived = 1u << 1,  ///< the run's SIM_CONTROL end was received: these are the final counts
+};
+/// FSW_ACK, flight software -> bus simulator: counts since the SIM_CONTROL start of run_id.
+struct FswAckFrame {
+  std::uint32_t run_id = 0;        ///< 0: no run started yet
+  std::uint32_t imu_frames = 0;    ///< IMU_SAMPLE frames taken from the bus (delivered or rejected)
+  std::uint32_t frames = 0;        ///< data frames taken from the bus (all IDs, control frames excluded)
+  std::uint32_t imu_delivered = 0; ///< IMU samples handed to the flight software
+  std::uint32_t nav_frames = 0;    ///< navigation frames computed
+  std::uint8_t flags = 0;          ///< FswAckFlag
+};
+/// kBadInput for a command or mode outside the enums (no frame made).
+CodecStatus encode_sim_control(const SimControlFrame& c, CanFrame& out);
+/// kBadInput for a command or mode outside the enums (the other fields are still decoded).
+CodecStatus decode_sim_control(const CanFrame& f, SimControlFrame& out);
+void encode_fsw_ack(const FswAckFrame& a, CanFrame& out);
+CodecStatus decode_fsw_ack(const CanFrame& f, FswAckFrame& out);
 
 /// IMU encoder with the rounding residual carried to the next sample (as integrating IMUs do):
 /// the sum of the transmitted increments differs from the sum of the true ones by less than one

@@ -42,6 +42,7 @@ struct CanRxHealth {
   std::uint32_t bad_length = 0;         ///< wrong DLC / payload length for the identifier
   std::uint32_t bad_crc = 0;            ///< CRC mismatch: corrupted payload
   std::uint32_t unsupported_frame = 0;  ///< remote / error frames, classic frames with an FD length
+  std::uint32_t control_frames = 0;     ///< valid SIM_CONTROL / FSW_ACK (lockstep flow control): no sensor data
   // IMU
   std::uint32_t imu_frames = 0;         ///< valid IMU_SAMPLE frames
   std::uint32_t imu_delivered = 0;
@@ -189,6 +190,7 @@ void CanRxHealth::for_each(F&& f) const {
   SDINS_CAN_RX_COUNTER(bad_length);
   SDINS_CAN_RX_COUNTER(bad_crc);
   SDINS_CAN_RX_COUNTER(unsupported_frame);
+  SDINS_CAN_RX_COUNTER(control_frames);
   SDINS_CAN_RX_COUNTER(imu_frames);
   SDINS_CAN_RX_COUNTER(imu_delivered);
   SDINS_CAN_RX_COUNTER(imu_gaps);

@@ -51,6 +51,8 @@ class SensorStream {
 
   const std::vector<fsw::GpsAlmanac>& almanac() const { return almanac_; }
   int samples_per_epoch() const { return samples_per_epoch_; }
+  /// IMU samples of the whole scenario (duration x IMU rate).
+  long long total_samples() const { return n_samples_; }
 
   const sim::ImuErrors& imu_errors() const { return imu_->errors(); }
   const sim::Scenario& scenario() const { return sc_; }
