@@ -503,17 +503,11 @@ nlohmann::json to_json(const FswRunResult& r) {
   j["exit"] = to_string(r.exit);
   j["error"] = r.error;
   const fsw::NavState& n = r.summary.last_nav;
-  constexpr double kDeg = 180.0 / 3.14159265358979323846;
   j["initialised"] = r.summary.initialised;
   j["init_t_s"] = r.summary.init_t_s;
   j["nav_frames"] = r.summary.nav_frames;
   j["digest"] = digest_hex(r.summary.digest);
-  j["last_nav"] = {{"t_s", n.t_s},
-                   {"lat_deg", n.llh(0) * kDeg},
-                   {"lon_deg", n.llh(1) * kDeg},
-                   {"height_m", n.llh(2)},
-                   {"vel_enu_mps", {n.vel_enu_mps(0), n.vel_enu_mps(1), n.vel_enu_mps(2)}},
-                   {"q_b_n_wxyz", {n.q_b_n.w(), n.q_b_n.x(), n.q_b_n.y(), n.q_b_n.z()}}};
+  j["last_nav"] = last_nav_json(n);
   j["run"] = {{"started", r.run_started},
               {"run_id", r.run.run_id},
               {"mode", r.run.mode == can::SimMode::kLockstep ? "lockstep" : "realtime"},
@@ -535,36 +529,9 @@ nlohmann::json to_json(const FswRunResult& r) {
                  {"foreign_acks", r.foreign_acks},
                  {"acks_sent", r.acks_sent},
                  {"ack_send_failures", r.ack_send_failures}};
-  nlohmann::json rx;
-  r.rx.for_each([&rx](const char* name, std::uint32_t v) { rx[name] = v; });
-  rx["rejections"] = r.rx.rejections();
-  j["assembler"] = rx;
-  const fsw::ExecutiveHealth& e = r.exec;
-  j["executive"] = {{"ticks", e.ticks},
-                    {"nav_frames", e.nav_frames},
-                    {"ekf_runs", e.ekf_runs},
-                    {"ekf_updates", e.ekf_updates},
-                    {"ekf_without_gnss", e.ekf_without_gnss},
-                    {"imu_samples", e.imu_samples},
-                    {"imu_rejected", e.imu_rejected},
-                    {"imu_short_ticks", e.imu_short_ticks},
-                    {"imu_time_gaps", e.imu_time_gaps},
-                    {"gnss_epochs", e.gnss_epochs},
-                    {"gnss_stale", e.gnss_stale},
-                    {"gnss_replaced", e.gnss_replaced},
-                    {"gnss_invalid", e.gnss_invalid},
-                    {"pr_used", e.pr_used},
-                    {"prr_used", e.prr_used},
-                    {"pr_rejected", e.pr_rejected},
-                    {"prr_rejected", e.prr_rejected},
-                    {"overruns", e.overruns},
-                    {"worst_tick_s", e.worst_tick_s},
-                    {"fsw_errors", e.fsw_errors}};
-  const fsw::FlightAppHealth& a = r.app;
-  j["app"] = {{"imu_received", a.imu_received},       {"imu_before_init", a.imu_before_init},
-              {"imu_rejected", a.imu_rejected},       {"gnss_received", a.gnss_received},
-              {"gnss_rejected", a.gnss_rejected},     {"gnss_before_init", a.gnss_before_init},
-              {"almanac_received", a.almanac_received}, {"almanac_rejected", a.almanac_rejected}};
+  j["assembler"] = can_rx_json(r.rx);
+  j["executive"] = executive_json(r.exec);
+  j["app"] = app_json(r.app);
   j["telemetry"] = {{"lcm_url", r.lcm_url},
                     {"network_active", r.lcm_network},
                     {"published", r.lcm_published},

@@ -14,6 +14,10 @@ namespace tools {
 /// height_m, vel_enu_mps}, app (flight app counters), executive (executive and EKF health),
 /// telemetry (network, url, published, logged, send/log failures).
 nlohmann::json fsw_summary_json(const hal::FswNode& node);
+/// The parts of it, for summaries that hold copies rather than the node (tools/hil.hpp).
+nlohmann::json last_nav_json(const fsw::NavState& n);
+nlohmann::json app_json(const fsw::FlightAppHealth& a);
+nlohmann::json executive_json(const fsw::ExecutiveHealth& e);
 /// Every CAN receive counter by name.
 nlohmann::json can_rx_json(const hal::CanRxHealth& h);
 /// The digest as 16 lower-case hex digits.
