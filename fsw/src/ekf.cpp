@@ -47,13 +47,25 @@ Mat9 navigation_dynamics(const NavState& nav, const Vec3& f_n_mps2) {
   return F;
 }
 
+/// Standard-normal quantile of the NIS test: P(Z > 3.090) = 0.001.
+constexpr double kNisTestZ = 3.090232;
+
+/// Upper chi-square quantile with k degrees of freedom at the standard-normal quantile z
+/// (Wilson-Hilferty; within 1% for k >= 10, which a 10-epoch window always has).
+double chi2_upper_quantile(int k, double z) {
+  const double a = 2.0 / (9.0 * k);
+  const double c = 1.0 - a + z * std::sqrt(a);
+  return k * c * c * c;
+}
+
 }  // namespace
 
 template <class Layout>
 Status Ekf<Layout>::init(const EkfConfig& cfg) {
   if (cfg.propagation_substep_frames < 1 || !(cfg.pseudorange_sigma_m > 0.0) ||
       !(cfg.pseudorange_rate_sigma_mps > 0.0) || !(cfg.gate_chi2 > 0.0) || !cfg.att_sigma_rad.allFinite() ||
-      !cfg.lever_arm_b_m.allFinite())
+      !cfg.lever_arm_b_m.allFinite() || cfg.nis_window < 1 || cfg.nis_window > kMaxNisWindow ||
+      cfg.runaway_epochs < 0)
     return Status::kBadConfig;
   cfg_ = cfg;
   x_.setZero();
@@ -81,7 +93,12 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   sig(oc) = cfg.clock_bias_sigma_m;
   sig(oc + 1) = cfg.clock_drift_sigma_mps;
   if (!sig.allFinite() || (sig.array() < 0.0).any()) return Status::kBadConfig;
-  P_ = sig.array().square().matrix().asDiagonal();
+  init_var_ = sig.array().square().matrix();
+  P_ = init_var_.asDiagonal();
+  health_ = EkfHealth{};
+  nis_head_ = 0;
+  nis_count_ = 0;
+  runaway_count_ = 0;
   Phi_.setIdentity();
   interval_s_ = 0.0;
   sub_frames_ = 0;
@@ -99,7 +116,11 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
 template <class Layout>
 Status Ekf<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
   if (!initialised_) return Status::kNotInitialised;
-  if (!(inc.dt_s > 0.0) || !inc.dv_sum_mps.allFinite() || !inc.dtheta_sum_rad.allFinite()) return Status::kBadInput;
+  if (!(inc.dt_s > 0.0) || !inc.dv_sum_mps.allFinite() || !inc.dtheta_sum_rad.allFinite() || !nav.llh.allFinite() ||
+      !nav.vel_enu_mps.allFinite() || !nav.q_b_n.coeffs().allFinite()) {
+    ++health_.nonfinite_rejected;
+    return Status::kBadInput;
+  }
   const Mat3 C = nav.C_b_n();
   sum_C_dt_ += C * inc.dt_s;
   sum_dv_n_ += C * inc.dv_sum_mps;
@@ -120,40 +141,43 @@ void Ekf<Layout>::flush_substep(const NavState& nav) {
   const double T = sub_T_;
   const Mat9 FT = navigation_dynamics(nav, sum_dv_n_ / T) * T;
   Mat9 A = Mat9::Identity() + FT;
-  A.noalias() += 0.5 * FT * FT;
+  A.noalias() += 0.5 * FT.lazyProduct(FT);  // coefficient-based: no GEMM blocking (alloca/malloc)
 
-  // Integrated sensor-error columns of the navigation rows.
-  Eigen::Matrix<double, 9, N> B = Eigen::Matrix<double, 9, N>::Zero();
-  if constexpr (Layout::has(Block::kAccelBias)) B.template block<3, 3>(3, Layout::offset(Block::kAccelBias)) = sum_C_dt_;
-  if constexpr (Layout::has(Block::kGyroBias)) B.template block<3, 3>(6, Layout::offset(Block::kGyroBias)) = -sum_C_dt_;
+  // Phi_nav <- A Phi_nav + (I + FT / 2) B, B the integrated sensor-error columns of the
+  // navigation rows (sparse: added block by block, never formed). top_ is member scratch.
+  const Mat9 half = Mat9::Identity() + 0.5 * FT;
+  top_.noalias() = A.lazyProduct(Phi_.template topRows<9>());
+  if constexpr (Layout::has(Block::kAccelBias)) {
+    top_.template middleCols<3>(Layout::offset(Block::kAccelBias)).noalias() +=
+        half.template middleCols<3>(3).lazyProduct(sum_C_dt_);
+  }
+  if constexpr (Layout::has(Block::kGyroBias)) {
+    top_.template middleCols<3>(Layout::offset(Block::kGyroBias)).noalias() -=
+        half.template middleCols<3>(6).lazyProduct(sum_C_dt_);
+  }
   if constexpr (Layout::has(Block::kAccelMisalign)) {
     constexpr int o = Layout::offset(Block::kAccelMisalign);
     for (int k = 0; k < 3; ++k) {
       const AxisPair ax = kAccelMisalignmentAxes[k];
-      B.template block<3, 1>(3, o + k) = sum_C_dv_.col(3 * ax.i + ax.j);
+      top_.col(o + k).noalias() += half.template middleCols<3>(3).lazyProduct(sum_C_dv_.col(3 * ax.i + ax.j));
     }
   }
   if constexpr (Layout::has(Block::kGyroMisalign)) {
     constexpr int o = Layout::offset(Block::kGyroMisalign);
     for (int k = 0; k < 6; ++k) {
       const AxisPair ax = kGyroMisalignmentAxes[k];
-      B.template block<3, 1>(6, o + k) = -sum_C_dth_.col(3 * ax.i + ax.j);
+      top_.col(o + k).noalias() -= half.template middleCols<3>(6).lazyProduct(sum_C_dth_.col(3 * ax.i + ax.j));
     }
   }
   if constexpr (Layout::has(Block::kAccelScale)) {
     constexpr int o = Layout::offset(Block::kAccelScale);
-    for (int i = 0; i < 3; ++i) B.template block<3, 1>(3, o + i) = sum_C_dv_.col(4 * i);
+    for (int i = 0; i < 3; ++i) top_.col(o + i).noalias() += half.template middleCols<3>(3).lazyProduct(sum_C_dv_.col(4 * i));
   }
   if constexpr (Layout::has(Block::kGyroScale)) {
     constexpr int o = Layout::offset(Block::kGyroScale);
-    for (int i = 0; i < 3; ++i) B.template block<3, 1>(6, o + i) = -sum_C_dth_.col(4 * i);
+    for (int i = 0; i < 3; ++i) top_.col(o + i).noalias() -= half.template middleCols<3>(6).lazyProduct(sum_C_dth_.col(4 * i));
   }
-  // Second order: the forcing integrated over the sub-step is carried on by half its dynamics.
-  const Mat9 half = Mat9::Identity() + 0.5 * FT;
-  Eigen::Matrix<double, 9, N> top;
-  top.noalias() = A.lazyProduct(Phi_.template topRows<9>());
-  top.noalias() += half.lazyProduct(B);
-  Phi_.template topRows<9>() = top;
+  Phi_.template topRows<9>() = top_;
 
   interval_s_ += T;
   sub_frames_ = 0;
@@ -193,47 +217,54 @@ Status Ekf<Layout>::propagate() {
     qc.template segment<3>(Layout::offset(Block::kGyroBias))
         .setConstant(cfg_.gyro_bias_rw_radps_per_rts * cfg_.gyro_bias_rw_radps_per_rts);
   // Phi's structure: dense navigation rows (0..8); below them a diagonal (random constants,
-  // Gauss-Markov decays) plus the clock's bias-drift coupling. Q and P use it (O(9 N^2), not N^3).
-  Mat Q = Mat::Zero();
-  for (int j = 0; j < N; ++j) {  // Qd = 0.5 (Phi Qc Phi^T + Qc) T, Qc diagonal
-    if (qc(j) == 0.0) continue;
-    const Eigen::Matrix<double, 9, 1> v = Phi_.template block<9, 1>(0, j);
-    const double vj = j >= 9 ? Phi_(j, j) : 0.0;
-    Q.template topLeftCorner<9, 9>().noalias() += qc(j) * v * v.transpose();
-    if (j >= 9) {
-      Q.template block<9, 1>(0, j) += qc(j) * vj * v;
-      Q.template block<1, 9>(j, 0) += qc(j) * vj * v.transpose();
-      Q(j, j) += qc(j) * vj * vj;
-    }
-    Q(j, j) += qc(j);
-  }
-  Q *= 0.5 * T;
-  const double Sb = cfg_.clock_bias_psd_m2ps, Sd = cfg_.clock_drift_psd_m2ps3;
-  Q(oc, oc) = Sb * T + Sd * T * T * T / 3.0;
-  Q(oc, oc + 1) = Q(oc + 1, oc) = Sd * T * T / 2.0;
-  Q(oc + 1, oc + 1) = Sd * T;
-  if constexpr (Layout::has(Block::kRangeError)) {
-    const double q = cfg_.range_gm_sigma_m * cfg_.range_gm_sigma_m * (1.0 - a_range * a_range);
-    for (int k = 0; k < kGnssErrorChannels; ++k) Q(Layout::offset(Block::kRangeError) + k, Layout::offset(Block::kRangeError) + k) = q;
-    range_err_hat_ *= a_range;
-  }
-  if constexpr (Layout::has(Block::kRangeRateError)) {
-    const double q = cfg_.range_rate_gm_sigma_mps * cfg_.range_rate_gm_sigma_mps * (1.0 - a_rate * a_rate);
-    for (int k = 0; k < kGnssErrorChannels; ++k)
-      Q(Layout::offset(Block::kRangeRateError) + k, Layout::offset(Block::kRangeRateError) + k) = q;
-    rate_err_hat_ *= a_rate;
-  }
-
-  Mat PhiP;  // Phi P
+  // Gauss-Markov decays) plus the clock's bias-drift coupling. P uses it (O(9 N^2), not N^3), and
+  // every N x N intermediate lives in member scratch, not on the task's stack.
+  Mat& PhiP = work_;
   PhiP.template topRows<9>().noalias() = Phi_.template topRows<9>().lazyProduct(P_);
   for (int i = 9; i < N; ++i) PhiP.row(i) = Phi_(i, i) * P_.row(i);
   PhiP.row(oc) += Phi_(oc, oc + 1) * P_.row(oc + 1);
   P_.template leftCols<9>().noalias() = PhiP.lazyProduct(Phi_.template topRows<9>().transpose());
   for (int j = 9; j < N; ++j) P_.col(j) = Phi_(j, j) * PhiP.col(j);
   P_.col(oc) += Phi_(oc, oc + 1) * PhiP.col(oc + 1);
-  P_ += Q;
-  P_ = 0.5 * (P_ + P_.transpose()).eval();
-  x_ = (Phi_ * x_).eval();
+
+  // + Qd = 0.5 (Phi Qc Phi^T + Qc) T, Qc diagonal, added in place with the same structure.
+  const double halfT = 0.5 * T;
+  for (int j = 0; j < N; ++j) {
+    if (qc(j) == 0.0) continue;
+    const double q = qc(j) * halfT;
+    const Eigen::Matrix<double, 9, 1> v = Phi_.template block<9, 1>(0, j);
+    P_.template topLeftCorner<9, 9>().noalias() += (q * v) * v.transpose();
+    if (j >= 9) {
+      const double vj = Phi_(j, j);
+      P_.template block<9, 1>(0, j) += (q * vj) * v;
+      P_.template block<1, 9>(j, 0) += (q * vj) * v.transpose();
+      P_(j, j) += q * vj * vj;
+    }
+    P_(j, j) += q;
+  }
+  const double Sb = cfg_.clock_bias_psd_m2ps, Sd = cfg_.clock_drift_psd_m2ps3;
+  P_(oc, oc) += Sb * T + Sd * T * T * T / 3.0;
+  P_(oc, oc + 1) += Sd * T * T / 2.0;
+  P_(oc + 1, oc) += Sd * T * T / 2.0;
+  P_(oc + 1, oc + 1) += Sd * T;
+  if constexpr (Layout::has(Block::kRangeError)) {
+    const double q = cfg_.range_gm_sigma_m * cfg_.range_gm_sigma_m * (1.0 - a_range * a_range);
+    for (int k = 0; k < kGnssErrorChannels; ++k) P_(Layout::offset(Block::kRangeError) + k, Layout::offset(Block::kRangeError) + k) += q;
+    range_err_hat_ *= a_range;
+  }
+  if constexpr (Layout::has(Block::kRangeRateError)) {
+    const double q = cfg_.range_rate_gm_sigma_mps * cfg_.range_rate_gm_sigma_mps * (1.0 - a_rate * a_rate);
+    for (int k = 0; k < kGnssErrorChannels; ++k)
+      P_(Layout::offset(Block::kRangeRateError) + k, Layout::offset(Block::kRangeRateError) + k) += q;
+    rate_err_hat_ *= a_rate;
+  }
+  symmetrise();
+  // x <- Phi x with the same structure (x is normally zero after feedback).
+  const Eigen::Matrix<double, 9, 1> x_nav = Phi_.template topRows<9>() * x_;
+  const double x_clock = Phi_(oc, oc) * x_(oc) + Phi_(oc, oc + 1) * x_(oc + 1);
+  for (int i = 9; i < N; ++i) x_(i) *= Phi_(i, i);
+  x_(oc) = x_clock;
+  x_.template head<9>() = x_nav;
   clock_bias_m_ += clock_drift_mps_ * T;
   last_Phi_ = Phi_;
   Phi_.setIdentity();
@@ -242,12 +273,12 @@ Status Ekf<Layout>::propagate() {
 }
 
 template <class Layout>
-bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r) {
+bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu, double& S) {
   Vec s = Vec::Zero();  // P h^T over the few non-zeros of h
   for (int j = 0; j < N; ++j)
     if (h(j) != 0.0) s.noalias() += h(j) * P_.col(j);
-  const double S = h.dot(s) + r;
-  const double nu = y - h.dot(x_);
+  S = h.dot(s) + r;
+  nu = y - h.dot(x_);
   if (!(S > 0.0) || !(nu * nu <= cfg_.gate_chi2 * S)) return false;
   Vec K = s / S;
   // Consider states get no gain; the Joseph form below stays exact for this suboptimal gain.
@@ -301,8 +332,11 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
                            EkfUpdateReport& report) {
   report = EkfUpdateReport{};
   if (!initialised_) return Status::kNotInitialised;
-  if (epoch.n_obs < 0 || epoch.n_obs > kMaxGnssChannels || !std::isfinite(epoch.t_s) || !omega_ib_b_radps.allFinite())
+  if (epoch.n_obs < 0 || epoch.n_obs > kMaxGnssChannels || !std::isfinite(epoch.t_s) || !omega_ib_b_radps.allFinite() ||
+      !nav.llh.allFinite() || !nav.vel_enu_mps.allFinite() || !nav.q_b_n.coeffs().allFinite()) {
+    ++health_.nonfinite_rejected;
     return Status::kBadInput;
+  }
   const double lat = nav.llh.x(), lon = nav.llh.y();
   const Mat3 Cne = C_n_e(lat, lon);
   const Mat3 C = nav.C_b_n();
@@ -318,12 +352,16 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   bool valid[kMaxGnssChannels] = {};
   double sum_b = 0.0, sum_d = 0.0;
   int n_valid = 0;
+  report.n_obs = epoch.n_obs;
   for (int k = 0; k < epoch.n_obs; ++k) {
     const GnssObservation& o = epoch.obs[k];
+    report.obs[k].prn = o.prn;
     const double rs = o.sat_pos_ecef_m.norm();
     if (!o.sat_pos_ecef_m.allFinite() || !o.sat_vel_ecef_mps.allFinite() || !std::isfinite(o.pseudorange_m) ||
         !std::isfinite(o.pseudorange_rate_mps) || rs < 1.0e7 || rs > 1.0e8) {
       ++report.obs_invalid;
+      report.obs[k].pr_outcome = InnovationOutcome::kInvalid;
+      report.obs[k].prr_outcome = InnovationOutcome::kInvalid;
       continue;
     }
     geo[k] = gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r_ant, v_ant);
@@ -353,6 +391,7 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   for (int k = 0; k < epoch.n_obs; ++k) {
     if (!valid[k]) continue;
     const GnssObservation& o = epoch.obs[k];
+    ObservationInnovation& inn = report.obs[static_cast<std::size_t>(k)];
     const int slot = kChannels ? bind_channel(o.prn) : -1;
     double r_pr = cfg_.pseudorange_sigma_m * cfg_.pseudorange_sigma_m;
     double r_prr = cfg_.pseudorange_rate_sigma_mps * cfg_.pseudorange_rate_sigma_mps;
@@ -375,10 +414,16 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
         range_err = range_err_hat_(slot);
       }
     }
-    if (scalar_update(h, geo[k].range_m + clk_b + range_err - o.pseudorange_m, r_pr))
+    if (scalar_update(h, geo[k].range_m + clk_b + range_err - o.pseudorange_m, r_pr, inn.pr_innovation_m,
+                      inn.pr_variance_m2)) {
       ++report.pr_used;
-    else
+      inn.pr_outcome = InnovationOutcome::kUsed;
+      report.nis_sum += inn.pr_innovation_m * inn.pr_innovation_m / inn.pr_variance_m2;
+      ++report.nis_dof;
+    } else {
       ++report.pr_rejected;
+      inn.pr_outcome = InnovationOutcome::kGated;
+    }
     if (!cfg_.use_pseudorange_rate) continue;
     h.setZero();
     h.template segment<3>(3) = -e_n.transpose();
@@ -389,13 +434,148 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
         rate_err = rate_err_hat_(slot);
       }
     }
-    if (scalar_update(h, geo[k].range_rate_mps + clock_drift_mps_ + rate_err - o.pseudorange_rate_mps, r_prr))
+    if (scalar_update(h, geo[k].range_rate_mps + clock_drift_mps_ + rate_err - o.pseudorange_rate_mps, r_prr,
+                      inn.prr_innovation_mps, inn.prr_variance_m2ps2)) {
       ++report.prr_used;
-    else
+      inn.prr_outcome = InnovationOutcome::kUsed;
+      report.nis_sum += inn.prr_innovation_mps * inn.prr_innovation_mps / inn.prr_variance_m2ps2;
+      ++report.nis_dof;
+    } else {
       ++report.prr_rejected;
+      inn.prr_outcome = InnovationOutcome::kGated;
+    }
   }
-  P_ = 0.5 * (P_ + P_.transpose()).eval();
+  check_covariance();
+  track_consistency(report);
   return Status::kOk;
+}
+
+template <class Layout>
+Status Ekf<Layout>::set_covariance(const Mat& P) {
+  if (!initialised_) return Status::kNotInitialised;
+  if (!P.allFinite()) {
+    ++health_.nonfinite_rejected;
+    return Status::kBadInput;
+  }
+  P_ = P;
+  check_covariance();
+  return Status::kOk;
+}
+
+template <class Layout>
+void Ekf<Layout>::symmetrise() {
+  for (int j = 0; j < N; ++j)
+    for (int i = j + 1; i < N; ++i) {
+      const double a = 0.5 * (P_(i, j) + P_(j, i));
+      P_(i, j) = a;
+      P_(j, i) = a;
+    }
+}
+
+template <class Layout>
+void Ekf<Layout>::check_covariance() {
+  symmetrise();
+  ++health_.cov_checks;
+  // Cholesky of the correlation matrix D^-1 P D^-1 (scale-free: the states span 1e-10..1e2), in
+  // the member scratch work_. Unblocked and in place: no temporaries, no alloca.
+  Vec d = Vec::Zero();  // 1 / sigma, 0 for a state with exactly zero variance
+  bool ok = P_.allFinite();
+  for (int i = 0; ok && i < N; ++i) {
+    if (P_(i, i) < 0.0) ok = false;
+    d(i) = P_(i, i) > 0.0 ? 1.0 / std::sqrt(P_(i, i)) : 0.0;
+  }
+  constexpr double kMinPivot = 1e-12;
+  for (int attempt = 0; ok; ++attempt) {
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i) work_(i, j) = d(i) * P_(i, j) * d(j);
+    for (int i = 0; i < N; ++i)
+      if (d(i) == 0.0) work_(i, i) = 1.0;
+    bool pd = true;
+    for (int j = 0; j < N && pd; ++j) {
+      const double piv = work_(j, j) - work_.row(j).head(j).squaredNorm();
+      if (!(piv > kMinPivot)) {
+        pd = false;
+        break;
+      }
+      const double l = std::sqrt(piv);
+      work_(j, j) = l;
+      for (int i = j + 1; i < N; ++i) work_(i, j) = (work_(i, j) - work_.row(i).head(j).dot(work_.row(j).head(j))) / l;
+      for (int i = j + 1; i < N; ++i) work_(j, i) = 0.0;
+    }
+    if (pd) return;
+    // Not positive definite: shrink the correlations, P <- (P + delta diag(P)) / (1 + delta) off
+    // the diagonal, with growing delta; a diagonal P is always positive definite.
+    if (attempt == 0) ++health_.cov_repairs;
+    constexpr double kDeltas[] = {1e-9, 1e-6, 1e-3, 1e-1, 1.0};
+    if (attempt >= 5) {
+      ok = false;
+      break;
+    }
+    const double shrink = 1.0 / (1.0 + kDeltas[attempt]);
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i)
+        if (i != j) P_(i, j) *= shrink;
+  }
+  if (!ok) {
+    // Non-finite or negative variances (or correlations that would not shrink into shape): keep
+    // the finite positive variances, fall back to the initial ones elsewhere, drop correlations.
+    ++health_.cov_repairs;
+    for (int i = 0; i < N; ++i) {
+      const double v = P_(i, i);
+      work_(i, i) = (std::isfinite(v) && v > 0.0) ? v : init_var_(i);
+    }
+    P_.setZero();
+    for (int i = 0; i < N; ++i) P_(i, i) = work_(i, i);
+    if (!x_.allFinite()) x_.setZero();
+  }
+}
+
+template <class Layout>
+void Ekf<Layout>::track_consistency(const EkfUpdateReport& report) {
+  // Windowed NIS test.
+  const int w = cfg_.nis_window;
+  nis_hist_[static_cast<std::size_t>(nis_head_)] = report.nis_sum;
+  dof_hist_[static_cast<std::size_t>(nis_head_)] = report.nis_dof;
+  nis_head_ = (nis_head_ + 1) % w;
+  if (nis_count_ < w) ++nis_count_;
+  double sum = 0.0;
+  int dof = 0;
+  for (int k = 0; k < nis_count_; ++k) {
+    sum += nis_hist_[static_cast<std::size_t>(k)];
+    dof += dof_hist_[static_cast<std::size_t>(k)];
+  }
+  health_.nis_window_sum = sum;
+  health_.nis_window_dof = dof;
+  health_.nis_window_bound = dof > 0 ? chi2_upper_quantile(dof, kNisTestZ) : 0.0;
+  health_.diverging = nis_count_ == w && dof > 0 && sum > health_.nis_window_bound;
+  if (health_.diverging) ++health_.divergence_windows;
+
+  // Gating runaway: most of the epoch's measurements fail the gate, epoch after epoch.
+  // (Per measurement type: a clock jump fails every pseudorange and no rate.)
+  const int pr_seen = report.pr_used + report.pr_rejected;
+  const int prr_seen = report.prr_used + report.prr_rejected;
+  if ((pr_seen >= 4 && 2 * report.pr_rejected > pr_seen) || (prr_seen >= 4 && 2 * report.prr_rejected > prr_seen)) {
+    ++runaway_count_;
+    ++health_.gating_runaway_epochs;
+  } else {
+    runaway_count_ = 0;
+  }
+  if (cfg_.runaway_epochs > 0 && runaway_count_ >= cfg_.runaway_epochs) {
+    // Re-open the filter to the data: navigation and clock states back to their initial
+    // uncertainty, uncorrelated with the rest; the clock is re-initialised from the next epoch.
+    constexpr int oc = Layout::offset(Block::kClock);
+    for (int i : {0, 1, 2, 3, 4, 5, 6, 7, 8, oc, oc + 1}) {
+      P_.row(i).setZero();
+      P_.col(i).setZero();
+      P_(i, i) = init_var_(i);
+      x_(i) = 0.0;
+    }
+    clock_initialised_ = false;
+    runaway_count_ = 0;
+    nis_count_ = 0;
+    nis_head_ = 0;
+    ++health_.resets;
+  }
 }
 
 template <class Layout>
@@ -440,5 +620,6 @@ template class Ekf<Layout15>;
 template class Ekf<Layout24>;
 template class Ekf<Layout15Full>;
 template class Ekf<Layout24Full>;
+template class Ekf<Layout15Conv>;
 
 }  // namespace fsw

@@ -100,6 +100,7 @@ void Executive<Layout>::run_ekf(FrameOutput& out) {
   out.ekf_ran = true;
   ++health_.ekf_runs;
   if (ekf_.propagate() != Status::kOk) ++health_.fsw_errors;
+  health_.ekf = ekf_.health();
   if (!epoch_ready) {
     ++health_.ekf_without_gnss;
     return;
@@ -112,6 +113,7 @@ void Executive<Layout>::run_ekf(FrameOutput& out) {
   at_epoch.llh += llh_rate(nav.llh, nav.vel_enu_mps) * dt;
   at_epoch.vel_enu_mps += last_accel_n_mps2_ * dt;
   const Status st = ekf_.update(pending_, at_epoch, ins_.omega_ib_b_radps(), out.report);
+  health_.ekf = ekf_.health();
   if (st != Status::kOk) {
     ++health_.fsw_errors;
     return;
@@ -130,5 +132,6 @@ template class Executive<Layout15>;
 template class Executive<Layout24>;
 template class Executive<Layout15Full>;
 template class Executive<Layout24Full>;
+template class Executive<Layout15Conv>;
 
 }  // namespace fsw

@@ -1,5 +1,4 @@
-// YUMA almanac reader and almanac orbit propagation (IS-GPS-200 20.3.3.5.2.1, Table 20-IV with
-// the almanac simplifications: no harmonic corrections, no inclination rate, i0 given in full).
+// YUMA almanac reader and visibility (the orbit computation is fsw/gps_orbit.cpp).
 #include "sim/almanac.hpp"
 #include "sim/text_file.hpp"
 
@@ -205,61 +204,6 @@ AlmanacParseResult parse_yuma_file(const std::string& path) {
   } catch (const std::exception& e) {
     return {std::nullopt, path + ":0: " + e.what()};
   }
-}
-
-int full_week(int week_mod_1024, int reference_full_week) {
-  const int w = ((week_mod_1024 % 1024) + 1024) % 1024;
-  const int k = static_cast<int>(std::lround(static_cast<double>(reference_full_week - w) / 1024.0));
-  return w + 1024 * k;
-}
-
-double time_from_applicability_s(const AlmanacEntry& sat, int full_gps_week, double tow_s) {
-  const int alm_week = full_week(sat.week_mod_1024, full_gps_week);
-  return static_cast<double>(full_gps_week - alm_week) * kSecondsPerWeek + (tow_s - sat.toa_s);
-}
-
-void satellite_pv_ecef(const AlmanacEntry& sat, int full_gps_week, double tow_s, Vec3& r_ecef_m, Vec3& v_ecef_mps) {
-  const double tk = time_from_applicability_s(sat, full_gps_week, tow_s);
-  const double a = sat.sqrt_a_sqrtm * sat.sqrt_a_sqrtm;
-  const double e = sat.eccentricity;
-  const double n = std::sqrt(kGpsGM_m3ps2 / (a * a * a));
-  const double m = sat.mean_anomaly_rad + n * tk;
-
-  // Kepler's equation M = E - e sin E by Newton iteration.
-  double ecc_anom = m;
-  for (int it = 0; it < 50; ++it) {
-    const double d = (ecc_anom - e * std::sin(ecc_anom) - m) / (1.0 - e * std::cos(ecc_anom));
-    ecc_anom -= d;
-    if (std::abs(d) < 1e-13) break;
-  }
-  const double sin_e = std::sin(ecc_anom), cos_e = std::cos(ecc_anom);
-  const double one_m_ecos = 1.0 - e * cos_e;
-  const double root = std::sqrt(1.0 - e * e);
-  const double nu = std::atan2(root * sin_e, cos_e - e);
-  const double u = nu + sat.arg_perigee_rad;  // argument of latitude (no corrections)
-  const double r = a * one_m_ecos;
-  const double inc = sat.inclination_rad;
-  const double omega_rate = sat.omega_dot_radps - kGpsOmegaE_radps;
-  const double node = sat.omega0_rad + omega_rate * tk - kGpsOmegaE_radps * sat.toa_s;
-
-  const double cu = std::cos(u), su = std::sin(u);
-  const double ci = std::cos(inc), si = std::sin(inc);
-  const double cn = std::cos(node), sn = std::sin(node);
-  const double xp = r * cu, yp = r * su;  // in the orbital plane
-  r_ecef_m = Vec3(xp * cn - yp * ci * sn, xp * sn + yp * ci * cn, yp * si);
-
-  // Time derivatives of the same equations.
-  const double e_dot = n / one_m_ecos;
-  const double u_dot = e_dot * root / one_m_ecos;  // d(nu)/dt
-  const double r_dot = a * e * sin_e * e_dot;
-  const double xp_dot = r_dot * cu - yp * u_dot;
-  const double yp_dot = r_dot * su + xp * u_dot;
-  v_ecef_mps = Vec3(xp_dot * cn - yp_dot * ci * sn - r_ecef_m.y() * omega_rate,
-                    xp_dot * sn + yp_dot * ci * cn + r_ecef_m.x() * omega_rate, yp_dot * si);
-}
-
-double satellite_clock_bias_s(const AlmanacEntry& sat, int full_gps_week, double tow_s) {
-  return sat.af0_s + sat.af1_sps * time_from_applicability_s(sat, full_gps_week, tow_s);
 }
 
 LookAngles look_angles(const Vec3& receiver_llh, const Vec3& r_target_ecef_m) {

@@ -245,4 +245,40 @@ void GpsModel::measure(const TruthSample& truth, fsw::GnssEpoch& out) noexcept {
   out.n_obs = static_cast<int>(n);
 }
 
+void GpsModel::raw(const fsw::GnssEpoch& epoch, fsw::GnssRawEpoch& out) const noexcept {
+  out = fsw::GnssRawEpoch{};
+  out.t_s = epoch.t_s;
+  // A receiver tags its epochs with its own clock: GPS time plus the clock bias. That is what makes
+  // tow - rho / c the exact transmit time on the receiver side.
+  out.gps_week = epoch.gps_week;
+  out.gps_tow_s = epoch.gps_tow_s + clock_.bias_m / kSpeedOfLight_mps;
+  if (out.gps_tow_s < 0.0) {
+    out.gps_tow_s += kSecondsPerWeek;
+    --out.gps_week;
+  } else if (out.gps_tow_s >= kSecondsPerWeek) {
+    out.gps_tow_s -= kSecondsPerWeek;
+    ++out.gps_week;
+  }
+  int n = 0;
+  for (int i = 0; i < epoch.n_obs; ++i) {
+    const fsw::GnssObservation& o = epoch.obs[static_cast<std::size_t>(i)];
+    const auto it = std::lower_bound(almanac_.begin(), almanac_.end(), static_cast<int>(o.prn),
+                                     [](const AlmanacEntry& a, int prn) { return a.prn < prn; });
+    if (it == almanac_.end() || it->prn != o.prn) continue;  // cannot happen: measure() uses almanac_
+    double tow_tx = epoch.gps_tow_s - o.pseudorange_m / kSpeedOfLight_mps;
+    int week_tx = epoch.gps_week;
+    if (tow_tx < 0.0) {
+      tow_tx += kSecondsPerWeek;
+      --week_tx;
+    }
+    const double dt_sat_s = satellite_clock_bias_s(*it, week_tx, tow_tx);
+    fsw::GnssRawMeasurement& m = out.meas[static_cast<std::size_t>(n++)];
+    m.prn = o.prn;
+    m.pseudorange_m = o.pseudorange_m - kSpeedOfLight_mps * dt_sat_s;
+    m.pseudorange_rate_mps = o.pseudorange_rate_mps - kSpeedOfLight_mps * it->af1_sps;
+    m.cn0_dbhz = 30.0 + 20.0 * std::sin(o.elevation_rad);
+  }
+  out.n_meas = n;
+}
+
 }  // namespace sim

@@ -27,7 +27,16 @@ for c in cases:
     assert 0 < c["mean_nees"] < 100, c["mean_nees"]
     assert c["wall_s"] > 0
     assert c["health"]["fsw_errors"] == 0
+    assert c["health"]["cov_repairs"] == 0 and c["health"]["filter_resets"] == 0, c["health"]
+    combos = c["misalignment_combinations"]
+    # 15-state: misalignments are consider states, nothing estimated; 24-state: 3 + 6 directions.
+    assert len(combos) == (0 if c["model"] == "15" else 9), len(combos)
+    for x in combos:
+        assert 0 < x["filter_sigma"] <= x["initial_sigma"] * 1.0001, x
+        assert abs(sum(t["coef"] ** 2 for t in x["terms"]) - 1) < 0.1, x
 checks = j["acceptance"]["checks"]
-assert len(checks) == 11 and all(isinstance(c["pass"], bool) for c in checks)
+fixed = [c for c in checks if not c["name"].startswith("observable misalignment combination converges")]
+assert len(fixed) == 13 and all(isinstance(c["pass"], bool) for c in checks), [c["name"] for c in fixed]
+assert sum(c["name"].startswith("the manoeuvres make at least one") for c in checks) == 2
 print("summary.json ok:", [(c["misalignment_arcsec"], c["model"], round(c["mean_nees"], 2)) for c in cases])
 PY

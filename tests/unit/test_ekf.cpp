@@ -6,7 +6,10 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <cstdio>
+#include <functional>
+#include <random>
 #include <vector>
 
 #include "fsw/ekf.hpp"
@@ -245,6 +248,68 @@ TEST(Ekf, SequentialUpdateEqualsBatchKalmanFormula) {
   EXPECT_EQ((ekf.P() - ekf.P().transpose()).cwiseAbs().maxCoeff(), 0.0);
 }
 
+// The report carries every observation's outcome and innovation: the clock-initialising epoch
+// processes nothing, then an outlier is gated, a non-finite observation is invalid, and the first
+// scalar update's innovation and variance are the prior ones (x = 0, P0).
+TEST(Ekf, ReportsPerObservationInnovations) {
+  using Ekf = fsw::Ekf<Layout15>;
+  fsw::EkfConfig cfg;
+  Ekf ekf;
+  ASSERT_EQ(ekf.init(cfg), fsw::Status::kOk);
+  fsw::NavState nav;
+  nav.llh = Vec3(35.0 * fsw::kDegToRad, 127.0 * fsw::kDegToRad, 5000.0);
+  nav.vel_enu_mps = Vec3(0.0, 250.0, 0.0);
+  const Vec3 r_rx = fsw::ecef_from_llh(nav.llh);
+  const Mat3 Cne = fsw::C_n_e(nav.llh.x(), nav.llh.y());
+  fsw::GnssEpoch ep;
+  const double az[6] = {0.3, 1.4, 2.5, 3.6, 4.7, 5.8}, el[6] = {0.3, 0.6, 0.9, 1.2, 0.5, 0.8};
+  ep.n_obs = 6;
+  for (int k = 0; k < 6; ++k) {
+    const Vec3 u_n(std::cos(el[k]) * std::sin(az[k]), std::cos(el[k]) * std::cos(az[k]), std::sin(el[k]));
+    auto& o = ep.obs[k];
+    o.prn = static_cast<std::uint8_t>(10 + k);
+    o.sat_pos_ecef_m = r_rx + Cne * u_n * 2.2e7;
+    o.sat_vel_ecef_mps = Vec3(1000.0 * k, -500.0, 2000.0);
+    const fsw::GnssGeometry g = fsw::gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r_rx, Cne * nav.vel_enu_mps);
+    o.pseudorange_m = g.range_m + 100.0 + 2.0 * (k - 2.5);
+    o.pseudorange_rate_mps = g.range_rate_mps + 2.0 + 0.05 * (k - 2.5);
+  }
+  fsw::EkfUpdateReport rep;
+  ASSERT_EQ(ekf.update(ep, nav, Vec3::Zero(), rep), fsw::Status::kOk);
+  ASSERT_TRUE(rep.clock_initialised);
+  ASSERT_EQ(rep.n_obs, 6);
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_EQ(rep.obs[k].prn, 10 + k);
+    EXPECT_EQ(rep.obs[k].pr_outcome, fsw::InnovationOutcome::kNotProcessed);
+    EXPECT_EQ(rep.obs[k].prr_outcome, fsw::InnovationOutcome::kNotProcessed);
+  }
+  const double b0 = ekf.clock_bias_m();
+  const double p_pos = ekf.P()(0, 0), p_clk = ekf.P()(15, 15);
+  ep.obs[2].pseudorange_m += 2000.0;  // far outside the gate
+  ep.obs[4].pseudorange_m = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_EQ(ekf.update(ep, nav, Vec3::Zero(), rep), fsw::Status::kOk);
+  EXPECT_EQ(rep.pr_used, 4);
+  EXPECT_EQ(rep.pr_rejected, 1);
+  EXPECT_EQ(rep.obs_invalid, 1);
+  EXPECT_EQ(rep.obs[0].pr_outcome, fsw::InnovationOutcome::kUsed);
+  EXPECT_EQ(rep.obs[2].pr_outcome, fsw::InnovationOutcome::kGated);
+  EXPECT_EQ(rep.obs[2].prr_outcome, fsw::InnovationOutcome::kUsed);
+  EXPECT_EQ(rep.obs[4].pr_outcome, fsw::InnovationOutcome::kInvalid);
+  EXPECT_EQ(rep.obs[4].prr_outcome, fsw::InnovationOutcome::kInvalid);
+  const double nu2 = rep.obs[2].pr_innovation_m;
+  EXPECT_GT(nu2 * nu2, cfg.gate_chi2 * rep.obs[2].pr_variance_m2);
+  EXPECT_LT(nu2, -1900.0);  // predicted minus measured: the measurement is 2000 m long
+  // First scalar update of the epoch: prior innovation and variance.
+  const auto& o0 = ep.obs[0];
+  const fsw::GnssGeometry g0 = fsw::gnss_geometry(o0.sat_pos_ecef_m, o0.sat_vel_ecef_mps, r_rx, Cne * nav.vel_enu_mps);
+  EXPECT_NEAR(rep.obs[0].pr_innovation_m, g0.range_m + b0 - o0.pseudorange_m, 1e-6);
+  const Vec3 e_n = Cne.transpose() * g0.los_ecef;
+  const double var0 = e_n.squaredNorm() * p_pos + p_clk + cfg.pseudorange_sigma_m * cfg.pseudorange_sigma_m;
+  EXPECT_NEAR(rep.obs[0].pr_variance_m2, var0, 1e-9 * var0);
+  for (int k = 0; k < 6; ++k)
+    if (k != 4) EXPECT_GT(rep.obs[k].prr_variance_m2ps2, 0.0);
+}
+
 namespace {
 
 /// Fixed synthetic constellation: 8 satellites 20,200 km up at spread azimuths/elevations as
@@ -282,12 +347,19 @@ struct FlightResult {
   Eigen::Matrix<double, 9, 1> err;    ///< final nav error (estimate minus truth)
   Eigen::Matrix<double, 9, 1> sigma;  ///< final filter sigma
   fsw::ExecutiveHealth health;
+  fsw::EkfHealth ekf_health;
+  int diverging_epochs = 0;           ///< epochs after which EkfHealth::diverging was set
+  std::uint32_t pr_used_last_10s = 0;
 };
+
+/// Changes an epoch's measurements before the filter sees them (noise, clock jumps).
+using EpochMutator = std::function<void(fsw::GnssEpoch&, double t_s)>;
 
 /// Flies `truth` with a perfect IMU through the executive from an initial error, with
 /// noise-free GNSS from a synthetic sky, and returns the final error and sigma.
 template <class Layout>
-FlightResult fly(const std::vector<sim::TruthSample>& truth, const Vec3& dp, const Vec3& dv, const Vec3& phi) {
+FlightResult fly(const std::vector<sim::TruthSample>& truth, const Vec3& dp, const Vec3& dv, const Vec3& phi,
+                 const EpochMutator& mutate = {}) {
   fsw::ExecutiveConfig cfg;
   cfg.ekf.pos_sigma_m = 20.0;
   cfg.ekf.vel_sigma_mps = 0.5;
@@ -299,6 +371,8 @@ FlightResult fly(const std::vector<sim::TruthSample>& truth, const Vec3& dp, con
   std::vector<fsw::ImuSample> frame;
   fsw::GnssEpoch ep;
   fsw::FrameOutput out;
+  FlightResult r;
+  std::uint32_t pr_used_at_end_minus_10 = 0;
   for (std::size_t k = 1; k < truth.size(); ++k) {
     frame.push_back(ideal_imu(truth[k]));
     if (frame.size() < 5) continue;
@@ -308,12 +382,16 @@ FlightResult fly(const std::vector<sim::TruthSample>& truth, const Vec3& dp, con
     const double t = truth[k].t_s;
     if (std::abs(t - std::round(t)) < 1e-6) {
       ep = sky.epoch(truth[k], 150.0 + 0.3 * t, 0.3);
+      if (mutate) mutate(ep, t);
       in.gnss = &ep;
     }
     EXPECT_EQ(exec.tick(in, out), fsw::Status::kOk);
+    if (out.ekf_ran && exec.ekf().health().diverging) ++r.diverging_epochs;
+    if (truth.back().t_s - t > 10.0) pr_used_at_end_minus_10 = exec.health().pr_used;
     frame.clear();
   }
-  FlightResult r;
+  r.ekf_health = exec.ekf().health();
+  r.pr_used_last_10s = exec.health().pr_used - pr_used_at_end_minus_10;
   r.err = nav_difference(out.nav, nav_from_truth(truth.back()));
   r.sigma = exec.ekf().P().diagonal().template head<9>().cwiseSqrt();
   r.health = exec.health();
@@ -366,4 +444,89 @@ TEST(Ekf, StaticPositionConvergesHeadingUnobservable) {
   EXPECT_LT(r.err.head<3>().norm(), 2.0);
   EXPECT_LT(r.err.segment<3>(3).norm(), 0.02);
   EXPECT_NEAR(r.err(8) * kRadToArcsec, 200.0, 20.0);
+}
+
+// A 1 ms receiver clock jump (300 km in every pseudorange, as receivers do when they steer their
+// clock) fails every pseudorange gate. The divergence guard sees the runaway, re-opens the
+// navigation and clock covariance and re-initialises the clock; the filter then uses the data again.
+TEST(EkfHealth, ClockJumpGatingRunawayIsDetectedAndTheFilterRecovers) {
+  const auto truth = truth_window(0.0, 50.0);
+  const FlightResult r = fly<Layout15>(truth, Vec3(5, -5, 3), Vec3(0.1, -0.1, 0.05), Vec3::Zero(),
+                                       [](fsw::GnssEpoch& ep, double t) {
+                                         if (t < 20.0) return;
+                                         for (int k = 0; k < ep.n_obs; ++k) ep.obs[k].pseudorange_m += 299792.458;
+                                       });
+  EXPECT_EQ(r.ekf_health.resets, 1u);
+  EXPECT_GE(r.ekf_health.gating_runaway_epochs, 5u);
+  EXPECT_EQ(r.pr_used_last_10s % 8, 0u);  // 8 satellites in each of the last epochs ...
+  EXPECT_GE(r.pr_used_last_10s, 80u);     // ... all accepted again
+  EXPECT_LT(r.err.head<3>().norm(), 3.0);
+  EXPECT_LT(r.err.segment<3>(3).norm(), 0.05);
+  EXPECT_EQ(r.ekf_health.cov_repairs, 0u);
+}
+
+// The windowed NIS test (false-alarm rate 1e-3 per window) is quiet on measurements with the
+// noise the filter assumes and flags noise 2.5 times larger in nearly every window.
+TEST(EkfHealth, NisWindowFlagsNoiseTheModelDoesNotHaveAndStaysQuietOtherwise) {
+  const auto truth = truth_window(0.0, 60.0);
+  for (double noise_scale : {1.0, 2.5}) {
+    std::mt19937_64 gen(42);
+    std::normal_distribution<double> n01(0.0, 1.0);
+    const FlightResult r = fly<Layout15>(truth, Vec3(5, -5, 3), Vec3(0.1, -0.1, 0.05), Vec3::Zero(),
+                                         [&](fsw::GnssEpoch& ep, double) {
+                                           for (int k = 0; k < ep.n_obs; ++k) {
+                                             ep.obs[k].pseudorange_m += noise_scale * 8.0 * n01(gen);
+                                             ep.obs[k].pseudorange_rate_mps += noise_scale * 0.2 * n01(gen);
+                                           }
+                                         });
+    std::printf("noise x%.1f: windowed NIS %.1f over %d dof (bound %.1f), diverging epochs %d, resets %u\n", noise_scale,
+                r.ekf_health.nis_window_sum, r.ekf_health.nis_window_dof, r.ekf_health.nis_window_bound,
+                r.diverging_epochs, r.ekf_health.resets);
+    EXPECT_EQ(r.ekf_health.nis_window_dof > 100, true);
+    if (noise_scale == 1.0) {
+      EXPECT_EQ(r.diverging_epochs, 0);
+      EXPECT_EQ(r.ekf_health.divergence_windows, 0u);
+      EXPECT_LT(r.ekf_health.nis_window_sum, r.ekf_health.nis_window_bound);
+    } else {
+      EXPECT_GT(r.diverging_epochs, 30);  // of 50 full windows
+      EXPECT_TRUE(r.ekf_health.diverging);
+    }
+    EXPECT_EQ(r.ekf_health.cov_repairs, 0u);
+  }
+}
+
+// A covariance that is not positive definite (a correlation above 1) is repaired and counted; a
+// NaN one is rejected before it reaches the filter.
+TEST(EkfHealth, CovarianceRepairAndNonFiniteRejection) {
+  fsw::Ekf<Layout24> ekf;
+  ASSERT_EQ(ekf.init(fsw::EkfConfig{}), fsw::Status::kOk);
+  fsw::Ekf<Layout24>::Mat P = ekf.P();
+  const double s0 = std::sqrt(P(0, 0)), s6 = std::sqrt(P(6, 6));
+  P(0, 6) = P(6, 0) = 1.5 * s0 * s6;  // correlation 1.5
+  ASSERT_EQ(ekf.set_covariance(P), fsw::Status::kOk);
+  EXPECT_EQ(ekf.health().cov_repairs, 1u);
+  const double corr = ekf.P()(0, 6) / std::sqrt(ekf.P()(0, 0) * ekf.P()(6, 6));
+  EXPECT_LT(std::abs(corr), 1.0);
+  EXPECT_EQ(ekf.P()(0, 0), P(0, 0));  // variances kept
+  Eigen::LLT<Eigen::MatrixXd> llt{Eigen::MatrixXd(ekf.P())};
+  EXPECT_EQ(llt.info(), Eigen::Success);
+
+  // A valid P passes untouched.
+  const fsw::Ekf<Layout24>::Mat good = ekf.P();
+  ASSERT_EQ(ekf.set_covariance(good), fsw::Status::kOk);
+  EXPECT_EQ(ekf.health().cov_repairs, 1u);
+  EXPECT_EQ(ekf.P(), good);
+
+  // Negative variance: falls back to the initial variance of that state, correlations dropped.
+  P = good;
+  P(3, 3) = -1.0;
+  ASSERT_EQ(ekf.set_covariance(P), fsw::Status::kOk);
+  EXPECT_EQ(ekf.health().cov_repairs, 2u);
+  EXPECT_DOUBLE_EQ(ekf.P()(3, 3), fsw::EkfConfig{}.vel_sigma_mps * fsw::EkfConfig{}.vel_sigma_mps);
+
+  P = good;
+  P(2, 5) = std::nan("");
+  EXPECT_EQ(ekf.set_covariance(P), fsw::Status::kBadInput);
+  EXPECT_EQ(ekf.health().nonfinite_rejected, 1u);
+  EXPECT_TRUE(ekf.P().allFinite());
 }

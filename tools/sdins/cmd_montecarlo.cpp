@@ -32,8 +32,10 @@ std::vector<tools::Model> parse_models(const std::string& text) {
       models.push_back(tools::Model::k15);
     else if (item == "24")
       models.push_back(tools::Model::k24);
+    else if (item == "15c")
+      models.push_back(tools::Model::k15c);
     else
-      throw std::runtime_error("--models: unknown model '" + item + "' (use 15, 24 or 15,24)");
+      throw std::runtime_error("--models: unknown model '" + item + "' (use 15, 15c, 24 or a list such as 15,24)");
   }
   if (models.empty()) throw std::runtime_error("--models: no model given");
   return models;

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "hal/fsw_node.hpp"
 #include "sim/scenario.hpp"
 
 namespace sdins {
@@ -14,7 +15,13 @@ void register_scenario(CLI::App& app);
 void register_fly(CLI::App& app);
 void register_montecarlo(CLI::App& app);
 void register_paper(CLI::App& app);
+void register_log(CLI::App& app);
+void register_can(CLI::App& app);
+void register_sil(CLI::App& app);
+void register_replay(CLI::App& app);
 void register_audit(CLI::App& app);
+void register_bus_sim(CLI::App& app);
+void register_fsw(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -22,9 +29,15 @@ int run_analyze();
 int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gamma_arcsec, bool plots);
 int run_scenario_check();
 int run_fly();
+int run_sil();
+int run_replay();
 int run_montecarlo();
 int run_paper();
+int run_log();
+int run_can();
 int run_audit();
+int run_bus_sim();
+int run_fsw();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {
@@ -36,6 +49,19 @@ struct ScenarioOptions {
   sim::Scenario load() const;
 };
 void add_scenario_options(CLI::App* sub, ScenarioOptions& opt);
+
+/// The options of every command that runs the flight software (sil, replay, fsw): --model,
+/// --log, --lcm-url, --nav-decimation, --json.
+struct FswRunOptions {
+  std::string model = "24";
+  std::string log;
+  std::string lcm_url;  ///< "": $LCM_DEFAULT_URL or LCM's default group; "none": no network
+  std::string json;
+  int nav_decimation = 10;
+  /// The flight-software node's configuration (hal::default_flight_config()); throws on a bad model.
+  hal::FswNodeConfig node_config() const;
+};
+void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& default_lcm_url);
 
 /// Runs a plotting script with the Python that has matplotlib (SDINS_PYTHON). Returns its exit code.
 int run_plot_script(const std::string& script, const std::string& args);

@@ -25,6 +25,30 @@ void add_scenario_options(CLI::App* sub, ScenarioOptions& opt) {
       ->check(CLI::Range(0LL, std::numeric_limits<long long>::max()));
 }
 
+hal::FswNodeConfig FswRunOptions::node_config() const {
+  hal::FswNodeConfig cfg;
+  if (!hal::parse_fsw_model(model, cfg.model)) throw std::runtime_error("--model: 15 or 24");
+  cfg.app = hal::default_flight_config();
+  cfg.telemetry.lcm_url = lcm_url;
+  cfg.telemetry.log_path = log;
+  cfg.nav_decimation = nav_decimation;
+  return cfg;
+}
+
+void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& default_lcm_url) {
+  opt.lcm_url = default_lcm_url;
+  sub->add_option("--model", opt.model, "filter model")->check(CLI::IsMember({"15", "24"}))->capture_default_str();
+  sub->add_option("--log", opt.log, "write an LCM log of the run (inputs and outputs)");
+  sub->add_option("--lcm-url", opt.lcm_url,
+                  "LCM URL for live telemetry (empty: $LCM_DEFAULT_URL or udpm://239.255.76.67:7667?ttl=0; "
+                  "'none': no network)")
+      ->capture_default_str();
+  sub->add_option("--nav-decimation", opt.nav_decimation, "NAV_SOLUTION every n-th 200 Hz frame")
+      ->check(CLI::Range(1, 200))
+      ->capture_default_str();
+  sub->add_option("--json", opt.json, "write the end-of-run summary as JSON");
+}
+
 int run_plot_script(const std::string& script, const std::string& args) {
   const std::string cmd = std::string(SDINS_PYTHON) + " " + SDINS_PLOT_DIR + "/" + script + " " + args;
   const int rc = std::system(cmd.c_str());
@@ -37,7 +61,13 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("fly")) return run_fly();
   if (app.got_subcommand("montecarlo")) return run_montecarlo();
   if (app.got_subcommand("paper")) return run_paper();
+  if (app.got_subcommand("log")) return run_log();
+  if (app.got_subcommand("can")) return run_can();
+  if (app.got_subcommand("sil")) return run_sil();
+  if (app.got_subcommand("replay")) return run_replay();
   if (app.got_subcommand("audit")) return run_audit();
+  if (app.got_subcommand("bus-sim")) return run_bus_sim();
+  if (app.got_subcommand("fsw")) return run_fsw();
   return 1;
 }
 

@@ -16,7 +16,13 @@ int main(int argc, char** argv) {
   sdins::register_fly(app);
   sdins::register_montecarlo(app);
   sdins::register_paper(app);
+  sdins::register_sil(app);
+  sdins::register_replay(app);
+  sdins::register_log(app);
+  sdins::register_can(app);
   sdins::register_audit(app);
+  sdins::register_bus_sim(app);
+  sdins::register_fsw(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -105,7 +105,13 @@ std::vector<char> pack_results(const std::vector<tools::RunResult>& rs) {
         w.pod(x.initial_sigma);
         w.pod(x.sigma);
         w.str(x.unit);
+        w.pod(static_cast<std::uint8_t>(x.estimated));
       }
+    }
+    w.pod(static_cast<std::uint64_t>(r.sensor_cov.size()));
+    for (const auto& c : r.sensor_cov) {
+      w.pod(static_cast<std::uint64_t>(c.size()));
+      w.bytes(c.data(), c.size() * sizeof(double));
     }
     w.pod(static_cast<std::uint64_t>(r.health.size()));
     for (const auto& h : r.health) w.pod(h);
@@ -139,7 +145,13 @@ void unpack_results(const char* data, std::size_t n, std::vector<tools::RunResul
         x.initial_sigma = u.pod<double>();
         x.sigma = u.pod<double>();
         x.unit = u.str();
+        x.estimated = u.pod<std::uint8_t>() != 0;
       }
+    }
+    r.sensor_cov.resize(u.count(8));
+    for (auto& c : r.sensor_cov) {
+      c.resize(u.count(sizeof(double)));
+      u.bytes(c.data(), c.size() * sizeof(double));
     }
     r.health.resize(u.count(sizeof(fsw::ExecutiveHealth)));
     for (auto& h : r.health) h = u.pod<fsw::ExecutiveHealth>();
@@ -258,7 +270,10 @@ json health_json(const fsw::ExecutiveHealth& h) {
   return json{{"ekf_runs", h.ekf_runs},         {"ekf_updates", h.ekf_updates}, {"ekf_without_gnss", h.ekf_without_gnss},
               {"imu_rejected", h.imu_rejected}, {"gnss_epochs", h.gnss_epochs}, {"gnss_stale", h.gnss_stale},
               {"pr_used", h.pr_used},           {"prr_used", h.prr_used},       {"pr_rejected", h.pr_rejected},
-              {"prr_rejected", h.prr_rejected}, {"obs_invalid", h.obs_invalid}, {"fsw_errors", h.fsw_errors}};
+              {"prr_rejected", h.prr_rejected}, {"obs_invalid", h.obs_invalid}, {"fsw_errors", h.fsw_errors},
+              {"cov_checks", h.ekf.cov_checks}, {"cov_repairs", h.ekf.cov_repairs},
+              {"nonfinite_rejected", h.ekf.nonfinite_rejected}, {"nis_divergence_windows", h.ekf.divergence_windows},
+              {"gating_runaway_epochs", h.ekf.gating_runaway_epochs}, {"filter_resets", h.ekf.resets}};
 }
 
 CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, const std::string& out_dir,
@@ -313,7 +328,20 @@ CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig&
                          {"initial_sigma", x.initial_sigma},
                          {"rms_residual", x.residual},
                          {"filter_sigma", x.sigma},
+                         {"estimated", x.estimated},
                          {"converged", x.residual <= 0.5 * x.initial_sigma}});
+    }
+    json combos = json::array();
+    for (const auto& c : tools::misalignment_combinations(s)) {
+      json terms = json::array();
+      for (const auto& t : c.terms) terms.push_back({{"state", t.first}, {"coef", t.second}});
+      combos.push_back({{"label", c.label},
+                        {"terms", terms},
+                        {"unit", "arcsec"},
+                        {"initial_sigma", c.initial_sigma},
+                        {"filter_sigma", c.final_sigma},
+                        {"rms_residual", c.rms_residual},
+                        {"observable", c.observable}});
     }
     r.models.push_back({{"model", tools::model_name(mc.models[m])},
                         {"runs", s.runs},
@@ -331,6 +359,7 @@ CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig&
                         {"final_pos_rms_m", s.pos_rms_m[last]},
                         {"final_vel_rms_mps", s.vel_rms_mps[last]},
                         {"sensors", sensors},
+                        {"misalignment_combinations", combos},
                         {"health", health_json(s.health)},
                         {"csv", csv}});
     r.stats.push_back(std::move(s));

@@ -85,6 +85,35 @@ struct EkfConfig {
   Vec3 lever_arm_b_m = Vec3::Zero();  ///< IMU reference point -> GNSS antenna, body axes
 
   int propagation_substep_frames = 10;  ///< navigation frames per transition-matrix sub-step
+
+  // Divergence guard. NIS window for the consistency test, and the gating runaway: when more than
+  // half of an epoch's pseudoranges (or of its rates; at least 4 of them) fail the gate for
+  // runaway_epochs epochs in a row, the filter
+  // no longer accepts the data that would correct it; the navigation and clock covariance is then
+  // re-inflated to its initial values (counted in EkfHealth::resets). 0 disables the reset.
+  int nis_window = 10;
+  int runaway_epochs = 5;
+};
+
+/// What happened to one scalar measurement (pseudorange or pseudorange rate) of an epoch.
+enum class InnovationOutcome : std::uint8_t {
+  kNotProcessed = 0,  ///< not reached (epoch used to initialise the clock, rates disabled, update not run)
+  kUsed,              ///< passed the gate and updated the state
+  kGated,             ///< failed the innovation gate (or a non-positive innovation variance)
+  kInvalid,           ///< the observation's data were non-finite or implausible
+};
+
+/// Innovations of one observation of the epoch. Innovation = predicted minus measured, after the
+/// earlier scalar updates of the same epoch; variance = H P H^T + R of that scalar update (the
+/// NIS is innovation^2 / variance).
+struct ObservationInnovation {
+  std::uint8_t prn = 0;
+  InnovationOutcome pr_outcome = InnovationOutcome::kNotProcessed;
+  InnovationOutcome prr_outcome = InnovationOutcome::kNotProcessed;
+  double pr_innovation_m = 0.0;
+  double pr_variance_m2 = 0.0;
+  double prr_innovation_mps = 0.0;
+  double prr_variance_m2ps2 = 0.0;
 };
 
 /// What one measurement update did.
@@ -96,6 +125,26 @@ struct EkfUpdateReport {
   int obs_invalid = 0;   ///< non-finite or implausible observation data, not used
   int obs_no_channel = 0;  ///< more satellites than error-state channels: used with the white model
   bool clock_initialised = false;  ///< this epoch set the clock estimate from the measurements
+  int n_obs = 0;                   ///< entries of obs: the epoch's observations, in epoch order
+  std::array<ObservationInnovation, kMaxGnssChannels> obs{};
+  double nis_sum = 0.0;            ///< sum of the NIS of the accepted scalar measurements ...
+  int nis_dof = 0;                 ///< ... and their number
+};
+
+/// Numerical and statistical health of the filter (F Prime style counters, never asserts).
+struct EkfHealth {
+  std::uint32_t cov_checks = 0;       ///< covariance SPD checks (one per epoch)
+  std::uint32_t cov_repairs = 0;      ///< checks that found P not symmetric positive definite and repaired it
+  std::uint32_t nonfinite_rejected = 0;  ///< inputs with NaN/Inf stopped before the state
+  /// NIS test over a sliding window of nis_window epochs: the windowed NIS sum against the upper
+  /// 99.9% chi-square quantile of its degrees of freedom (false-alarm rate 1e-3 per window).
+  double nis_window_sum = 0.0;
+  int nis_window_dof = 0;
+  double nis_window_bound = 0.0;      ///< the chi-square quantile the sum is compared with
+  bool diverging = false;             ///< the last window failed the NIS test
+  std::uint32_t divergence_windows = 0;  ///< windows that failed it
+  std::uint32_t gating_runaway_epochs = 0;  ///< consecutive epochs with most measurements gated
+  std::uint32_t resets = 0;           ///< navigation covariance re-inflated after a gating runaway
 };
 
 template <class Layout>
@@ -126,6 +175,10 @@ class Ekf {
   /// Applies the estimate to the solution and the IMU compensation and resets it to zero.
   Status feedback(Strapdown& ins, ImuCompensation& comp);
 
+  /// Replaces the covariance (restoring a saved filter, tests); symmetrised and checked like every
+  /// epoch's (a non-positive-definite P is repaired and counted). kBadInput for NaN/Inf.
+  Status set_covariance(const Mat& P);
+
   const Vec& x() const { return x_; }
   const Mat& P() const { return P_; }
   /// Transition matrix of the interval closed by the last propagate().
@@ -136,11 +189,19 @@ class Ekf {
   /// PRN bound to each measurement-error channel (0: free); only for layouts with kRangeError.
   const std::array<std::uint8_t, kGnssErrorChannels>& channel_prn() const { return slot_prn_; }
   const EkfConfig& config() const { return cfg_; }
+  const EkfHealth& health() const { return health_; }
 
  private:
   void flush_substep(const NavState& nav);
-  bool scalar_update(const RowVec& h, double y, double r);
-  int bind_channel(std::uint8_t prn);
+  /// One gated scalar update; nu and S receive the innovation and its variance.
+  bool scalar_update(const RowVec& h, double y, double r, double& nu, double& S);
+  /// Symmetrises P in place and checks it is positive definite; repairs (counted) if not.
+  void check_covariance();
+  void symmetrise();
+  void track_consistency(const EkfUpdateReport& report);
+  // noinline: a partially inlined clone (.part.0) folded by identical-code folding leaves the
+  // stack audit without a frame size for it.
+  [[gnu::noinline]] int bind_channel(std::uint8_t prn);
   void reset_channel_state(int state, double sigma);
 
   EkfConfig cfg_{};
@@ -149,6 +210,16 @@ class Ekf {
   Mat P_ = Mat::Zero();
   Mat Phi_ = Mat::Identity();  ///< transition since the last propagate()
   Mat last_Phi_ = Mat::Identity();
+  Mat work_ = Mat::Zero();     ///< scratch (Phi P, Cholesky): a member, so it is not on the task's stack
+  Eigen::Matrix<double, 9, N> top_ = Eigen::Matrix<double, 9, N>::Zero();  ///< scratch of flush_substep
+  EkfHealth health_{};
+  static constexpr int kMaxNisWindow = 64;
+  std::array<double, kMaxNisWindow> nis_hist_{};
+  std::array<int, kMaxNisWindow> dof_hist_{};
+  int nis_head_ = 0;
+  int nis_count_ = 0;
+  int runaway_count_ = 0;
+  Vec init_var_ = Vec::Zero();  ///< initial variances (covariance repair, resets)
   double interval_s_ = 0.0;    ///< time covered by Phi_
   // Sub-step sums.
   int sub_frames_ = 0;
@@ -170,5 +241,6 @@ extern template class Ekf<Layout15>;
 extern template class Ekf<Layout24>;
 extern template class Ekf<Layout15Full>;
 extern template class Ekf<Layout24Full>;
+extern template class Ekf<Layout15Conv>;
 
 }  // namespace fsw

@@ -126,6 +126,15 @@ using LayoutFull = ErrorStateLayout<Block::kPosition, Block::kVelocity, Block::k
 using Layout15Full = ConsiderLayout<LayoutFull, Block::kAccelMisalign, Block::kGyroMisalign, Block::kAccelScale,
                                     Block::kGyroScale>;
 using Layout24Full = ConsiderLayout<LayoutFull, Block::kAccelScale, Block::kGyroScale>;
+/// The conventional 15-state filter of the paper for the full error set: the misalignments are
+/// neither estimated nor considered (the filter does not know they exist); scale factors are
+/// considered and the GPS errors modelled exactly as in Layout24Full, so the two differ only in
+/// the misalignments. 50 states.
+using Layout15Conv =
+    ConsiderLayout<ErrorStateLayout<Block::kPosition, Block::kVelocity, Block::kAttitude, Block::kAccelBias,
+                                    Block::kGyroBias, Block::kAccelScale, Block::kGyroScale, Block::kClock,
+                                    Block::kRangeError, Block::kRangeRateError>,
+                   Block::kAccelScale, Block::kGyroScale>;
 
 static_assert(Layout15::kSize == 17, "15-state model plus two clock states");
 static_assert(Layout24::kSize == 26, "24-state model plus two clock states");

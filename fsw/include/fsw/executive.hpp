@@ -56,6 +56,7 @@ struct ExecutiveHealth {
   std::uint32_t overruns = 0;
   double worst_tick_s = 0.0;
   std::uint32_t fsw_errors = 0;          ///< fsw calls that returned an unexpected status
+  EkfHealth ekf{};                       ///< the filter's numerical/statistical health after the last EKF run
 };
 
 struct FrameInput {
@@ -107,5 +108,6 @@ extern template class Executive<Layout15>;
 extern template class Executive<Layout24>;
 extern template class Executive<Layout15Full>;
 extern template class Executive<Layout24Full>;
+extern template class Executive<Layout15Conv>;
 
 }  // namespace fsw

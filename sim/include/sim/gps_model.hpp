@@ -53,7 +53,7 @@
 
 namespace sim {
 
-inline constexpr int kMaxGpsPrn = 32;
+using fsw::kMaxGpsPrn;
 
 /// Zenith tropospheric delay at sea level [m] and its scale height [m].
 inline constexpr double kTropoZenithDelay_m = 2.4;
@@ -88,6 +88,15 @@ class GpsModel {
   /// t_s = k / rate_hz). Advances the random processes by the time since the previous call (the
   /// first call starts them; a time going backwards advances by 0). Never throws.
   void measure(const TruthSample& truth, fsw::GnssEpoch& out) noexcept;
+
+  /// The same epoch as a receiver reports it on the bus (fsw::GnssRawEpoch): time tag on the
+  /// receiver clock (GPS time + bias / c of the last measure(), so call it right after), PRN, pseudorange
+  /// with the satellite clock error put back (c * (af0 + af1 tk) subtracted), rate with c * af1
+  /// subtracted, and a nominal C/N0 of 30 + 20 sin(elevation) dB-Hz. fsw::gnss_epoch_from_raw with
+  /// the same almanac inverts it (satellite positions recomputed at tow - rho / c: < 1 mm apart).
+  void raw(const fsw::GnssEpoch& epoch, fsw::GnssRawEpoch& out) const noexcept;
+  /// The almanac the model flies (sorted by PRN), for delivery to the flight software.
+  const std::vector<AlmanacEntry>& almanac() const { return almanac_; }
 
   /// Truth receiver clock at the last epoch.
   const GpsClockState& clock() const { return clock_; }

@@ -1,9 +1,12 @@
 #include "tools/montecarlo.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <memory>
 #include <stdexcept>
@@ -33,7 +36,8 @@ struct ModelRunner {
   virtual fsw::Status init(const fsw::ExecutiveConfig& cfg, const fsw::NavState& nav) = 0;
   virtual bool tick(const fsw::FrameInput& in) = 0;  ///< returns whether the EKF ran
   virtual void record(const sim::TruthSample& truth) = 0;
-  virtual std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg) const = 0;
+  virtual std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg,
+                                              std::vector<double>& cov) const = 0;
   virtual fsw::ExecutiveHealth health() const = 0;
   std::vector<EpochRecord>* records = nullptr;
 };
@@ -71,13 +75,23 @@ struct ModelRun final : ModelRunner {
     records->push_back(r);
   }
 
-  std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg) const override {
+  std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg,
+                                      std::vector<double>& cov) const override {
     std::vector<SensorResidual> out_s;
+    std::vector<std::pair<int, double>> state_scale;
     const auto& P = exec.ekf().P();
     const fsw::ImuCompensation& c = exec.compensation();
     auto add = [&](const std::string& name, int state, double truth_v, double est, double sigma0, const char* unit,
                    double scale) {
-      out_s.push_back({name, (truth_v - est) * scale, sigma0 * scale, std::sqrt(P(state, state)) * scale, unit});
+      bool estimated = true;
+      for (int b = 0; b < Layout::kNumBlocks; ++b) {
+        const Block blk = Layout::kBlocks[b];
+        if (state >= Layout::offset(blk) && state < Layout::offset(blk) + fsw::block_size(blk))
+          estimated = !Layout::is_consider(blk);
+      }
+      out_s.push_back(
+          {name, (truth_v - est) * scale, sigma0 * scale, std::sqrt(P(state, state)) * scale, unit, estimated});
+      state_scale.emplace_back(state, scale);
     };
     const char* axes[3] = {"x", "y", "z"};
     if constexpr (Layout::has(Block::kAccelBias)) {
@@ -110,6 +124,11 @@ struct ModelRun final : ModelRunner {
             c.gyro_error(ax.i, ax.j), cfg.ekf.gyro_misalign_sigma_rad, "arcsec", fsw::kRadToArcsec);
       }
     }
+    const std::size_t k = state_scale.size();
+    cov.assign(k * k, 0.0);
+    for (std::size_t i = 0; i < k; ++i)
+      for (std::size_t j = 0; j < k; ++j)
+        cov[i * k + j] = P(state_scale[i].first, state_scale[j].first) * state_scale[i].second * state_scale[j].second;
     return out_s;
   }
 };
@@ -227,7 +246,9 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   std::vector<std::unique_ptr<ModelRunner>> runners;
   for (std::size_t m = 0; m < n_models; ++m) {
     const bool is15 = mc.models[m] == Model::k15;
-    if (mc.model_gps_errors)
+    if (mc.models[m] == Model::k15c)
+      runners.push_back(std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout15Conv>));
+    else if (mc.model_gps_errors)
       runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout15Full>)
                              : std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout24Full>));
     else
@@ -272,9 +293,10 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
       for (auto& r : runners) r->record(*te);
   }
   res.sensors.assign(n_models, {});
+  res.sensor_cov.assign(n_models, {});
   res.health.assign(n_models, {});
   for (std::size_t m = 0; m < n_models; ++m) {
-    res.sensors[m] = runners[m]->sensors(errors, cfg);
+    res.sensors[m] = runners[m]->sensors(errors, cfg, res.sensor_cov[m]);
     res.health[m] = runners[m]->health();
   }
   // EKF ticks also ran one mechanization frame each; charge that to the mechanization.
@@ -401,6 +423,13 @@ ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, Model m
     s.sensors[k].residual = std::sqrt(r2 / n);
     s.sensors[k].sigma = sg / n;
   }
+  s.sensor_cov.assign(results.front().sensor_cov[mi].size(), 0.0);
+  for (const RunResult& r : results) {
+    for (std::size_t k = 0; k < s.sensor_cov.size(); ++k) s.sensor_cov[k] += r.sensor_cov[mi][k] / n;
+    std::vector<double> res(r.sensors[mi].size());
+    for (std::size_t k = 0; k < res.size(); ++k) res[k] = r.sensors[mi][k].residual;
+    s.sensor_residuals.push_back(std::move(res));
+  }
   for (const RunResult& r : results) {
     const fsw::ExecutiveHealth& h = r.health[mi];
     fsw::ExecutiveHealth& a = s.health;
@@ -419,8 +448,67 @@ ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, Model m
     a.prr_rejected += h.prr_rejected;
     a.obs_invalid += h.obs_invalid;
     a.fsw_errors += h.fsw_errors;
+    a.ekf.cov_checks += h.ekf.cov_checks;
+    a.ekf.cov_repairs += h.ekf.cov_repairs;
+    a.ekf.nonfinite_rejected += h.ekf.nonfinite_rejected;
+    a.ekf.divergence_windows += h.ekf.divergence_windows;
+    a.ekf.gating_runaway_epochs += h.ekf.gating_runaway_epochs;
+    a.ekf.resets += h.ekf.resets;
   }
   return s;
+}
+
+std::vector<MisalignmentCombination> misalignment_combinations(const ModelStats& s) {
+  std::vector<std::size_t> idx;  // the misalignment states among the sensor states
+  for (std::size_t k = 0; k < s.sensors.size(); ++k)
+    if (s.sensors[k].estimated && s.sensors[k].name.find("_mis.") != std::string::npos) idx.push_back(k);
+  std::vector<MisalignmentCombination> out;
+  const std::size_t ks = s.sensors.size(), m = idx.size();
+  if (m == 0 || s.sensor_cov.size() != ks * ks) return out;
+  // Normalised covariance D0^-1 P D0^-1 (D0: initial sigmas); its eigenvalues are the squared
+  // ratios final / initial sigma along each direction.
+  Eigen::MatrixXd Pn(m, m);
+  for (std::size_t i = 0; i < m; ++i)
+    for (std::size_t j = 0; j < m; ++j)
+      Pn(i, j) = s.sensor_cov[idx[i] * ks + idx[j]] / (s.sensors[idx[i]].initial_sigma * s.sensors[idx[j]].initial_sigma);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Pn);
+  for (std::size_t e = 0; e < m; ++e) {  // ascending eigenvalues: most reduced first
+    Eigen::VectorXd v = eig.eigenvectors().col(static_cast<Eigen::Index>(e));
+    Eigen::Index big = 0;
+    v.cwiseAbs().maxCoeff(&big);
+    if (v(big) < 0.0) v = -v;  // sign convention: the largest coefficient positive
+    MisalignmentCombination c;
+    // Direction in physical units: u_i = v_i / sigma0_i (normalised), sigma along it.
+    Eigen::VectorXd u(m);
+    for (std::size_t i = 0; i < m; ++i) u(i) = v(i) / s.sensors[idx[i]].initial_sigma;
+    u /= u.norm();
+    double var0 = 0.0, var = 0.0;
+    for (std::size_t i = 0; i < m; ++i)
+      for (std::size_t j = 0; j < m; ++j) {
+        const double pij = s.sensor_cov[idx[i] * ks + idx[j]];
+        var += u(i) * u(j) * pij;
+        if (i == j) var0 += u(i) * u(i) * s.sensors[idx[i]].initial_sigma * s.sensors[idx[i]].initial_sigma;
+      }
+    c.initial_sigma = std::sqrt(var0);
+    c.final_sigma = std::sqrt(std::max(0.0, var));
+    double r2 = 0.0;
+    for (const auto& res : s.sensor_residuals) {
+      double p = 0.0;
+      for (std::size_t i = 0; i < m; ++i) p += u(i) * res[idx[i]];
+      r2 += p * p;
+    }
+    c.rms_residual = s.sensor_residuals.empty() ? 0.0 : std::sqrt(r2 / static_cast<double>(s.sensor_residuals.size()));
+    c.observable = c.final_sigma <= kObservableSigmaRatio * c.initial_sigma;
+    char buf[64];
+    for (std::size_t i = 0; i < m; ++i) {
+      if (std::abs(u(i)) < 0.1) continue;
+      c.terms.emplace_back(s.sensors[idx[i]].name, u(i));
+      std::snprintf(buf, sizeof buf, "%s%+.2f %s", c.label.empty() ? "" : " ", u(i), s.sensors[idx[i]].name.c_str());
+      c.label += buf;
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
 }
 
 void write_stats_csv(const ModelStats& s, const std::string& path) {

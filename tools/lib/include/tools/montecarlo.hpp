@@ -38,8 +38,10 @@ struct TruthTrack {
   static TruthTrack generate(const sim::Scenario& sc);
 };
 
-enum class Model { k15, k24 };
-inline const char* model_name(Model m) { return m == Model::k15 ? "15" : "24"; }
+/// k15: the 15-state model with the misalignments as Schmidt consider states (consistent);
+/// k15c: the conventional 15-state model that ignores them (the paper's); k24: 24 states.
+enum class Model { k15, k24, k15c };
+inline const char* model_name(Model m) { return m == Model::k15 ? "15" : m == Model::k24 ? "24" : "15c"; }
 
 struct MonteCarloConfig {
   int runs = 100;
@@ -87,6 +89,7 @@ struct SensorResidual {
   double initial_sigma = 0.0;
   double sigma = 0.0;
   std::string unit;
+  bool estimated = true;  ///< false for a Schmidt consider state (the filter carries but never corrects it)
 };
 
 struct RunResult {
@@ -94,6 +97,9 @@ struct RunResult {
   std::uint64_t seed = 0;
   std::vector<std::vector<EpochRecord>> epochs;  ///< [model][epoch]
   std::vector<std::vector<SensorResidual>> sensors;  ///< [model][state]
+  /// [model]: the filter's final covariance of the sensor states, row-major k x k in the units and
+  /// order of sensors[model].
+  std::vector<std::vector<double>> sensor_cov;
   std::vector<fsw::ExecutiveHealth> health;      ///< [model]
   double wall_sim_s = 0.0;   ///< IMU and GPS error models
   double wall_mech_s = 0.0;  ///< 200 Hz rate group (all models)
@@ -123,8 +129,27 @@ struct ModelStats {
   std::array<double, 2> nees_bounds{};      ///< 95% bounds of the run-averaged 9-dof NEES
   std::array<double, 2> nees_att_bounds{};  ///< ... of the 3-dof attitude NEES
   std::vector<SensorResidual> sensors;      ///< residual = RMS across runs, sigma = mean filter sigma
+  std::vector<double> sensor_cov;           ///< mean across runs of RunResult::sensor_cov
+  std::vector<std::vector<double>> sensor_residuals;  ///< [run][state]: truth minus final compensation
   fsw::ExecutiveHealth health{};            ///< summed over runs
 };
+
+/// One direction in the space of the misalignment states (normalised by their initial sigmas)
+/// along which the filter's final covariance has an eigenvalue: the combinations the manoeuvres
+/// make observable are those whose sigma fell well below the initial one.
+struct MisalignmentCombination {
+  std::vector<std::pair<std::string, double>> terms;  ///< (state, coefficient), |coef| >= 0.1, unit vector
+  std::string label;          ///< e.g. "+0.71 gyro_mis.yz +0.70 gyro_mis.zy"
+  double initial_sigma = 0.0; ///< [arcsec] along the direction (all misalignments share one unit)
+  double final_sigma = 0.0;   ///< [arcsec] filter sigma along the direction
+  double rms_residual = 0.0;  ///< [arcsec] RMS across runs of the residual projected on it
+  bool observable = false;    ///< final_sigma <= kObservableSigmaRatio * initial_sigma
+};
+inline constexpr double kObservableSigmaRatio = 0.5;
+
+/// Eigen-directions of the mean final misalignment covariance, most reduced first. Empty when
+/// the model estimates no misalignment.
+std::vector<MisalignmentCombination> misalignment_combinations(const ModelStats& s);
 
 ModelStats reduce(const std::vector<RunResult>& results, std::size_t model_index, Model model, const TruthTrack& truth);
 

@@ -1,0 +1,85 @@
+// The flight-software node: the thin glue (PX4 style) that binds fsw::FlightApp to the outside
+// world. Inputs arrive already decoded (from the CAN receive assembler, an LCM log or the
+// in-process simulator); the node logs them (so every run can be replayed), runs the flight app,
+// and publishes the outputs on LCM (NAV_SOLUTION at nav_decimation of the 200 Hz frames;
+// EKF_STATE and FILTER_HEALTH after every 1 Hz EKF run). It also keeps a digest of every
+// navigation frame's solution, so two runs can be compared bit for bit (SIL vs HIL, replay).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "fsw/flight_app.hpp"
+#include "hal/lcm_log_sink.hpp"
+
+namespace hal {
+
+enum class FswModel : std::uint8_t { k15, k24 };
+/// "15" or "24" -> model; false for anything else.
+bool parse_fsw_model(const std::string& s, FswModel& out);
+const char* to_string(FswModel m);
+
+struct FswNodeConfig {
+  FswModel model = FswModel::k24;
+  fsw::FlightAppConfig app{};
+  LcmTelemetryConfig telemetry{};  ///< network URL ("none": off) and the log path ("": no log)
+  int nav_decimation = 10;         ///< NAV_SOLUTION every n-th 200 Hz frame (10: 20 Hz)
+  bool log_inputs = true;          ///< write IMU, GNSS_RAW, GPS_ALMANAC (makes the log replayable)
+};
+
+/// The default flight configuration: the paper's sensor class (fsw::EkfConfig defaults), the
+/// TCXO clock and the GPS error model of the built-in scenario, the 56-state filter layouts.
+fsw::FlightAppConfig default_flight_config();
+
+struct FswNodeSummary {
+  bool initialised = false;
+  double init_t_s = 0.0;
+  std::uint64_t nav_frames = 0;
+  std::uint64_t digest = 0;   ///< FNV-1a over every frame's (t, llh, vel, quaternion) bytes
+  fsw::NavState last_nav{};
+};
+
+class FswNode {
+ public:
+  FswNode();
+  ~FswNode();
+  FswNode(const FswNode&) = delete;
+  FswNode& operator=(const FswNode&) = delete;
+
+  /// kBadConfig for an invalid flight configuration; the log status when the log cannot be opened.
+  /// error receives a one-line reason.
+  bool open(const FswNodeConfig& cfg, std::string& error);
+  void on_almanac(const fsw::GpsAlmanac& sat, double t_s);
+  void on_gnss(const fsw::GnssRawEpoch& epoch);
+  /// counter/status: the sensor's, when known (bus, log); -1 lets the sink count.
+  void on_imu(const fsw::ImuSample& s, std::int32_t counter = -1, std::int16_t status = 0);
+  /// Truth (simulator runs only) on the TRUTH channel.
+  void on_truth(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, const fsw::Mat3& C_b_n);
+  /// Measured execution time of the previous minor frame (real-time mode).
+  void set_prev_tick_exec_s(double s);
+  /// Flushes and closes the log.
+  bool close(std::string& error);
+
+  const FswNodeSummary& summary() const { return summary_; }
+  const fsw::FlightAppHealth& app_health() const;
+  const fsw::ExecutiveHealth& exec_health() const;
+  const LcmLogSink& sink() const { return sink_; }
+  /// Whether the last on_imu() completed a minor frame, and its output.
+  const fsw::FrameOutput& last_frame() const { return frame_; }
+  bool frame_completed() const { return frame_done_; }
+
+  struct App;  ///< the flight app of the chosen layout (defined in the .cpp)
+
+ private:
+  void after_frame();
+  std::unique_ptr<App> app_;
+  FswNodeConfig cfg_{};
+  LcmLogSink sink_;
+  fsw::FrameOutput frame_{};
+  bool frame_done_ = false;
+  bool closed_ = false;
+  FswNodeSummary summary_{};
+};
+
+}  // namespace hal

@@ -1,0 +1,186 @@
+#include "hal/fsw_node.hpp"
+
+#include <cstring>
+
+namespace hal {
+
+struct FswNode::App {
+  virtual ~App() = default;
+  virtual fsw::Status init(const fsw::FlightAppConfig& cfg) = 0;
+  virtual void on_almanac(const fsw::GpsAlmanac& s) = 0;
+  virtual void on_gnss(const fsw::GnssRawEpoch& e) = 0;
+  virtual fsw::Status on_imu(const fsw::ImuSample& s, fsw::FrameOutput& out) = 0;
+  virtual void set_prev_tick_exec_s(double s) = 0;
+  virtual const fsw::FlightAppHealth& health() const = 0;
+  virtual const fsw::ExecutiveHealth& exec_health() const = 0;
+  virtual void write_ekf(LcmLogSink& sink) const = 0;
+  virtual void write_health(LcmLogSink& sink, const fsw::FrameOutput& frame) const = 0;
+};
+
+namespace {
+
+template <class Layout>
+struct AppOf final : FswNode::App {
+  fsw::FlightApp<Layout> app;
+  fsw::Status init(const fsw::FlightAppConfig& cfg) override { return app.init(cfg); }
+  void on_almanac(const fsw::GpsAlmanac& s) override { app.on_almanac(s); }
+  void on_gnss(const fsw::GnssRawEpoch& e) override { app.on_gnss(e); }
+  fsw::Status on_imu(const fsw::ImuSample& s, fsw::FrameOutput& out) override { return app.on_imu(s, out); }
+  void set_prev_tick_exec_s(double s) override { app.set_prev_tick_exec_s(s); }
+  const fsw::FlightAppHealth& health() const override { return app.health(); }
+  const fsw::ExecutiveHealth& exec_health() const override { return app.executive().health(); }
+  void write_ekf(LcmLogSink& sink) const override { sink.write_ekf(app.executive()); }
+  void write_health(LcmLogSink& sink, const fsw::FrameOutput& frame) const override {
+    sink.write_health(app.executive(), frame, app.health().conversion);
+  }
+};
+
+constexpr std::uint64_t kFnvOffset = 1469598103934665603ull;
+constexpr std::uint64_t kFnvPrime = 1099511628211ull;
+
+void fnv(std::uint64_t& h, const void* p, std::size_t n) {
+  const auto* b = static_cast<const unsigned char*>(p);
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= b[i];
+    h *= kFnvPrime;
+  }
+}
+
+}  // namespace
+
+bool parse_fsw_model(const std::string& s, FswModel& out) {
+  if (s == "15") out = FswModel::k15;
+  else if (s == "24") out = FswModel::k24;
+  else return false;
+  return true;
+}
+
+const char* to_string(FswModel m) { return m == FswModel::k15 ? "15" : "24"; }
+
+fsw::FlightAppConfig default_flight_config() {
+  fsw::FlightAppConfig c;
+  fsw::EkfConfig& e = c.exec.ekf;
+  // The simulated receiver class (sim::GpsConfig defaults): TCXO h0 = 2e-19, h-2 = 2e-20; GPS
+  // errors 8 m / 60 s and 0.2 m/s / 10 s Gauss-Markov, with a small white floor.
+  const double c2 = fsw::kSpeedOfLight_mps * fsw::kSpeedOfLight_mps;
+  e.clock_bias_psd_m2ps = 2e-19 / 2.0 * c2;
+  e.clock_drift_psd_m2ps3 = 2.0 * fsw::kPi * fsw::kPi * 2e-20 * c2;
+  e.clock_bias_sigma_m = 10.0;
+  e.clock_drift_sigma_mps = 0.5;
+  e.range_gm_sigma_m = 8.0;
+  e.range_gm_tau_s = 60.0;
+  e.range_rate_gm_sigma_mps = 0.2;
+  e.range_rate_gm_tau_s = 10.0;
+  e.pseudorange_sigma_m = 0.3;
+  e.pseudorange_rate_sigma_mps = 0.01;
+  e.arw_rad_per_rts = 2e-7;
+  return c;
+}
+
+FswNode::FswNode() = default;
+FswNode::~FswNode() {
+  std::string ignored;
+  close(ignored);
+}
+
+bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
+  if (cfg.nav_decimation < 1) {
+    error = "nav_decimation must be >= 1";
+    return false;
+  }
+  cfg_ = cfg;
+  if (cfg.model == FswModel::k15)
+    app_ = std::make_unique<AppOf<fsw::Layout15Full>>();
+  else
+    app_ = std::make_unique<AppOf<fsw::Layout24Full>>();
+  const fsw::Status st = app_->init(cfg.app);
+  if (st != fsw::Status::kOk) {
+    error = std::string("flight application configuration rejected: ") + fsw::to_string(st);
+    app_.reset();
+    return false;
+  }
+  const LcmLogStatus ls = sink_.open(cfg.telemetry);
+  if (ls != LcmLogStatus::kOk) {
+    error = "cannot open the telemetry/log (" + cfg.telemetry.log_path + "): " + to_string(ls);
+    app_.reset();
+    return false;
+  }
+  summary_ = FswNodeSummary{};
+  summary_.digest = kFnvOffset;
+  closed_ = false;
+  return true;
+}
+
+void FswNode::on_almanac(const fsw::GpsAlmanac& sat, double t_s) {
+  if (!app_) return;
+  if (cfg_.log_inputs) sink_.write_almanac(sat, t_s);
+  app_->on_almanac(sat);
+}
+
+void FswNode::on_gnss(const fsw::GnssRawEpoch& epoch) {
+  if (!app_) return;
+  if (cfg_.log_inputs) sink_.write_gnss(epoch);
+  app_->on_gnss(epoch);
+}
+
+void FswNode::on_imu(const fsw::ImuSample& s, std::int32_t counter, std::int16_t status) {
+  frame_done_ = false;
+  if (!app_) return;
+  if (cfg_.log_inputs) {
+    if (counter >= 0)
+      sink_.write_imu(ImuRecord{s, counter, status});
+    else
+      sink_.write_imu(s, status);
+  }
+  app_->on_imu(s, frame_);
+  if (frame_.nav_valid) after_frame();
+}
+
+void FswNode::after_frame() {
+  frame_done_ = true;
+  const fsw::NavState& n = frame_.nav;
+  fnv(summary_.digest, &n.t_s, sizeof n.t_s);
+  fnv(summary_.digest, n.llh.data(), 3 * sizeof(double));
+  fnv(summary_.digest, n.vel_enu_mps.data(), 3 * sizeof(double));
+  fnv(summary_.digest, n.q_b_n.coeffs().data(), 4 * sizeof(double));
+  if (summary_.nav_frames % static_cast<std::uint64_t>(cfg_.nav_decimation) == 0 || frame_.ekf_updated)
+    sink_.write_nav(frame_);
+  ++summary_.nav_frames;
+  summary_.last_nav = n;
+  summary_.initialised = true;
+  summary_.init_t_s = app_->health().init_t_s;
+  if (frame_.ekf_ran) {
+    app_->write_ekf(sink_);
+    app_->write_health(sink_, frame_);
+  }
+}
+
+void FswNode::on_truth(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, const fsw::Mat3& C_b_n) {
+  if (app_) sink_.write_truth(t_s, llh, vel_enu_mps, C_b_n);
+}
+
+void FswNode::set_prev_tick_exec_s(double s) {
+  if (app_) app_->set_prev_tick_exec_s(s);
+}
+
+bool FswNode::close(std::string& error) {
+  if (!app_ || closed_) return true;
+  closed_ = true;
+  const LcmLogStatus ls = sink_.close();
+  if (ls != LcmLogStatus::kOk) {
+    error = std::string("closing the log failed: ") + to_string(ls);
+    return false;
+  }
+  return true;
+}
+
+const fsw::FlightAppHealth& FswNode::app_health() const {
+  static const fsw::FlightAppHealth none{};
+  return app_ ? app_->health() : none;
+}
+const fsw::ExecutiveHealth& FswNode::exec_health() const {
+  static const fsw::ExecutiveHealth none{};
+  return app_ ? app_->exec_health() : none;
+}
+
+}  // namespace hal

@@ -1,0 +1,156 @@
+#include "hal/lcm_log_sink.hpp"
+
+#include <algorithm>
+#include <utility>
+
+namespace hal {
+
+LcmLogStatus LcmLogSink::write_imu(const fsw::ImuSample& sample, std::int16_t status) {
+  ImuRecord r;
+  r.sample = sample;
+  r.counter = imu_counter_;
+  r.status = status;
+  return write_imu(r);
+}
+
+LcmLogStatus LcmLogSink::write_imu(const ImuRecord& record) {
+  sdins::imu_sample_t m{};
+  to_msg(record, m);
+  // The running counter continues from the last sample written (wraps like an int32 sensor counter).
+  imu_counter_ = static_cast<std::int32_t>(static_cast<std::uint32_t>(record.counter) + 1u);
+  return publish(kLcmChannelImu, m);
+}
+
+LcmLogStatus LcmLogSink::write_gnss(const fsw::GnssRawEpoch& epoch) {
+  sdins::gnss_raw_epoch_t m{};
+  to_msg(epoch, m);
+  return publish(kLcmChannelGnssRaw, m);
+}
+
+LcmLogStatus LcmLogSink::write_almanac(const fsw::GpsAlmanac& almanac, double t_s) {
+  sdins::gps_almanac_t m{};
+  to_msg(almanac, t_s, m);
+  return publish(kLcmChannelGpsAlmanac, m);
+}
+
+LcmLogStatus LcmLogSink::write_nav(const fsw::NavState& nav, bool valid, bool ekf_updated) {
+  sdins::nav_solution_t m{};
+  to_msg(nav, valid, ekf_updated, m);
+  return publish(kLcmChannelNavSolution, m);
+}
+
+LcmLogStatus LcmLogSink::write_truth(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps,
+                                     const fsw::Mat3& C_b_n) {
+  sdins::truth_t m{};
+  truth_to_msg(t_s, llh, vel_enu_mps, C_b_n, m);
+  return publish(kLcmChannelTruth, m);
+}
+
+LcmLogStatus LcmLogSink::write_health(double t_s, const fsw::ExecutiveHealth& health,
+                                      const fsw::GnssConversionStats& conversion, const fsw::FrameOutput& frame,
+                                      double gate_chi2) {
+  to_msg(t_s, health, conversion, frame, gate_chi2, health_msg_);
+  return publish(kLcmChannelFilterHealth, health_msg_);
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+bool later(const std::pair<double, std::uint64_t>& a, const std::pair<double, std::uint64_t>& b) { return a > b; }
+}  // namespace
+
+LcmLogStatus LcmReplayReader::open(const std::string& path, const LcmReplayConfig& cfg) {
+  cfg_ = cfg;
+  if (!(cfg_.reorder_window_s >= 0.0)) cfg_.reorder_window_s = 0.0;  // NaN or negative: no reordering
+  stats_ = LcmReplayStats{};
+  pending_.clear();
+  seq_ = 0;
+  eof_ = false;
+  have_newest_ = false;
+  have_delivered_ = false;
+  have_counter_ = false;
+  return log_.open(path, cfg.max_event_bytes);
+}
+
+void LcmReplayReader::push(LcmReplayInput&& in) {
+  if (have_delivered_ && in.t_s < last_delivered_t_s_) {
+    ++stats_.out_of_order;
+    return;
+  }
+  if (!have_newest_ || in.t_s > newest_t_s_) newest_t_s_ = in.t_s;
+  have_newest_ = true;
+  pending_.push_back(Pending{seq_++, std::move(in)});
+  std::push_heap(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) {
+    return later({a.input.t_s, a.seq}, {b.input.t_s, b.seq});
+  });
+}
+
+void LcmReplayReader::take(const LcmLogEvent& ev) {
+  LcmReplayInput in;
+  if (ev.channel == cfg_.imu_channel) {
+    sdins::imu_sample_t m{};
+    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
+    if (st == LcmInputStatus::kOk) st = from_msg(m, in.imu, cfg_.imu_limits);
+    stats_.imu.record(st);
+    if (st != LcmInputStatus::kOk) return;
+    if (have_counter_) {
+      const std::uint32_t step = static_cast<std::uint32_t>(in.imu.counter) - static_cast<std::uint32_t>(last_counter_);
+      if (step != 1u) {
+        ++stats_.imu_counter_gaps;
+        if (step > 1u && step < (1u << 30)) stats_.imu_counter_missing += step - 1u;
+      }
+    }
+    have_counter_ = true;
+    last_counter_ = in.imu.counter;
+    in.kind = LcmReplayInput::Kind::kImu;
+    in.t_s = in.imu.sample.t_s;
+  } else if (ev.channel == cfg_.gnss_channel) {
+    sdins::gnss_raw_epoch_t m{};
+    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
+    int dropped = 0;
+    if (st == LcmInputStatus::kOk) st = from_msg(m, in.gnss, dropped);
+    stats_.gnss.record(st);
+    stats_.gnss.measurements_dropped += static_cast<std::uint64_t>(dropped);
+    if (st != LcmInputStatus::kOk && st != LcmInputStatus::kMeasurementsDropped) return;
+    in.kind = LcmReplayInput::Kind::kGnss;
+    in.t_s = in.gnss.t_s;
+  } else if (ev.channel == cfg_.almanac_channel) {
+    sdins::gps_almanac_t m{};
+    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
+    if (st == LcmInputStatus::kOk) st = from_msg(m, in.almanac);
+    stats_.almanac.record(st);
+    if (st != LcmInputStatus::kOk) return;
+    in.kind = LcmReplayInput::Kind::kAlmanac;
+    in.t_s = m.t_s;
+  } else {
+    ++stats_.other_events;
+    return;
+  }
+  push(std::move(in));
+}
+
+LcmLogStatus LcmReplayReader::next(LcmReplayInput& in) {
+  const auto cmp = [](const Pending& a, const Pending& b) { return later({a.input.t_s, a.seq}, {b.input.t_s, b.seq}); };
+  for (;;) {
+    if (!pending_.empty() && (eof_ || pending_.front().input.t_s <= newest_t_s_ - cfg_.reorder_window_s)) {
+      std::pop_heap(pending_.begin(), pending_.end(), cmp);
+      in = std::move(pending_.back().input);
+      pending_.pop_back();
+      have_delivered_ = true;
+      last_delivered_t_s_ = in.t_s;
+      ++stats_.delivered;
+      return LcmLogStatus::kOk;
+    }
+    if (eof_) return LcmLogStatus::kEndOfLog;
+    LcmLogEvent ev;
+    const LcmLogStatus st = log_.next(ev);
+    if (st == LcmLogStatus::kOk) {
+      take(ev);
+    } else if (st == LcmLogStatus::kEndOfLog) {
+      eof_ = true;
+    } else {
+      return st;
+    }
+  }
+}
+
+}  // namespace hal

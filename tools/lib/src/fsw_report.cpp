@@ -1,0 +1,115 @@
+#include "tools/fsw_report.hpp"
+
+#include <cinttypes>
+#include <cstdio>
+
+namespace tools {
+
+using nlohmann::json;
+
+std::string digest_hex(std::uint64_t d) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "%016" PRIx64, d);
+  return buf;
+}
+
+json can_rx_json(const hal::CanRxHealth& h) {
+  json j = json::object();
+  h.for_each([&j](const char* name, std::uint32_t v) { j[name] = v; });
+  j["rejections"] = h.rejections();
+  return j;
+}
+
+json last_nav_json(const fsw::NavState& n) {
+  return {{"t_s", n.t_s},
+          {"lat_deg", n.llh.x() * fsw::kRadToDeg},
+          {"lon_deg", n.llh.y() * fsw::kRadToDeg},
+          {"height_m", n.llh.z()},
+          {"vel_enu_mps", {n.vel_enu_mps.x(), n.vel_enu_mps.y(), n.vel_enu_mps.z()}},
+          {"q_b_n_wxyz", {n.q_b_n.w(), n.q_b_n.x(), n.q_b_n.y(), n.q_b_n.z()}}};
+}
+
+json app_json(const fsw::FlightAppHealth& a) {
+  return {{"imu_received", a.imu_received},       {"imu_before_init", a.imu_before_init},
+          {"imu_rejected", a.imu_rejected},       {"gnss_received", a.gnss_received},
+          {"gnss_rejected", a.gnss_rejected},     {"gnss_before_init", a.gnss_before_init},
+          {"init_no_fix", a.init_no_fix},         {"init_bad_geometry", a.init_bad_geometry},
+          {"init_too_slow", a.init_too_slow},     {"init_not_level", a.init_not_level},
+          {"almanac_received", a.almanac_received}, {"almanac_rejected", a.almanac_rejected},
+          {"gnss_no_almanac", a.conversion.no_almanac}, {"gnss_unhealthy", a.conversion.unhealthy},
+          {"gnss_invalid", a.conversion.invalid}, {"gnss_duplicate_prn", a.conversion.duplicate_prn},
+          {"init_satellites", a.init_fix.n_used}, {"init_pdop", a.init_fix.pdop}};
+}
+
+json executive_json(const fsw::ExecutiveHealth& e) {
+  return {{"ticks", e.ticks},
+          {"nav_frames", e.nav_frames},
+          {"ekf_runs", e.ekf_runs},
+          {"ekf_updates", e.ekf_updates},
+          {"ekf_without_gnss", e.ekf_without_gnss},
+          {"imu_samples", e.imu_samples},
+          {"imu_rejected", e.imu_rejected},
+          {"imu_short_ticks", e.imu_short_ticks},
+          {"imu_time_gaps", e.imu_time_gaps},
+          {"gnss_epochs", e.gnss_epochs},
+          {"gnss_stale", e.gnss_stale},
+          {"gnss_replaced", e.gnss_replaced},
+          {"gnss_invalid", e.gnss_invalid},
+          {"pr_used", e.pr_used},
+          {"prr_used", e.prr_used},
+          {"pr_rejected", e.pr_rejected},
+          {"prr_rejected", e.prr_rejected},
+          {"obs_invalid", e.obs_invalid},
+          {"overruns", e.overruns},
+          {"worst_tick_s", e.worst_tick_s},
+          {"fsw_errors", e.fsw_errors},
+          {"cov_repairs", e.ekf.cov_repairs},
+          {"nonfinite_rejected", e.ekf.nonfinite_rejected},
+          {"nis_divergence_windows", e.ekf.divergence_windows},
+          {"filter_resets", e.ekf.resets}};
+}
+
+json fsw_summary_json(const hal::FswNode& node) {
+  const hal::FswNodeSummary& s = node.summary();
+  const fsw::FlightAppHealth& a = node.app_health();
+  const auto& tel = node.sink().telemetry();
+  json j;
+  j["initialised"] = a.initialised;
+  j["init_t_s"] = a.init_t_s;
+  j["nav_frames"] = s.nav_frames;
+  j["digest"] = digest_hex(s.digest);
+  j["last_nav"] = last_nav_json(s.last_nav);
+  j["app"] = app_json(a);
+  j["executive"] = executive_json(node.exec_health());
+  j["telemetry"] = {{"network", tel.network_active()}, {"url", tel.url()},         {"published", tel.published()},
+                    {"logged", tel.logged()},          {"send_failures", tel.send_failures()},
+                    {"log_failures", tel.log_failures()}};
+  return j;
+}
+
+void print_fsw_summary(const hal::FswNode& node) {
+  const hal::FswNodeSummary& s = node.summary();
+  const fsw::FlightAppHealth& a = node.app_health();
+  const fsw::ExecutiveHealth& e = node.exec_health();
+  const auto& tel = node.sink().telemetry();
+  if (!a.initialised) {
+    std::printf("flight software: NOT initialised (%u IMU samples, %u GNSS epochs received; no fix %u, geometry %u, "
+                "too slow %u, levelling %u, no almanac %u)\n",
+                a.imu_received, a.gnss_received, a.init_no_fix, a.init_bad_geometry, a.init_too_slow, a.init_not_level,
+                a.conversion.no_almanac);
+  } else {
+    std::printf("flight software: initialised at t = %.3f s (%d satellites, PDOP %.2f); %llu navigation frames, "
+                "digest %s\n",
+                a.init_t_s, a.init_fix.n_used, a.init_fix.pdop, static_cast<unsigned long long>(s.nav_frames),
+                digest_hex(s.digest).c_str());
+  }
+  std::printf("EKF: %u runs, %u updates, %u without GNSS; pr used/gated %u/%u, rate used/gated %u/%u; "
+              "overruns %u; fsw errors %u; covariance repairs %u; resets %u\n",
+              e.ekf_runs, e.ekf_updates, e.ekf_without_gnss, e.pr_used, e.pr_rejected, e.prr_used, e.prr_rejected,
+              e.overruns, e.fsw_errors, e.ekf.cov_repairs, e.ekf.resets);
+  std::printf("telemetry: %s, %llu published, %llu logged\n",
+              tel.network_active() ? tel.url().c_str() : "network off (log only)",
+              static_cast<unsigned long long>(tel.published()), static_cast<unsigned long long>(tel.logged()));
+}
+
+}  // namespace tools

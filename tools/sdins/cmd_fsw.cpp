@@ -1,0 +1,111 @@
+// sdins fsw: the flight software as its own process, fed by a CAN bus (the flight side of a HIL
+// run). Answers `sdins bus-sim` with FSW_ACK; ends on the run's SIM_CONTROL end (exit 0) or after
+// --idle-timeout seconds without frames (exit 2, a silent bus).
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+#include "commands.hpp"
+#include "hal/can_bus.hpp"
+#include "tools/hil.hpp"
+
+namespace sdins {
+namespace {
+
+struct Options {
+  std::string bus;
+  std::string model = "24";
+  std::string log;
+  std::string lcm_url;
+  bool realtime = false;
+  double idle_timeout_s = 5.0;
+  int fifo_priority = 50;
+  std::string json;
+} opt;
+
+void warn(const std::string& m) { std::fprintf(stderr, "sdins fsw: %s\n", m.c_str()); }
+
+}  // namespace
+
+void register_fsw(CLI::App& app) {
+  CLI::App* sub = app.add_subcommand(
+      "fsw", "Run the flight software fed by a CAN bus (IMU and GPS frames of hal/can/sdins.dbc), with LCM "
+             "telemetry and log; answers `sdins bus-sim` with FSW_ACK. Exit 0: end of run; 2: silent bus.");
+  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT")->required();
+  sub->add_option("--model", opt.model, "filter model: 15 or 24 (default 24)")->check(CLI::IsMember({"15", "24"}));
+  sub->add_option("--log", opt.log, "write an LCM log (inputs and outputs)");
+  sub->add_option("--lcm-url", opt.lcm_url,
+                  "LCM telemetry URL (default $LCM_DEFAULT_URL or udpm://239.255.76.67:7667?ttl=0; none: off)");
+  sub->add_flag("--realtime", opt.realtime,
+                "real-time mode: SCHED_FIFO when permitted, minor-frame execution times (overruns), IMU lateness");
+  sub->add_option("--fifo-priority", opt.fifo_priority, "realtime: SCHED_FIFO priority (default 50)")
+      ->check(CLI::Range(1, 99));
+  sub->add_option("--idle-timeout", opt.idle_timeout_s, "stop after this long without frames [s] (default 5)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--json", opt.json, "write the summary as JSON (fields in README)");
+}
+
+int run_fsw() {
+  tools::FswRunConfig cfg;
+  if (!hal::parse_fsw_model(opt.model, cfg.node.model)) throw std::runtime_error("--model must be 15 or 24");
+  cfg.node.app = hal::default_flight_config();
+  cfg.node.telemetry.log_path = opt.log;
+  if (!opt.lcm_url.empty()) cfg.node.telemetry.lcm_url = opt.lcm_url;
+  cfg.realtime = opt.realtime;
+  cfg.fifo_priority = opt.fifo_priority;
+  cfg.idle_timeout_s = opt.idle_timeout_s;
+  hal::CanBus bus;
+  if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
+  std::fprintf(stderr, "sdins fsw: %s-state model listening on %s\n", opt.model.c_str(), opt.bus.c_str());
+  const tools::FswRunResult r = tools::run_fsw(bus, cfg, nullptr, &warn);
+  if (r.exit == tools::FswExit::kError) throw std::runtime_error(r.error);
+
+  if (r.exit == tools::FswExit::kIdleTimeout)
+    std::printf("silent bus: no frame for %.3f s, stopping%s\n", r.idle_timeout_s,
+                r.end_received ? "" : (r.run_started ? " (run started, no SIM_CONTROL end)" : " (no run started)"));
+  else
+    std::printf("end of run %08x received\n", r.run.run_id);
+  const fsw::NavState& n = r.summary.last_nav;
+  const double deg = 180.0 / 3.14159265358979323846;
+  std::printf("initialised: %s", r.summary.initialised ? "yes" : "no");
+  if (r.summary.initialised) std::printf(" at t=%.3f s", r.summary.init_t_s);
+  std::printf("\nnav frames: %llu  digest: %s\n", static_cast<unsigned long long>(r.summary.nav_frames),
+              tools::digest_hex(r.summary.digest).c_str());
+  std::printf("last position: t=%.3f s lat=%.9f deg lon=%.9f deg h=%.3f m vel_enu=%.4f,%.4f,%.4f m/s\n", n.t_s,
+              n.llh(0) * deg, n.llh(1) * deg, n.llh(2), n.vel_enu_mps(0), n.vel_enu_mps(1), n.vel_enu_mps(2));
+  const fsw::ExecutiveHealth& e = r.exec;
+  std::printf("executive: ticks=%u nav_frames=%u ekf_runs=%u ekf_updates=%u ekf_without_gnss=%u imu_rejected=%u "
+              "imu_time_gaps=%u gnss_stale=%u pr_used=%u pr_rejected=%u overruns=%u worst_tick_s=%.6f fsw_errors=%u\n",
+              e.ticks, e.nav_frames, e.ekf_runs, e.ekf_updates, e.ekf_without_gnss, e.imu_rejected, e.imu_time_gaps,
+              e.gnss_stale, e.pr_used, e.pr_rejected, e.overruns, e.worst_tick_s, e.fsw_errors);
+  std::printf("frames: received=%llu data=%llu imu=%llu imu_delivered=%llu control=%llu control_rejected=%llu "
+              "foreign_acks=%llu acks_sent=%llu\n",
+              static_cast<unsigned long long>(r.frames_received), static_cast<unsigned long long>(r.data_frames),
+              static_cast<unsigned long long>(r.imu_frames), static_cast<unsigned long long>(r.imu_delivered),
+              static_cast<unsigned long long>(r.control_frames), static_cast<unsigned long long>(r.control_rejected),
+              static_cast<unsigned long long>(r.foreign_acks), static_cast<unsigned long long>(r.acks_sent));
+  std::printf("assembler: rejections=%u", r.rx.rejections());
+  r.rx.for_each([](const char* name, std::uint32_t v) {
+    if (v != 0) std::printf(" %s=%u", name, v);
+  });
+  std::printf("\ntelemetry: lcm %s published=%llu send_failures=%llu; log %s events=%llu failures=%llu\n",
+              r.lcm_network ? "on" : "off", static_cast<unsigned long long>(r.lcm_published),
+              static_cast<unsigned long long>(r.lcm_send_failures), r.log_path.empty() ? "(none)" : r.log_path.c_str(),
+              static_cast<unsigned long long>(r.lcm_logged), static_cast<unsigned long long>(r.lcm_log_failures));
+  if (r.realtime)
+    std::printf("realtime: %s; minor frames timed=%llu exec mean=%.6f s max=%.6f s overruns=%u; IMU lateness mean=%.6f "
+                "s max=%.6f s late(>%.3f s)=%llu missing=%u\n",
+                r.sched_note.c_str(), static_cast<unsigned long long>(r.minor_frames_timed), r.exec_mean_s,
+                r.exec_max_s, e.overruns, r.imu_lateness_mean_s, r.imu_lateness_max_s, r.late_threshold_s,
+                static_cast<unsigned long long>(r.imu_late), r.rx.imu_missing);
+  std::printf("wall time: %.3f s\n", r.wall_s);
+  if (!opt.json.empty()) {
+    std::ofstream f(opt.json);
+    if (!f) throw std::runtime_error("cannot write " + opt.json);
+    f << tools::to_json(r).dump(2) << '\n';
+  }
+  return r.exit == tools::FswExit::kEndOfRun ? 0 : 2;
+}
+
+}  // namespace sdins
