@@ -72,7 +72,8 @@ LcmLogStatus LcmReplayReader::open(const std::string& path, const LcmReplayConfi
 }
 
 void LcmReplayReader::push(LcmReplayInput&& in) {
-  if (have_delivered_ && in.t_s < last_delivered_t_s_) {
+  if ((have_delivered_ && in.t_s < last_delivered_t_s_) ||
+      (have_newest_ && in.t_s < newest_t_s_ - cfg_.reorder_window_s)) {
     ++stats_.out_of_order;
     return;
   }

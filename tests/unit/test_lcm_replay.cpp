@@ -2,6 +2,7 @@
 // bit-exact, with every bad input counted by reason.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -331,6 +332,37 @@ TEST(LcmReplay, ReorderWindowSortsLateInputsAndCountsTooLateOnes) {
   EXPECT_EQ(n, 3001);
   EXPECT_EQ(rd.stats().out_of_order, 1u);
   EXPECT_EQ(rd.stats().rejected(), 1u);
+  std::remove(path.c_str());
+}
+
+// fuzz_lcm_log (fuzz/regressions/lcm_log/): a sample with a wild time tag (-1.5e305 s) logged
+// after samples up to 0.1 s, before anything was returned. It lags far more than the window behind
+// the newest input, so it is dropped and counted; it must not jump ahead of the good samples (it
+// used to be returned first, because nothing had been returned yet when it was read).
+TEST(LcmReplay, WildTimeTagBehindTheWindowIsDroppedEvenBeforeAnythingWasReturned) {
+  const std::string path = lcm_test::scratch("replay_wild_time.lcmlog");
+  hal::LcmLogSink sink;
+  hal::LcmTelemetryConfig cfg;
+  cfg.lcm_url = "none";
+  cfg.log_path = path;
+  ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
+  for (int k = 0; k <= 100; ++k) ASSERT_EQ(sink.write_imu(imu_at(k)), hal::LcmLogStatus::kOk);
+  hal::ImuRecord wild = imu_at(101);
+  wild.sample.t_s = -1.4873979575313448e305;
+  ASSERT_EQ(sink.write_imu(wild), hal::LcmLogStatus::kOk);
+  hal::ImuRecord late_ok = imu_at(50);  // 0.05 s behind the newest: inside the 1 s window
+  late_ok.counter = 102;
+  ASSERT_EQ(sink.write_imu(late_ok), hal::LcmLogStatus::kOk);
+  ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
+  hal::LcmReplayReader rd;
+  ASSERT_EQ(rd.open(path, hal::LcmReplayConfig{}), hal::LcmLogStatus::kOk);
+  hal::LcmReplayInput in;
+  std::vector<double> t;
+  while (rd.next(in) == hal::LcmLogStatus::kOk) t.push_back(in.t_s);
+  ASSERT_EQ(t.size(), 102u);
+  EXPECT_TRUE(std::is_sorted(t.begin(), t.end()));
+  EXPECT_EQ(t.front(), imu_at(0).sample.t_s);
+  EXPECT_EQ(rd.stats().out_of_order, 1u);
   std::remove(path.c_str());
 }
 

@@ -8,8 +8,10 @@
 // LcmReplayReader: reads a log's IMU, GNSS_RAW and GPS_ALMANAC channels (names configurable) and
 // returns them as fsw inputs in time order (t_s, then log order for equal times). Inputs may be
 // logged slightly out of order (e.g. an epoch written after the IMU samples that followed it); a
-// reorder window (reorder_window_s of input time) puts them back in order. An input older than
-// one already returned (beyond the window) is dropped and counted (out_of_order). Every event is
+// reorder window (reorder_window_s of input time) puts them back in order. An input that lags
+// more than the window behind the newest input read so far, or is older than one already
+// returned, is dropped and counted (out_of_order); the rule depends only on the log, not on how
+// far the caller has read, so a single wild time tag cannot jump ahead of the data. Every event is
 // accounted for: log-level rejections (LcmLogReader), per-channel decode/validation statuses
 // (LcmInputStats), events on other channels (other_events), IMU counter gaps.
 #pragma once
@@ -121,7 +123,7 @@ struct LcmReplayStats {
   std::uint64_t other_events = 0;    ///< events on other channels (outputs, truth, foreign data)
   std::uint64_t imu_counter_gaps = 0;     ///< accepted samples whose counter is not previous + 1
   std::uint64_t imu_counter_missing = 0;  ///< samples missing according to forward counter jumps
-  std::uint64_t out_of_order = 0;    ///< inputs older than one already returned (beyond the window): dropped
+  std::uint64_t out_of_order = 0;    ///< inputs lagging > window behind the newest, or older than one returned: dropped
   std::uint64_t delivered = 0;       ///< inputs returned by next()
 
   std::uint64_t rejected() const { return imu.rejected() + gnss.rejected() + almanac.rejected() + out_of_order; }
