@@ -1,5 +1,6 @@
 #include "fsw/ekf.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "fsw/effect_catalogue.hpp"
@@ -64,7 +65,9 @@ template <class Layout>
 Status Ekf<Layout>::init(const EkfConfig& cfg) {
   if (cfg.propagation_substep_frames < 1 || !(cfg.pseudorange_sigma_m > 0.0) ||
       !(cfg.pseudorange_rate_sigma_mps > 0.0) || !(cfg.gate_chi2 > 0.0) || !cfg.att_sigma_rad.allFinite() ||
-      !cfg.lever_arm_b_m.allFinite() || cfg.nis_window < 1 || cfg.nis_window > kMaxNisWindow ||
+      !cfg.lever_arm_b_m.allFinite() || !(cfg.gyro_g_sens_sigma_radps_per_mps2 >= 0.0) ||
+      !(cfg.time_offset_sigma_s >= 0.0) || !(cfg.lever_arm_sigma_m >= 0.0) || !(cfg.tropo_scale_sigma >= 0.0) ||
+      !(cfg.iono_scale_sigma >= 0.0) || cfg.nis_window < 1 || cfg.nis_window > kMaxNisWindow ||
       cfg.runaway_epochs < 0)
     return Status::kBadConfig;
   cfg_ = cfg;
@@ -84,6 +87,11 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   fill(Block::kGyroMisalign, cfg.gyro_misalign_sigma_rad);
   fill(Block::kAccelScale, cfg.accel_scale_sigma);
   fill(Block::kGyroScale, cfg.gyro_scale_sigma);
+  fill(Block::kGyroGSens, cfg.gyro_g_sens_sigma_radps_per_mps2);
+  fill(Block::kTimeOffset, cfg.time_offset_sigma_s);
+  fill(Block::kLeverArm, cfg.lever_arm_sigma_m);
+  fill(Block::kTropoScale, cfg.tropo_scale_sigma);
+  fill(Block::kIonoScale, cfg.iono_scale_sigma);
   fill(Block::kRangeError, cfg.range_gm_sigma_m);
   fill(Block::kRangeRateError, cfg.range_rate_gm_sigma_mps);
   if ((Layout::has(Block::kRangeError) && !(cfg.range_gm_tau_s > 0.0)) ||
@@ -92,6 +100,8 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   const int oc = Layout::offset(Block::kClock);
   sig(oc) = cfg.clock_bias_sigma_m;
   sig(oc + 1) = cfg.clock_drift_sigma_mps;
+  for (int i = 0; i < N && i < 64; ++i)
+    if ((cfg.frozen_states >> i) & 1u) sig(i) = 0.0;
   if (!sig.allFinite() || (sig.array() < 0.0).any()) return Status::kBadConfig;
   init_var_ = sig.array().square().matrix();
   P_ = init_var_.asDiagonal();
@@ -106,6 +116,10 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   clock_bias_m_ = 0.0;
   clock_drift_mps_ = 0.0;
   clock_initialised_ = false;
+  time_offset_hat_s_ = 0.0;
+  lever_arm_hat_b_m_ = cfg.lever_arm_b_m;
+  tropo_scale_hat_ = 0.0;
+  iono_scale_hat_ = 0.0;
   slot_prn_.fill(0);
   range_err_hat_.setZero();
   rate_err_hat_.setZero();
@@ -124,6 +138,7 @@ Status Ekf<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
   const Mat3 C = nav.C_b_n();
   sum_C_dt_ += C * inc.dt_s;
   sum_dv_n_ += C * inc.dv_sum_mps;
+  last_f_n_mps2_ = C * inc.dv_sum_mps / inc.dt_s;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
       sum_C_dv_.col(3 * i + j) += C.col(i) * inc.dv_sum_mps(j);
@@ -176,6 +191,10 @@ void Ekf<Layout>::flush_substep(const NavState& nav) {
   if constexpr (Layout::has(Block::kGyroScale)) {
     constexpr int o = Layout::offset(Block::kGyroScale);
     for (int i = 0; i < 3; ++i) top_.col(o + i).noalias() -= half.template middleCols<3>(6).lazyProduct(sum_C_dth_.col(4 * i));
+  }
+  if constexpr (Layout::has(Block::kGyroGSens)) {  // gyro i senses G_i f_i: driven by C(:, i) dv_i
+    constexpr int o = Layout::offset(Block::kGyroGSens);
+    for (int i = 0; i < 3; ++i) top_.col(o + i).noalias() -= half.template middleCols<3>(6).lazyProduct(sum_C_dv_.col(4 * i));
   }
   Phi_.template topRows<9>() = top_;
 
@@ -340,16 +359,26 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   const double lat = nav.llh.x(), lon = nav.llh.y();
   const Mat3 Cne = C_n_e(lat, lon);
   const Mat3 C = nav.C_b_n();
-  const Vec3 l_n = C * cfg_.lever_arm_b_m;
+  const Vec3 l_n = C * lever_arm_hat_b_m_;
   const Vec3 w_ie_b = C.transpose() * omega_ie_n(lat);
-  const Vec3 v_ant_n = nav.vel_enu_mps + C * (omega_ib_b_radps - w_ie_b).cross(cfg_.lever_arm_b_m);
-  const double dt = epoch.t_s - nav.t_s;  // epoch time tag minus INS time tag
-  const Vec3 r_ant = ecef_from_llh(nav.llh) + Cne * (l_n + v_ant_n * dt);
+  const Vec3 w_rel_b = omega_ib_b_radps - w_ie_b;
+  // The frame's kinematic acceleration (specific force plus gravity; Coriolis left out), for the
+  // time-offset terms.
+  const Vec3 a_n = last_f_n_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
+  // INS time tag of the epoch: its GNSS time plus the estimated IMU-GNSS offset.
+  const double dt_ins = epoch.t_s + time_offset_hat_s_ - nav.t_s;
+  Vec3 v_ant_n = nav.vel_enu_mps + C * w_rel_b.cross(lever_arm_hat_b_m_);
+  const Vec3 r_ant = ecef_from_llh(nav.llh) + Cne * (l_n + v_ant_n * dt_ins);
+  if constexpr (Layout::has(Block::kTimeOffset)) v_ant_n += a_n * time_offset_hat_s_;
   const Vec3 v_ant = Cne * v_ant_n;
+  const double dt = epoch.t_s - nav.t_s;  // the clock runs on GNSS time
   const double clk_b = clock_bias_m_ + clock_drift_mps_ * dt;
+  const double h_ant_m = nav.llh.z() + l_n.z();
 
   GnssGeometry geo[kMaxGnssChannels];
   bool valid[kMaxGnssChannels] = {};
+  double delay_tropo[kMaxGnssChannels] = {};
+  double delay_iono[kMaxGnssChannels] = {};
   double sum_b = 0.0, sum_d = 0.0;
   int n_valid = 0;
   report.n_obs = epoch.n_obs;
@@ -366,6 +395,13 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
     }
     geo[k] = gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r_ant, v_ant);
     valid[k] = true;
+    // Modelled delays (diagnosis extensions): added to the predicted range.
+    if constexpr (Layout::has(Block::kTropoScale) || Layout::has(Block::kIonoScale)) {
+      const double el = std::asin(std::clamp((Cne.transpose() * geo[k].los_ecef).z(), -1.0, 1.0));
+      delay_tropo[k] = tropospheric_delay_m(el, h_ant_m);
+      delay_iono[k] = ionospheric_delay_m(el);
+      geo[k].range_m += tropo_scale_hat_ * delay_tropo[k] + iono_scale_hat_ * delay_iono[k];
+    }
     sum_b += o.pseudorange_m - geo[k].range_m;
     sum_d += o.pseudorange_rate_mps - geo[k].range_rate_mps;
     ++n_valid;
@@ -408,6 +444,11 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
     h.template segment<3>(0) = -e_n.transpose();
     h.template segment<3>(6) = -e_n.transpose() * skew(l_n);
     h(oc) = 1.0;
+    if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = -e_n.dot(nav.vel_enu_mps);
+    if constexpr (Layout::has(Block::kLeverArm))
+      h.template segment<3>(Layout::offset(Block::kLeverArm)) = -e_n.transpose() * C;
+    if constexpr (Layout::has(Block::kTropoScale)) h(Layout::offset(Block::kTropoScale)) = delay_tropo[k];
+    if constexpr (Layout::has(Block::kIonoScale)) h(Layout::offset(Block::kIonoScale)) = delay_iono[k];
     if constexpr (Layout::has(Block::kRangeError)) {
       if (slot >= 0) {
         h(Layout::offset(Block::kRangeError) + slot) = 1.0;
@@ -428,6 +469,9 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
     h.setZero();
     h.template segment<3>(3) = -e_n.transpose();
     h(oc + 1) = 1.0;
+    if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = -e_n.dot(a_n);
+    if constexpr (Layout::has(Block::kLeverArm))
+      h.template segment<3>(Layout::offset(Block::kLeverArm)) = -e_n.transpose() * C * skew(w_rel_b);
     if constexpr (Layout::has(Block::kRangeRateError)) {
       if (slot >= 0) {
         h(Layout::offset(Block::kRangeRateError) + slot) = 1.0;
@@ -605,6 +649,12 @@ Status Ekf<Layout>::feedback(Strapdown& ins, ImuCompensation& comp) {
     constexpr int o = Layout::offset(Block::kGyroScale);
     for (int i = 0; i < 3; ++i) comp.gyro_error(i, i) += x_(o + i);
   }
+  if constexpr (Layout::has(Block::kGyroGSens))
+    comp.gyro_g_sens_radps_per_mps2 += x_.template segment<3>(Layout::offset(Block::kGyroGSens));
+  if constexpr (Layout::has(Block::kTimeOffset)) time_offset_hat_s_ -= x_(Layout::offset(Block::kTimeOffset));
+  if constexpr (Layout::has(Block::kLeverArm)) lever_arm_hat_b_m_ -= x_.template segment<3>(Layout::offset(Block::kLeverArm));
+  if constexpr (Layout::has(Block::kTropoScale)) tropo_scale_hat_ -= x_(Layout::offset(Block::kTropoScale));
+  if constexpr (Layout::has(Block::kIonoScale)) iono_scale_hat_ -= x_(Layout::offset(Block::kIonoScale));
   constexpr int oc = Layout::offset(Block::kClock);
   clock_bias_m_ -= x_(oc);
   clock_drift_mps_ -= x_(oc + 1);
@@ -621,5 +671,6 @@ template class Ekf<Layout24>;
 template class Ekf<Layout15Full>;
 template class Ekf<Layout24Full>;
 template class Ekf<Layout15Conv>;
+template class Ekf<LayoutDiag>;
 
 }  // namespace fsw

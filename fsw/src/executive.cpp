@@ -133,5 +133,6 @@ template class Executive<Layout24>;
 template class Executive<Layout15Full>;
 template class Executive<Layout24Full>;
 template class Executive<Layout15Conv>;
+template class Executive<LayoutDiag>;
 
 }  // namespace fsw

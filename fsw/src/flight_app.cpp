@@ -139,5 +139,6 @@ Status FlightApp<Layout>::on_imu(const ImuSample& s, FrameOutput& out) {
 
 template class FlightApp<Layout15Full>;
 template class FlightApp<Layout24Full>;
+template class FlightApp<LayoutDiag>;
 
 }  // namespace fsw

@@ -57,6 +57,11 @@ const BlockComponents kBlockComponents[fsw::kBlockCount] = {
       "ch11_m"}},
     {{"ch00_mps", "ch01_mps", "ch02_mps", "ch03_mps", "ch04_mps", "ch05_mps", "ch06_mps", "ch07_mps", "ch08_mps",
       "ch09_mps", "ch10_mps", "ch11_mps"}},
+    {{"x_radps_per_mps2", "y_radps_per_mps2", "z_radps_per_mps2"}},
+    {{"s"}},
+    {{"x_m", "y_m", "z_m"}},
+    {{"scale"}},
+    {{"scale"}},
 };
 
 }  // namespace

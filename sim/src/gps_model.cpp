@@ -64,15 +64,6 @@ bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
 
 }  // namespace
 
-double tropospheric_delay_m(double elevation_rad, double height_m) {
-  const double s = std::sin(elevation_rad);
-  return kTropoZenithDelay_m * std::exp(-height_m / kTropoScaleHeight_m) * 1.001 / std::sqrt(0.002001 + s * s);
-}
-
-double ionospheric_delay_m(double elevation_rad) {
-  const double x = kIonoEarthRadius_m * std::cos(elevation_rad) / (kIonoEarthRadius_m + kIonoShellHeight_m);
-  return kIonoZenithDelay_m / std::sqrt(1.0 - x * x);
-}
 
 GpsModel::GpsModel(const GpsConfig& cfg, std::vector<AlmanacEntry> almanac, const EffectSet& effects,
                    std::uint64_t seed)

@@ -89,7 +89,7 @@ for k in range(20):
     if k == 9:
         events.append(("GARBAGE", None, 0))  # marker: 50 bytes of junk here
 
-layout15 = [0, 3, 6, 9, 12, -1, -1, -1, -1, 15, -1, -1]
+layout15 = [0, 3, 6, 9, 12, -1, -1, -1, -1, 15, -1, -1] + [-1] * 5
 for t in (0.05, 0.1):
     s = ekf_state_t()
     s.t_s = t
@@ -97,7 +97,7 @@ for t in (0.05, 0.1):
     s.n_states = 17
     s.block_offset = layout15
     s.consider_mask = 0
-    s.sigma = [0.1 * (i + 1) if i < 17 else 0.0 for i in range(64)]
+    s.sigma = [0.1 * (i + 1) if i < 17 else 0.0 for i in range(72)]
     s.accel_bias_mps2 = [1e-4, 2e-4, 3e-4]
     s.clock_bias_m = 12.5
     s.channel_prn = [0] * 12
@@ -116,11 +116,11 @@ for k in range(3):
     add("FOREIGN", bytes([0x42] * (10 + k)), 0.001 * k)
 
 # Two EKF models on one channel: cannot be one CSV.
-for n_states, offsets in ((17, layout15), (26, [0, 3, 6, 9, 12, 15, 18, -1, -1, 24, -1, -1])):
+for n_states, offsets in ((17, layout15), (26, [0, 3, 6, 9, 12, 15, 18, -1, -1, 24, -1, -1] + [-1] * 5)):
     s = ekf_state_t()
     s.n_states = n_states
     s.block_offset = offsets
-    s.sigma = [1.0] * 64
+    s.sigma = [1.0] * 72
     s.channel_prn = [0] * 12
     add("EKF_MIXED", s.encode(), 0.2)
 

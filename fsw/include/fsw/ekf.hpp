@@ -6,7 +6,7 @@
 //   d(dp)/dt  = dv
 //   d(dv)/dt  = f_n x phi + C_b_n df_b - (2 w_ie + w_en) x dv + v x (2 dw_ie + dw_en) + dg
 //   d(phi)/dt = -w_in x phi + dw_in - C_b_n dw_ib_b
-//   df_b = db_a + (dSF_a + dM_a) f_b,    dw_ib_b = db_g + (dSF_g + dM_g) w_ib_b
+//   df_b = db_a + (dSF_a + dM_a) f_b,    dw_ib_b = db_g + (dSF_g + dM_g) w_ib_b + dG .* f_b
 // dw_ie, dw_en: the rate errors caused by the position (latitude) and velocity errors; dg the
 // normal-gravity error of the height error (+2 g / R dh Up). The misalignment and scale-factor
 // columns are driven by the measured angular rate and specific force, as in the paper's
@@ -25,6 +25,16 @@
 //   satellite in ENU). Every scalar is gated: (y - H dx)^2 / (H P H^T + R) > gate_chi2 rejects it
 //   (counted). The INS solution at the frame closest to the epoch is extrapolated to the epoch's
 //   time tag with its velocity.
+//
+// EXTENSION BLOCKS OF THE DIAGNOSIS MODEL (LayoutDiag; each a random constant, estimate fed back)
+//   time offset tau (IMU tag minus GNSS time): the INS is read at the epoch's time tag plus
+//     tau_hat; H_pr = -e_n^T v_n, H_prr = -e_n^T a_n (a_n: the frame's acceleration).
+//   lever arm l: the antenna at l_hat; H_pr = -e_n^T C_b_n, H_prr = -e_n^T C_b_n [w x]
+//     (w = w_ib_b - w_ie_b).
+//   tropospheric / ionospheric scale s: z_hat += s_hat * T(el, h) (fsw::tropospheric_delay_m,
+//     ionospheric_delay_m); H_pr = T(el, h). Their rates (< 1 cm/s) are left out.
+//   A block whose initial sigma is zero stays exactly zero (it has no process noise): the
+//   diagnosis switches extensions on and off that way.
 //
 // TIME-CORRELATED MEASUREMENT ERRORS (layouts with kRangeError / kRangeRateError): each tracked
 //   satellite is bound to a channel; the channel's first-order Gauss-Markov error is a state
@@ -60,6 +70,15 @@ struct EkfConfig {
   double gyro_misalign_sigma_rad = 5.0 * kArcsecToRad;
   double accel_scale_sigma = 100e-6;
   double gyro_scale_sigma = 100e-6;
+  // Extension blocks (LayoutDiag); zero switches a block off.
+  double gyro_g_sens_sigma_radps_per_mps2 = 0.0;
+  double time_offset_sigma_s = 0.0;
+  double lever_arm_sigma_m = 0.0;
+  double tropo_scale_sigma = 0.0;
+  double iono_scale_sigma = 0.0;
+  /// Bit i set: state i (i < 64) starts with zero variance whatever its block's sigma, so it stays
+  /// exactly zero (the diagnosis switches single components off this way).
+  std::uint64_t frozen_states = 0;
   double clock_bias_sigma_m = 30.0;
   double clock_drift_sigma_mps = 1.0;
 
@@ -185,6 +204,12 @@ class Ekf {
   const Mat& last_transition() const { return last_Phi_; }
   double clock_bias_m() const { return clock_bias_m_; }
   double clock_drift_mps() const { return clock_drift_mps_; }
+  /// Extension estimates (LayoutDiag): IMU-GNSS time offset, lever arm (starts at the configured
+  /// one), tropospheric and ionospheric delay scales.
+  double time_offset_s() const { return time_offset_hat_s_; }
+  const Vec3& lever_arm_b_m() const { return lever_arm_hat_b_m_; }
+  double tropo_scale() const { return tropo_scale_hat_; }
+  double iono_scale() const { return iono_scale_hat_; }
   bool clock_initialised() const { return clock_initialised_; }
   /// PRN bound to each measurement-error channel (0: free); only for layouts with kRangeError.
   const std::array<std::uint8_t, kGnssErrorChannels>& channel_prn() const { return slot_prn_; }
@@ -226,12 +251,17 @@ class Ekf {
   double sub_T_ = 0.0;
   Mat3 sum_C_dt_ = Mat3::Zero();                          ///< sum C_b_n dt
   Vec3 sum_dv_n_ = Vec3::Zero();                          ///< sum C_b_n dv (f_n dt)
+  Vec3 last_f_n_mps2_ = Vec3::Zero();                     ///< specific force of the last frame, ENU
   Eigen::Matrix<double, 3, 9> sum_C_dv_ = Eigen::Matrix<double, 3, 9>::Zero();   ///< col 3i+j: sum C(:,i) dv_j
   Eigen::Matrix<double, 3, 9> sum_C_dth_ = Eigen::Matrix<double, 3, 9>::Zero();  ///< col 3i+j: sum C(:,i) dtheta_j
   NavState last_nav_{};
   double clock_bias_m_ = 0.0;
   double clock_drift_mps_ = 0.0;
   bool clock_initialised_ = false;
+  double time_offset_hat_s_ = 0.0;
+  Vec3 lever_arm_hat_b_m_ = Vec3::Zero();
+  double tropo_scale_hat_ = 0.0;
+  double iono_scale_hat_ = 0.0;
   std::array<std::uint8_t, kGnssErrorChannels> slot_prn_{};
   Eigen::Matrix<double, kGnssErrorChannels, 1> range_err_hat_ = Eigen::Matrix<double, kGnssErrorChannels, 1>::Zero();
   Eigen::Matrix<double, kGnssErrorChannels, 1> rate_err_hat_ = Eigen::Matrix<double, kGnssErrorChannels, 1>::Zero();
@@ -242,5 +272,6 @@ extern template class Ekf<Layout24>;
 extern template class Ekf<Layout15Full>;
 extern template class Ekf<Layout24Full>;
 extern template class Ekf<Layout15Conv>;
+extern template class Ekf<LayoutDiag>;
 
 }  // namespace fsw

@@ -19,6 +19,12 @@
 //   kRangeError     first-order Gauss-Markov pseudorange error of each receiver channel [m]
 //   kRangeRateError first-order Gauss-Markov pseudorange-rate error of each channel [m/s]
 //                   (estimate minus truth; a channel is bound to a PRN while it is tracked)
+//   kGyroGSens      residual gyro g-sensitivity, gyro i senses G_i f_i (true minus compensated)
+//                   rad/s per m/s^2, body axes
+//   kTimeOffset     IMU-GNSS time offset (IMU time tag minus GNSS time) s, estimate minus truth
+//   kLeverArm       IMU reference point -> antenna, body axes m, estimate minus truth
+//   kTropoScale     scale of the tropospheric delay model (tropospheric_delay_m), estimate minus truth
+//   kIonoScale      scale of the ionospheric delay model (ionospheric_delay_m), estimate minus truth
 // The residual sensor errors are what remains after the IMU compensation that the filter feeds
 // back: measured = (I + SF + M) true + b, compensated = measured - b_hat - (SF_hat + M_hat) measured,
 // so compensated ~ true + delta b + (delta SF + delta M) true.
@@ -57,6 +63,11 @@ enum class Block : std::uint8_t {
   kClock,
   kRangeError,
   kRangeRateError,
+  kGyroGSens,
+  kTimeOffset,
+  kLeverArm,
+  kTropoScale,
+  kIonoScale,
   kCount
 };
 
@@ -66,12 +77,15 @@ inline constexpr int kGnssErrorChannels = 12;
 inline constexpr int kBlockCount = static_cast<int>(Block::kCount);
 
 /// Size of each block, indexed by Block.
-inline constexpr int kBlockSize[kBlockCount] = {3, 3, 3, 3, 3, 3, 6, 3, 3, 2, kGnssErrorChannels, kGnssErrorChannels};
+inline constexpr int kBlockSize[kBlockCount] = {3, 3, 3, 3, 3, 3, 6, 3, 3, 2, kGnssErrorChannels, kGnssErrorChannels,
+                                                3, 1, 3, 1, 1};
 
 /// Short block names for reports and CSV headers.
 inline constexpr const char* kBlockName[kBlockCount] = {"pos",       "vel",       "att",       "accel_bias",
                                                          "gyro_bias", "accel_mis", "gyro_mis",  "accel_sf",
-                                                         "gyro_sf",   "clock",     "range_err", "range_rate_err"};
+                                                         "gyro_sf",   "clock",     "range_err", "range_rate_err",
+                                                         "gyro_g_sens", "time_offset", "lever_arm", "tropo_scale",
+                                                         "iono_scale"};
 
 constexpr int block_size(Block b) { return kBlockSize[static_cast<int>(b)]; }
 
@@ -136,7 +150,19 @@ using Layout15Conv =
                                     Block::kRangeError, Block::kRangeRateError>,
                    Block::kAccelScale, Block::kGyroScale>;
 
+/// The diagnosis model (tools/diagnosis): the 15-state model with the clock and the per-channel
+/// Gauss-Markov GPS errors, plus one block for every error of the effect catalogue
+/// (effect_catalogue.hpp). The diagnosis switches blocks on and off at run time through their
+/// initial sigma (EkfConfig): a block started with zero variance and no process noise stays
+/// exactly zero and uncorrelated, so the model with every extension off is the baseline. 65 states.
+using LayoutDiag =
+    ErrorStateLayout<Block::kPosition, Block::kVelocity, Block::kAttitude, Block::kAccelBias, Block::kGyroBias,
+                     Block::kAccelMisalign, Block::kGyroMisalign, Block::kAccelScale, Block::kGyroScale,
+                     Block::kGyroGSens, Block::kTimeOffset, Block::kLeverArm, Block::kTropoScale, Block::kIonoScale,
+                     Block::kClock, Block::kRangeError, Block::kRangeRateError>;
+
 static_assert(Layout15::kSize == 17, "15-state model plus two clock states");
+static_assert(LayoutDiag::kSize == 65);
 static_assert(Layout24::kSize == 26, "24-state model plus two clock states");
 static_assert(LayoutFull::kSize == 56);
 static_assert(Layout15Full::is_consider(Block::kGyroMisalign) && !Layout24Full::is_consider(Block::kGyroMisalign));

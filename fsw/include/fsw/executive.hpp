@@ -109,5 +109,6 @@ extern template class Executive<Layout24>;
 extern template class Executive<Layout15Full>;
 extern template class Executive<Layout24Full>;
 extern template class Executive<Layout15Conv>;
+extern template class Executive<LayoutDiag>;
 
 }  // namespace fsw

@@ -92,5 +92,6 @@ class FlightApp {
 
 extern template class FlightApp<Layout15Full>;
 extern template class FlightApp<Layout24Full>;
+extern template class FlightApp<LayoutDiag>;
 
 }  // namespace fsw

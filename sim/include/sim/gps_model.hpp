@@ -55,22 +55,15 @@ namespace sim {
 
 using fsw::kMaxGpsPrn;
 
-/// Zenith tropospheric delay at sea level [m] and its scale height [m].
-inline constexpr double kTropoZenithDelay_m = 2.4;
-inline constexpr double kTropoScaleHeight_m = 7000.0;
-/// Zenith ionospheric delay [m], thin-shell height [m] and the Earth radius of the shell model [m].
-inline constexpr double kIonoZenithDelay_m = 5.0;
-inline constexpr double kIonoShellHeight_m = 350e3;
-inline constexpr double kIonoEarthRadius_m = 6371e3;
-
-/// Tropospheric delay [m] at elevation el and ellipsoidal height h:
-///   T = 2.4 m * exp(-h / 7000 m) * 1.001 / sqrt(0.002001 + sin^2(el))
-/// (the RTCA DO-229 mapping: 1 / sin(el) within 0.3% at 30 deg and 3% at 10 deg, 22.4 at el = 0).
-double tropospheric_delay_m(double elevation_rad, double height_m);
-
-/// Ionospheric delay [m] at elevation el, thin-shell obliquity factor:
-///   I = 5 m / sqrt(1 - (Re cos(el) / (Re + 350 km))^2),  Re = 6371 km  (1 at zenith, ~3.1 at 0 deg).
-double ionospheric_delay_m(double elevation_rad);
+// The delay models are the flight software's (fsw/gnss.hpp), so the diagnosis's extension states
+// and the truth side use one definition.
+using fsw::ionospheric_delay_m;
+using fsw::kIonoEarthRadius_m;
+using fsw::kIonoShellHeight_m;
+using fsw::kIonoZenithDelay_m;
+using fsw::kTropoScaleHeight_m;
+using fsw::kTropoZenithDelay_m;
+using fsw::tropospheric_delay_m;
 
 struct GpsClockState {
   double bias_m = 0.0;     ///< c * receiver clock bias
