@@ -1,0 +1,183 @@
+// Diagnosis of measured data: which error the navigation model is missing, how large it is, and
+// how much better navigation gets once the model includes it (`sdins diagnose`).
+//
+// METHOD (README "Diagnosis")
+//   The candidates are the components of the effect catalogue (fsw/effect_catalogue.hpp): every
+//   component is one state of the diagnosis model fsw::LayoutDiag, switched on by giving it a
+//   prior sigma (DiagnosisConfig::prior) and off by freezing it at zero.
+//   1. Screening: one run of the baseline model extended by every candidate at once. For a
+//      random-constant state with prior variance p0 and posterior variance p, the estimate under
+//      the null hypothesis (the effect is absent) is zero-mean with variance (p0 - p) p / p0 in a
+//      linear-Gaussian model, so z^2 = x_hat^2 p0 / ((p0 - p) p) is chi-square with one degree of
+//      freedom. A component is tested only if the data are informative about it
+//      (p <= max_variance_ratio * p0); the others are reported as unobservable with this data,
+//      never named. The threshold is the upper chi-square(1) quantile at alpha / (number of tested
+//      components): a family-wise false-alarm rate alpha per diagnosis (Bonferroni).
+//   2. Components that the data cannot tell apart: a significant component whose posterior
+//      correlation with another tested component exceeds max_correlation forms a group with it;
+//      the finding lists the group and the estimate of the group's sum direction.
+//   3. Confirmation: the baseline extended by the significant components only is re-run and the
+//      test repeated in that model; components no longer significant are dropped (until stable).
+//   4. Gain: baseline and extended model over the same data: innovation statistics (NIS,
+//      innovation RMS per measurement type, log-likelihood over the measurements both used) and,
+//      where the data carry truth or a reference trajectory, navigation error RMS.
+//   Truth is never used in steps 1 to 3.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "fsw/effect_catalogue.hpp"
+#include "fsw/error_state.hpp"
+#include "fsw/flight_app.hpp"
+#include "fsw/gps_orbit.hpp"
+#include "fsw/strapdown.hpp"
+#include "sim/scenario.hpp"
+
+namespace tools {
+
+/// A truth or reference sample (TRUTH channel).
+struct TruthPoint {
+  double t_s = 0.0;
+  fsw::Vec3 llh = fsw::Vec3::Zero();
+  fsw::Vec3 vel_enu_mps = fsw::Vec3::Zero();
+  fsw::Quat q_b_n = fsw::Quat::Identity();
+};
+
+/// A recording in memory, in arrival order: the inputs of the flight software and, separately,
+/// truth (used only to score navigation).
+struct RecordedData {
+  enum class Kind : std::uint8_t { kAlmanac, kImu, kGnss };
+  struct Event {
+    Kind kind;
+    std::uint32_t index;  ///< into almanac, imu or gnss
+  };
+  std::vector<fsw::GpsAlmanac> almanac;
+  std::vector<fsw::ImuSample> imu;
+  std::vector<fsw::GnssRawEpoch> gnss;
+  std::vector<Event> order;
+  std::vector<TruthPoint> truth;  ///< time-ordered; empty without truth
+  std::string description;
+};
+
+/// Reads an LCM log (IMU, GNSS_RAW, GPS_ALMANAC through hal::LcmReplayReader; TRUTH). Returns
+/// false with a message when the log cannot be read or has no IMU or GNSS data; rejections are
+/// summarised in `report`.
+bool load_recorded_data(const std::string& path, RecordedData& out, std::string& error, std::string& report);
+
+/// Flies a scenario through the simulator (tools::SensorStream) into memory, with truth at
+/// truth_rate_hz: the same data `sdins sim --log` writes, without the file.
+RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double truth_rate_hz = 10.0);
+
+/// One candidate: a component of a catalogue effect and its state in fsw::LayoutDiag.
+struct Candidate {
+  fsw::Effect effect;
+  int component;  ///< index into the effect's components
+  int state;      ///< index in LayoutDiag
+};
+/// Every component of the catalogue, in catalogue order.
+const std::vector<Candidate>& diagnosis_candidates();
+/// "gyro_misalignment.xy" (or the effect name alone for scalar effects).
+std::string candidate_name(const Candidate& c);
+
+struct DiagnosisConfig {
+  fsw::FlightAppConfig app{};  ///< the baseline model's configuration (the extension sigmas are set per run)
+  /// Prior 1-sigma of each effect in catalogue units (index fsw::Effect).
+  std::array<double, fsw::kEffectCount> prior{};
+  double alpha = 0.01;               ///< family-wise false-alarm rate of one diagnosis
+  double max_variance_ratio = 0.25;  ///< p / p0 above which a component counts as unobservable
+  double max_correlation = 0.9;      ///< |posterior correlation| above which two components are not told apart
+  int max_confirmation_passes = 3;
+  int max_findings = 4;              ///< forward-selection rounds
+  double gain_skip_s = 60.0;         ///< navigation errors are scored from initialisation + this
+};
+/// The defaults: the simulated receiver and IMU of the project (hal::default_flight_config) and
+/// priors that cover the realistic range of each effect.
+DiagnosisConfig default_diagnosis_config();
+
+/// Innovation statistics of one run.
+struct InnovationStats {
+  int epochs = 0;
+  int pr_used = 0, prr_used = 0, rejected = 0;
+  double nis_mean = 0.0;      ///< mean NIS per scalar measurement (1 for a consistent filter)
+  double pr_rms_m = 0.0;      ///< innovation RMS per measurement type
+  double prr_rms_mps = 0.0;
+  double log_likelihood = 0.0;  ///< sum over the measurements counted in `common`
+  int common = 0;              ///< measurements used by both models compared
+};
+
+/// Navigation error RMS against truth/reference.
+struct NavErrorStats {
+  bool available = false;
+  int samples = 0;
+  double pos_rms_m = 0.0, vel_rms_mps = 0.0;
+  double tilt_rms_deg = 0.0, heading_rms_deg = 0.0;
+  double heading_final_deg = 0.0;
+};
+
+/// One run of the diagnosis model with a set of active candidates.
+struct ModelRun {
+  std::vector<int> active;  ///< indices into diagnosis_candidates()
+  bool initialised = false;
+  double init_t_s = 0.0;
+  // Per active candidate, at the end (catalogue units).
+  std::vector<double> estimate, sigma, prior_sigma, z2;
+  Eigen::MatrixXd correlation;  ///< posterior correlation of the active candidates
+  InnovationStats innovations;
+  NavErrorStats nav;
+  // Per-epoch traces for the report.
+  std::vector<double> t_s, pr_rms_m, prr_rms_mps, heading_err_deg;
+  std::vector<std::vector<double>> est_trace, sigma_trace;  ///< [epoch][active]
+  // Scalar innovations (key: epoch, observation, type) for the likelihood comparison.
+  struct Scalar {
+    std::uint64_t key;
+    double nu, S;
+  };
+  std::vector<Scalar> scalars;
+};
+
+/// Runs the diagnosis model on the data with the given candidates active.
+ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active);
+
+/// Log-likelihood of both runs over the scalar measurements both used: fills a.innovations and
+/// b.innovations' log_likelihood and common.
+void compare_likelihood(ModelRun& a, ModelRun& b);
+
+struct Finding {
+  fsw::Effect effect;
+  std::string component;  ///< "" for scalar effects
+  double estimate = 0.0, sigma = 0.0;  ///< catalogue units, from the extended model
+  std::string unit;
+  double z2 = 0.0;       ///< Wald statistic in the extended model (chi-square, 1 dof under the null)
+  double p_value = 0.0;
+  /// Components the data cannot tell apart from this one ("effect.component"), with their
+  /// posterior correlation; empty when it is separable.
+  std::vector<std::pair<std::string, double>> confounded_with;
+};
+
+struct DiagnosisResult {
+  std::string baseline = "15";
+  double threshold_z2 = 0.0;  ///< per-component threshold (Bonferroni)
+  int tested = 0;
+  std::vector<std::string> unobservable;  ///< candidates the data are not informative about
+  std::vector<Finding> findings;          ///< most significant first
+  std::vector<std::string> extended_model;  ///< "effect.component" states added to the baseline
+  std::vector<double> screening_z2;     ///< per candidate: z^2 in the baseline + that component alone
+  std::vector<double> screening_ratio;  ///< per candidate: posterior / prior variance there
+  ModelRun base, extended;
+};
+
+/// The whole diagnosis. progress (optional) receives one line per step.
+DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
+                         const std::function<void(const std::string&)>& progress = {});
+
+/// Upper quantile of chi-square with 1 degree of freedom: P(X > q) = p.
+double chi2_1_upper_quantile(double p);
+/// P(X > x) for chi-square with 1 degree of freedom.
+double chi2_1_survival(double x);
+
+}  // namespace tools

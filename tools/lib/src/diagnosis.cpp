@@ -1,0 +1,579 @@
+#include "tools/diagnosis.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <thread>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "fsw/frames.hpp"
+#include "hal/fsw_node.hpp"
+#include "hal/lcm_channels.hpp"
+#include "hal/lcm_convert.hpp"
+#include "hal/lcm_log.hpp"
+#include "hal/lcm_log_sink.hpp"
+#include "tools/sensor_stream.hpp"
+
+namespace tools {
+namespace {
+
+using fsw::Block;
+using fsw::Effect;
+using fsw::LayoutDiag;
+
+Block block_of(Effect e) {
+  switch (e) {
+    case Effect::kGyroMisalignment: return Block::kGyroMisalign;
+    case Effect::kAccelMisalignment: return Block::kAccelMisalign;
+    case Effect::kGyroScaleFactor: return Block::kGyroScale;
+    case Effect::kAccelScaleFactor: return Block::kAccelScale;
+    case Effect::kGyroGSensitivity: return Block::kGyroGSens;
+    case Effect::kImuGnssTimeOffset: return Block::kTimeOffset;
+    case Effect::kAntennaLeverArm: return Block::kLeverArm;
+    case Effect::kTroposphericDelay: return Block::kTropoScale;
+    case Effect::kIonosphericDelay: return Block::kIonoScale;
+    case Effect::kCount: break;
+  }
+  return Block::kCount;
+}
+
+using App = fsw::FlightApp<LayoutDiag>;
+
+/// The current estimate of a candidate's effect in SI units.
+double estimate_si(const App& app, const Candidate& c) {
+  const fsw::ImuCompensation& comp = app.executive().compensation();
+  const auto& ekf = app.executive().ekf();
+  const int k = c.component;
+  switch (c.effect) {
+    case Effect::kGyroMisalignment: {
+      const auto ax = fsw::kGyroMisalignmentAxes[k];
+      return comp.gyro_error(ax.i, ax.j);
+    }
+    case Effect::kAccelMisalignment: {
+      const auto ax = fsw::kAccelMisalignmentAxes[k];
+      return comp.accel_error(ax.i, ax.j);
+    }
+    case Effect::kGyroScaleFactor: return comp.gyro_error(k, k);
+    case Effect::kAccelScaleFactor: return comp.accel_error(k, k);
+    case Effect::kGyroGSensitivity: return comp.gyro_g_sens_radps_per_mps2(k);
+    case Effect::kImuGnssTimeOffset: return ekf.time_offset_s();
+    case Effect::kAntennaLeverArm: return ekf.lever_arm_b_m()(k) - ekf.config().lever_arm_b_m(k);
+    case Effect::kTroposphericDelay: return ekf.tropo_scale();
+    case Effect::kIonosphericDelay: return ekf.iono_scale();
+    case Effect::kCount: break;
+  }
+  return 0.0;
+}
+
+double prior_si(const DiagnosisConfig& cfg, Effect e) {
+  return cfg.prior[static_cast<std::size_t>(e)] * fsw::effect_info(e).unit_to_si;
+}
+
+/// Wald statistic of a random-constant state: estimate x, prior variance p0, posterior p.
+double wald_z2(double x, double p0, double p) {
+  if (!(p0 > 0.0) || !(p > 0.0) || !(p0 - p > 0.0)) return 0.0;
+  return x * x * p0 / ((p0 - p) * p);
+}
+
+/// Linear interpolation of truth at t (attitude: slerp); false outside the truth's span.
+bool truth_at(const std::vector<TruthPoint>& truth, double t, TruthPoint& out) {
+  if (truth.empty() || t < truth.front().t_s || t > truth.back().t_s) return false;
+  auto it = std::lower_bound(truth.begin(), truth.end(), t, [](const TruthPoint& a, double x) { return a.t_s < x; });
+  if (it == truth.begin()) {
+    out = *it;
+    return true;
+  }
+  const TruthPoint& b = *it;
+  const TruthPoint& a = *(it - 1);
+  const double span = b.t_s - a.t_s;
+  if (!(span > 0.0) || span > 1.0) return false;  // a gap in the truth: no score
+  const double w = (t - a.t_s) / span;
+  out.t_s = t;
+  out.llh = a.llh + w * (b.llh - a.llh);
+  out.vel_enu_mps = a.vel_enu_mps + w * (b.vel_enu_mps - a.vel_enu_mps);
+  out.q_b_n = a.q_b_n.slerp(w, b.q_b_n);
+  return true;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+double chi2_1_survival(double x) { return x <= 0.0 ? 1.0 : std::erfc(std::sqrt(0.5 * x)); }
+
+double chi2_1_upper_quantile(double p) {
+  if (!(p > 0.0)) return INFINITY;
+  if (p >= 1.0) return 0.0;
+  double lo = 0.0, hi = 1.0;
+  while (chi2_1_survival(hi) > p) hi *= 2.0;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (chi2_1_survival(mid) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+const std::vector<Candidate>& diagnosis_candidates() {
+  static const std::vector<Candidate> list = [] {
+    std::vector<Candidate> v;
+    for (const fsw::EffectInfo& info : fsw::kEffectCatalogue) {
+      const Block b = block_of(info.effect);
+      for (std::size_t k = 0; k < info.n_components; ++k)
+        v.push_back(Candidate{info.effect, static_cast<int>(k), LayoutDiag::offset(b) + static_cast<int>(k)});
+    }
+    return v;
+  }();
+  return list;
+}
+
+std::string candidate_name(const Candidate& c) {
+  const fsw::EffectInfo& info = fsw::effect_info(c.effect);
+  std::string s = info.name;
+  if (info.n_components > 1) s += std::string(".") + info.components[c.component];
+  return s;
+}
+
+DiagnosisConfig default_diagnosis_config() {
+  DiagnosisConfig c;
+  c.app = hal::default_flight_config();
+  auto set = [&c](Effect e, double v) { c.prior[static_cast<std::size_t>(e)] = v; };
+  set(Effect::kGyroMisalignment, 60.0);     // arcsec
+  set(Effect::kAccelMisalignment, 60.0);    // arcsec
+  set(Effect::kGyroScaleFactor, 1000.0);    // ppm
+  set(Effect::kAccelScaleFactor, 1000.0);   // ppm
+  set(Effect::kGyroGSensitivity, 10.0);     // deg/h/g
+  set(Effect::kImuGnssTimeOffset, 0.05);    // s
+  set(Effect::kAntennaLeverArm, 2.0);       // m
+  set(Effect::kTroposphericDelay, 1.0);     // scale
+  set(Effect::kIonosphericDelay, 1.0);      // scale
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------
+bool load_recorded_data(const std::string& path, RecordedData& out, std::string& error, std::string& report) {
+  out = RecordedData{};
+  out.description = path;
+  hal::LcmReplayReader rd;
+  if (rd.open(path, hal::LcmReplayConfig{}) != hal::LcmLogStatus::kOk) {
+    error = "cannot read " + path + ": " + rd.error();
+    return false;
+  }
+  hal::LcmReplayInput in;
+  hal::LcmLogStatus st;
+  while ((st = rd.next(in)) == hal::LcmLogStatus::kOk) {
+    switch (in.kind) {
+      case hal::LcmReplayInput::Kind::kImu:
+        out.order.push_back({RecordedData::Kind::kImu, static_cast<std::uint32_t>(out.imu.size())});
+        out.imu.push_back(in.imu.sample);
+        break;
+      case hal::LcmReplayInput::Kind::kGnss:
+        out.order.push_back({RecordedData::Kind::kGnss, static_cast<std::uint32_t>(out.gnss.size())});
+        out.gnss.push_back(in.gnss);
+        break;
+      case hal::LcmReplayInput::Kind::kAlmanac:
+        out.order.push_back({RecordedData::Kind::kAlmanac, static_cast<std::uint32_t>(out.almanac.size())});
+        out.almanac.push_back(in.almanac);
+        break;
+    }
+  }
+  if (st != hal::LcmLogStatus::kEndOfLog) {
+    error = "reading " + path + " failed: " + rd.error();
+    return false;
+  }
+  // Truth / reference: its own channel, never an input.
+  hal::LcmLogReader lr;
+  std::uint64_t truth_rejected = 0;
+  if (lr.open(path) == hal::LcmLogStatus::kOk) {
+    hal::LcmLogEvent ev;
+    while (lr.next(ev) == hal::LcmLogStatus::kOk) {
+      if (ev.channel != hal::kLcmChannelTruth) continue;
+      sdins::truth_t m{};
+      if (hal::decode_exact(ev.data, ev.data_len, m) != hal::LcmInputStatus::kOk) {
+        ++truth_rejected;
+        continue;
+      }
+      TruthPoint p;
+      p.t_s = m.t_s;
+      p.llh = fsw::Vec3(m.lat_rad, m.lon_rad, m.height_m);
+      p.vel_enu_mps = fsw::Vec3(m.vel_enu_mps[0], m.vel_enu_mps[1], m.vel_enu_mps[2]);
+      p.q_b_n = fsw::Quat(m.q_b_n_wxyz[0], m.q_b_n_wxyz[1], m.q_b_n_wxyz[2], m.q_b_n_wxyz[3]);
+      const double qn = p.q_b_n.norm();
+      if (!std::isfinite(p.t_s) || !p.llh.allFinite() || !p.vel_enu_mps.allFinite() || !(std::abs(qn - 1.0) < 1e-3) ||
+          (!out.truth.empty() && !(p.t_s > out.truth.back().t_s))) {
+        ++truth_rejected;
+        continue;
+      }
+      p.q_b_n.normalize();
+      out.truth.push_back(p);
+    }
+  }
+  const hal::LcmReplayStats& s = rd.stats();
+  std::ostringstream r;
+  r << out.imu.size() << " IMU samples, " << out.gnss.size() << " GNSS epochs, " << out.almanac.size()
+    << " almanac entries, " << out.truth.size() << " truth samples; rejected: " << s.rejected() << " inputs, "
+    << rd.log_stats().total_rejections() << " log events, " << truth_rejected << " truth samples";
+  report = r.str();
+  if (out.imu.empty() || out.gnss.empty()) {
+    error = path + ": no IMU or no GNSS data (" + report + ")";
+    return false;
+  }
+  return true;
+}
+
+RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double truth_rate_hz) {
+  RecordedData out;
+  out.description = sc.name + ", seed " + std::to_string(seed);
+  SensorStream stream(sc, seed);
+  out.imu.reserve(static_cast<std::size_t>(stream.total_samples()));
+  out.order.reserve(static_cast<std::size_t>(stream.total_samples()) * 21 / 20 + 64);
+  const long long decim = std::max(1LL, std::llround(sc.imu.rate_hz / truth_rate_hz));
+  SensorEvent ev;
+  sim::TruthSample t;
+  long long n_imu = 0;
+  while (stream.next(ev, &t)) {
+    switch (ev.kind) {
+      case SensorEvent::Kind::kAlmanac:
+        out.order.push_back({RecordedData::Kind::kAlmanac, static_cast<std::uint32_t>(out.almanac.size())});
+        out.almanac.push_back(ev.almanac);
+        break;
+      case SensorEvent::Kind::kGnss:
+        out.order.push_back({RecordedData::Kind::kGnss, static_cast<std::uint32_t>(out.gnss.size())});
+        out.gnss.push_back(ev.gnss);
+        break;
+      case SensorEvent::Kind::kImu:
+        out.order.push_back({RecordedData::Kind::kImu, static_cast<std::uint32_t>(out.imu.size())});
+        out.imu.push_back(ev.imu);
+        if (n_imu++ % decim == 0) out.truth.push_back(TruthPoint{t.t_s, t.llh, t.vel_enu_mps, fsw::Quat(t.C_b_n)});
+        break;
+    }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active) {
+  const std::vector<Candidate>& cands = diagnosis_candidates();
+  ModelRun run;
+  run.active = active;
+  const int na = static_cast<int>(active.size());
+
+  fsw::FlightAppConfig app_cfg = cfg.app;
+  fsw::EkfConfig& e = app_cfg.exec.ekf;
+  e.gyro_misalign_sigma_rad = prior_si(cfg, Effect::kGyroMisalignment);
+  e.accel_misalign_sigma_rad = prior_si(cfg, Effect::kAccelMisalignment);
+  e.gyro_scale_sigma = prior_si(cfg, Effect::kGyroScaleFactor);
+  e.accel_scale_sigma = prior_si(cfg, Effect::kAccelScaleFactor);
+  e.gyro_g_sens_sigma_radps_per_mps2 = prior_si(cfg, Effect::kGyroGSensitivity);
+  e.time_offset_sigma_s = prior_si(cfg, Effect::kImuGnssTimeOffset);
+  e.lever_arm_sigma_m = prior_si(cfg, Effect::kAntennaLeverArm);
+  e.tropo_scale_sigma = prior_si(cfg, Effect::kTroposphericDelay);
+  e.iono_scale_sigma = prior_si(cfg, Effect::kIonosphericDelay);
+  e.frozen_states = 0;
+  for (std::size_t i = 0; i < cands.size(); ++i)
+    if (std::find(active.begin(), active.end(), static_cast<int>(i)) == active.end())
+      e.frozen_states |= std::uint64_t{1} << cands[i].state;
+
+  auto app = std::make_unique<App>();
+  if (app->init(app_cfg) != fsw::Status::kOk) return run;
+  run.prior_sigma.resize(static_cast<std::size_t>(na));
+  for (int a = 0; a < na; ++a)
+    run.prior_sigma[static_cast<std::size_t>(a)] = cfg.prior[static_cast<std::size_t>(cands[active[a]].effect)];
+
+  double pr_ss = 0.0, prr_ss = 0.0, nis = 0.0;
+  int nav_frames = 0;
+  double nav_pos_ss = 0.0, nav_vel_ss = 0.0, nav_tilt_ss = 0.0, nav_head_ss = 0.0;
+  fsw::FrameOutput out;
+  for (const RecordedData::Event& ev : data.order) {
+    switch (ev.kind) {
+      case RecordedData::Kind::kAlmanac: app->on_almanac(data.almanac[ev.index]); continue;
+      case RecordedData::Kind::kGnss: app->on_gnss(data.gnss[ev.index]); continue;
+      case RecordedData::Kind::kImu: break;
+    }
+    out.nav_valid = false;
+    out.ekf_ran = false;
+    if (app->on_imu(data.imu[ev.index], out) != fsw::Status::kOk || !out.nav_valid) continue;
+    if (!run.initialised && app->initialised()) {
+      run.initialised = true;
+      run.init_t_s = app->health().init_t_s;
+    }
+    const auto& ekf = app->executive().ekf();
+    ++nav_frames;
+    // Navigation error against truth, 10 Hz, from init + gain_skip_s; the solution's time tag is on
+    // the IMU clock: the model's own offset estimate puts it on GNSS time.
+    if (!data.truth.empty() && nav_frames % 20 == 0 && out.nav.t_s >= run.init_t_s + cfg.gain_skip_s) {
+      TruthPoint t;
+      if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t)) {
+        const fsw::Vec3 dp = fsw::enu_difference_m(out.nav.llh, t.llh);
+        const fsw::Vec3 dv = out.nav.vel_enu_mps - t.vel_enu_mps;
+        const fsw::Vec3 phi = fsw::attitude_error_enu(out.nav.C_b_n(), t.q_b_n.toRotationMatrix());
+        nav_pos_ss += dp.squaredNorm();
+        nav_vel_ss += dv.squaredNorm();
+        nav_tilt_ss += phi.head<2>().squaredNorm();
+        nav_head_ss += phi.z() * phi.z();
+        ++run.nav.samples;
+        run.nav.heading_final_deg = phi.z() * fsw::kRadToDeg;
+      }
+    }
+    if (!out.ekf_ran || !out.ekf_updated) continue;
+    const fsw::EkfUpdateReport& rep = out.report;
+    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * 200.0));
+    double epr = 0.0, eprr = 0.0;
+    int npr = 0, nprr = 0;
+    for (int k = 0; k < rep.n_obs; ++k) {
+      const fsw::ObservationInnovation& o = rep.obs[static_cast<std::size_t>(k)];
+      const std::uint64_t key = (frame << 6) | (static_cast<std::uint64_t>(k) << 1);
+      if (o.pr_outcome == fsw::InnovationOutcome::kUsed) {
+        run.scalars.push_back({key, o.pr_innovation_m, o.pr_variance_m2});
+        epr += o.pr_innovation_m * o.pr_innovation_m;
+        nis += o.pr_innovation_m * o.pr_innovation_m / o.pr_variance_m2;
+        ++npr;
+      } else if (o.pr_outcome == fsw::InnovationOutcome::kGated) {
+        ++run.innovations.rejected;
+      }
+      if (o.prr_outcome == fsw::InnovationOutcome::kUsed) {
+        run.scalars.push_back({key | 1u, o.prr_innovation_mps, o.prr_variance_m2ps2});
+        eprr += o.prr_innovation_mps * o.prr_innovation_mps;
+        nis += o.prr_innovation_mps * o.prr_innovation_mps / o.prr_variance_m2ps2;
+        ++nprr;
+      } else if (o.prr_outcome == fsw::InnovationOutcome::kGated) {
+        ++run.innovations.rejected;
+      }
+    }
+    pr_ss += epr;
+    prr_ss += eprr;
+    run.innovations.pr_used += npr;
+    run.innovations.prr_used += nprr;
+    ++run.innovations.epochs;
+    run.t_s.push_back(out.nav.t_s);
+    run.pr_rms_m.push_back(npr > 0 ? std::sqrt(epr / npr) : 0.0);
+    run.prr_rms_mps.push_back(nprr > 0 ? std::sqrt(eprr / nprr) : 0.0);
+    double head = NAN;
+    if (!data.truth.empty()) {
+      TruthPoint t;
+      if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t))
+        head = fsw::attitude_error_enu(out.nav.C_b_n(), t.q_b_n.toRotationMatrix()).z() * fsw::kRadToDeg;
+    }
+    run.heading_err_deg.push_back(head);
+    std::vector<double> est(static_cast<std::size_t>(na)), sig(static_cast<std::size_t>(na));
+    for (int a = 0; a < na; ++a) {
+      const Candidate& c = cands[static_cast<std::size_t>(active[a])];
+      const double u = fsw::effect_info(c.effect).unit_to_si;
+      est[static_cast<std::size_t>(a)] = estimate_si(*app, c) / u;
+      sig[static_cast<std::size_t>(a)] = std::sqrt(ekf.P()(c.state, c.state)) / u;
+    }
+    run.est_trace.push_back(std::move(est));
+    run.sigma_trace.push_back(std::move(sig));
+  }
+  const int nused = run.innovations.pr_used + run.innovations.prr_used;
+  run.innovations.nis_mean = nused > 0 ? nis / nused : 0.0;
+  run.innovations.pr_rms_m = run.innovations.pr_used > 0 ? std::sqrt(pr_ss / run.innovations.pr_used) : 0.0;
+  run.innovations.prr_rms_mps = run.innovations.prr_used > 0 ? std::sqrt(prr_ss / run.innovations.prr_used) : 0.0;
+  run.innovations.log_likelihood = 0.0;
+  for (const ModelRun::Scalar& s : run.scalars)
+    run.innovations.log_likelihood -= 0.5 * (std::log(2.0 * fsw::kPi * s.S) + s.nu * s.nu / s.S);
+  run.innovations.common = static_cast<int>(run.scalars.size());
+  if (run.nav.samples > 0) {
+    const double n = run.nav.samples;
+    run.nav.available = true;
+    run.nav.pos_rms_m = std::sqrt(nav_pos_ss / n);
+    run.nav.vel_rms_mps = std::sqrt(nav_vel_ss / n);
+    run.nav.tilt_rms_deg = std::sqrt(nav_tilt_ss / n) * fsw::kRadToDeg;
+    run.nav.heading_rms_deg = std::sqrt(nav_head_ss / n) * fsw::kRadToDeg;
+  }
+  // Final estimates, Wald statistics and the posterior correlation of the active candidates.
+  const auto& P = app->executive().ekf().P();
+  run.estimate.resize(static_cast<std::size_t>(na));
+  run.sigma.resize(static_cast<std::size_t>(na));
+  run.z2.resize(static_cast<std::size_t>(na));
+  run.correlation = Eigen::MatrixXd::Identity(na, na);
+  for (int a = 0; a < na; ++a) {
+    const Candidate& c = cands[static_cast<std::size_t>(active[a])];
+    const double u = fsw::effect_info(c.effect).unit_to_si;
+    const double x = estimate_si(*app, c);
+    const double p = P(c.state, c.state);
+    const double p0 = prior_si(cfg, c.effect) * prior_si(cfg, c.effect);
+    run.estimate[static_cast<std::size_t>(a)] = x / u;
+    run.sigma[static_cast<std::size_t>(a)] = std::sqrt(p) / u;
+    run.z2[static_cast<std::size_t>(a)] = wald_z2(x, p0, p);
+    for (int b = 0; b < na; ++b) {
+      const int sb = cands[static_cast<std::size_t>(active[b])].state;
+      const double d = std::sqrt(P(c.state, c.state) * P(sb, sb));
+      if (a != b) run.correlation(a, b) = d > 0.0 ? P(c.state, sb) / d : 0.0;
+    }
+  }
+  return run;
+}
+
+void compare_likelihood(ModelRun& a, ModelRun& b) {
+  auto by_key = [](const ModelRun::Scalar& x, const ModelRun::Scalar& y) { return x.key < y.key; };
+  std::sort(a.scalars.begin(), a.scalars.end(), by_key);
+  std::sort(b.scalars.begin(), b.scalars.end(), by_key);
+  double la = 0.0, lb = 0.0;
+  int n = 0;
+  std::size_t i = 0, j = 0;
+  while (i < a.scalars.size() && j < b.scalars.size()) {
+    if (a.scalars[i].key < b.scalars[j].key) {
+      ++i;
+    } else if (b.scalars[j].key < a.scalars[i].key) {
+      ++j;
+    } else {
+      const auto& x = a.scalars[i++];
+      const auto& y = b.scalars[j++];
+      la -= 0.5 * (std::log(2.0 * fsw::kPi * x.S) + x.nu * x.nu / x.S);
+      lb -= 0.5 * (std::log(2.0 * fsw::kPi * y.S) + y.nu * y.nu / y.S);
+      ++n;
+    }
+  }
+  a.innovations.log_likelihood = la;
+  b.innovations.log_likelihood = lb;
+  a.innovations.common = n;
+  b.innovations.common = n;
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+/// Runs the models in parallel (one per extension set), results in input order.
+std::vector<ModelRun> run_models(const RecordedData& data, const DiagnosisConfig& cfg,
+                                 const std::vector<std::vector<int>>& models) {
+  std::vector<ModelRun> out(models.size());
+  std::atomic<std::size_t> next{0};
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned n_threads = std::min<unsigned>(hw, static_cast<unsigned>(std::max<std::size_t>(1, models.size())));
+  auto worker = [&]() {
+    for (std::size_t i = next++; i < models.size(); i = next++) out[i] = run_diagnosis_model(data, cfg, models[i]);
+  };
+  std::vector<std::thread> threads;
+  for (unsigned t = 1; t < n_threads; ++t) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+  return out;
+}
+
+/// Position of candidate c in a run's active list, or -1.
+int position(const ModelRun& run, int c) {
+  for (std::size_t a = 0; a < run.active.size(); ++a)
+    if (run.active[a] == c) return static_cast<int>(a);
+  return -1;
+}
+
+}  // namespace
+
+DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
+                         const std::function<void(const std::string&)>& progress) {
+  const std::vector<Candidate>& cands = diagnosis_candidates();
+  const int nc = static_cast<int>(cands.size());
+  auto say = [&progress](const std::string& s) {
+    if (progress) progress(s);
+  };
+  DiagnosisResult res;
+  std::vector<int> selected;
+  std::vector<bool> excluded(static_cast<std::size_t>(nc), false);  // unobservable or confounded
+  std::vector<std::vector<std::pair<std::string, double>>> confounded(static_cast<std::size_t>(nc));
+  for (int round = 0; round < cfg.max_findings; ++round) {
+    std::vector<std::vector<int>> models;
+    std::vector<int> which;
+    for (int c = 0; c < nc; ++c) {
+      if (excluded[static_cast<std::size_t>(c)] || std::find(selected.begin(), selected.end(), c) != selected.end())
+        continue;
+      std::vector<int> m = selected;
+      m.push_back(c);
+      models.push_back(m);
+      which.push_back(c);
+    }
+    if (models.empty()) break;
+    say("round " + std::to_string(round + 1) + ": " + std::to_string(models.size()) + " candidate models of " +
+        std::to_string(selected.size() + 1) + " extension states");
+    std::vector<ModelRun> runs = run_models(data, cfg, models);
+    if (round == 0) {
+      res.screening_z2.assign(static_cast<std::size_t>(nc), 0.0);
+      res.screening_ratio.assign(static_cast<std::size_t>(nc), 1.0);
+    }
+    int best = -1;
+    double best_z2 = 0.0;
+    for (std::size_t k = 0; k < runs.size(); ++k) {
+      const int c = which[k];
+      const ModelRun& r = runs[k];
+      const int a = position(r, c);
+      if (!r.initialised || a < 0) continue;
+      const double ratio = r.sigma[static_cast<std::size_t>(a)] * r.sigma[static_cast<std::size_t>(a)] /
+                           (r.prior_sigma[static_cast<std::size_t>(a)] * r.prior_sigma[static_cast<std::size_t>(a)]);
+      if (round == 0) {
+        res.screening_z2[static_cast<std::size_t>(c)] = r.z2[static_cast<std::size_t>(a)];
+        res.screening_ratio[static_cast<std::size_t>(c)] = ratio;
+        if (ratio > cfg.max_variance_ratio) {
+          excluded[static_cast<std::size_t>(c)] = true;
+          res.unobservable.push_back(candidate_name(cands[static_cast<std::size_t>(c)]));
+          continue;
+        }
+        ++res.tested;
+      }
+      // Not separable from a component already in the model: named with it, never on its own.
+      bool confound = false;
+      for (int s : selected) {
+        const int b = position(r, s);
+        const double rho = r.correlation(a, b);
+        if (std::abs(rho) > cfg.max_correlation) {
+          confounded[static_cast<std::size_t>(s)].emplace_back(candidate_name(cands[static_cast<std::size_t>(c)]), rho);
+          confound = true;
+        }
+      }
+      if (confound) {
+        excluded[static_cast<std::size_t>(c)] = true;
+        continue;
+      }
+      if (r.z2[static_cast<std::size_t>(a)] > best_z2) {
+        best_z2 = r.z2[static_cast<std::size_t>(a)];
+        best = c;
+      }
+    }
+    if (round == 0)
+      res.threshold_z2 =
+          res.tested > 0 ? chi2_1_upper_quantile(cfg.alpha / static_cast<double>(res.tested)) : INFINITY;
+    if (best < 0 || !(best_z2 > res.threshold_z2)) {
+      say("round " + std::to_string(round + 1) + ": no further significant component");
+      break;
+    }
+    std::ostringstream s;
+    s << "round " << round + 1 << ": " << candidate_name(cands[static_cast<std::size_t>(best)]) << " z^2 " << best_z2
+      << " (threshold " << res.threshold_z2 << ")";
+    say(s.str());
+    selected.push_back(best);
+  }
+
+  // The extended model: confirmed in one run with every selected component.
+  for (int pass = 0; !selected.empty(); ++pass) {
+    say("extended model: baseline + " + std::to_string(selected.size()) + " components");
+    res.extended = run_diagnosis_model(data, cfg, selected);
+    std::vector<int> keep;
+    for (std::size_t a = 0; a < selected.size(); ++a)
+      if (res.extended.z2[a] > res.threshold_z2) keep.push_back(selected[a]);
+    if (keep.size() == selected.size() || pass + 1 >= cfg.max_confirmation_passes) break;
+    selected = keep;
+  }
+  say("baseline model");
+  res.base = run_diagnosis_model(data, cfg, {});
+  if (selected.empty()) res.extended = res.base;
+  compare_likelihood(res.base, res.extended);
+
+  for (std::size_t a = 0; a < res.extended.active.size(); ++a) {
+    const int c = res.extended.active[a];
+    const Candidate& cand = cands[static_cast<std::size_t>(c)];
+    Finding f;
+    f.effect = cand.effect;
+    const fsw::EffectInfo& info = fsw::effect_info(cand.effect);
+    f.component = info.n_components > 1 ? info.components[cand.component] : "";
+    f.unit = info.unit;
+    f.estimate = res.extended.estimate[a];
+    f.sigma = res.extended.sigma[a];
+    f.z2 = res.extended.z2[a];
+    f.p_value = chi2_1_survival(f.z2);
+    f.confounded_with = confounded[static_cast<std::size_t>(c)];
+    res.findings.push_back(f);
+    res.extended_model.push_back(candidate_name(cand));
+  }
+  std::sort(res.findings.begin(), res.findings.end(), [](const Finding& x, const Finding& y) { return x.z2 > y.z2; });
+  return res;
+}
+
+}  // namespace tools

@@ -1,0 +1,238 @@
+// sdins diagnose: which error the navigation model is missing in a recording, how large it is,
+// and how much better navigation gets with it (tools/diagnosis.hpp, README "Diagnosis").
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "commands.hpp"
+#include "tools/diagnosis.hpp"
+
+namespace sdins {
+namespace {
+struct Options {
+  std::string log;
+  std::string json;
+  std::string report;
+  std::string baseline = "15";
+  double alpha = 0.01;
+} opt;
+
+nlohmann::json innovations_json(const tools::InnovationStats& s) {
+  return {{"epochs", s.epochs},
+          {"pseudorange_used", s.pr_used},
+          {"pseudorange_rate_used", s.prr_used},
+          {"gated", s.rejected},
+          {"nis_mean", s.nis_mean},
+          {"innovation_rms", {{"pseudorange_m", s.pr_rms_m}, {"pseudorange_rate_mps", s.prr_rms_mps}}},
+          {"log_likelihood", s.log_likelihood},
+          {"log_likelihood_measurements", s.common}};
+}
+
+nlohmann::json nav_json(const tools::NavErrorStats& s) {
+  return {{"samples", s.samples},
+          {"position_rms_m", s.pos_rms_m},
+          {"velocity_rms_mps", s.vel_rms_mps},
+          {"tilt_rms_deg", s.tilt_rms_deg},
+          {"heading_rms_deg", s.heading_rms_deg},
+          {"heading_final_deg", s.heading_final_deg}};
+}
+
+void write_traces(const std::string& path, const tools::ModelRun& r) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write " + path);
+  const auto& cands = tools::diagnosis_candidates();
+  f << "t_s,pr_rms_m,prr_rms_mps,heading_err_deg";
+  for (int c : r.active) {
+    const std::string n = tools::candidate_name(cands[static_cast<std::size_t>(c)]);
+    f << "," << n << "," << n << "_sigma";
+  }
+  f << "\n";
+  char buf[64];
+  for (std::size_t k = 0; k < r.t_s.size(); ++k) {
+    std::snprintf(buf, sizeof buf, "%.3f", r.t_s[k]);
+    f << buf << "," << r.pr_rms_m[k] << "," << r.prr_rms_mps[k] << ",";
+    if (std::isfinite(r.heading_err_deg[k])) f << r.heading_err_deg[k];
+    for (std::size_t a = 0; a < r.active.size(); ++a) f << "," << r.est_trace[k][a] << "," << r.sigma_trace[k][a];
+    f << "\n";
+  }
+}
+
+std::string fmt(double v, const char* f = "%.4g") {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+}  // namespace
+
+void register_diagnose(CLI::App& app) {
+  CLI::App* sub = app.add_subcommand(
+      "diagnose",
+      "Find what the navigation model misses in a recording (LCM log: IMU, GNSS_RAW, GPS_ALMANAC; TRUTH only to "
+      "score): tests every component of the effect catalogue as an extension of the baseline model with a "
+      "chi-square test at a stated family-wise false-alarm rate, names the significant ones (and those the data "
+      "cannot tell apart), re-runs with the extended model and measures the gain.");
+  sub->add_option("--log", opt.log, "LCM log to diagnose")->required()->check(CLI::ExistingFile);
+  sub->add_option("--json", opt.json, "write the result as JSON (README \"Diagnosis\")")->required();
+  sub->add_option("--report", opt.report, "write a markdown report with plots and CSV traces into this directory");
+  sub->add_option("--baseline", opt.baseline, "baseline model")->check(CLI::IsMember({"15"}))->capture_default_str();
+  sub->add_option("--alpha", opt.alpha, "family-wise false-alarm rate of the diagnosis")
+      ->check(CLI::Range(1e-9, 0.5))
+      ->capture_default_str();
+}
+
+int run_diagnose() {
+  tools::RecordedData data;
+  std::string err, load_report;
+  if (!tools::load_recorded_data(opt.log, data, err, load_report)) throw std::runtime_error(err);
+  std::printf("diagnose: %s: %s\n", opt.log.c_str(), load_report.c_str());
+  tools::DiagnosisConfig cfg = tools::default_diagnosis_config();
+  cfg.alpha = opt.alpha;
+  const tools::DiagnosisResult r =
+      tools::diagnose(data, cfg, [](const std::string& m) { std::printf("  %s\n", m.c_str()); });
+  if (!r.base.initialised) throw std::runtime_error("the flight software never initialised on this log");
+
+  const auto& cands = tools::diagnosis_candidates();
+  nlohmann::json j;
+  j["baseline"] = opt.baseline;
+  j["log"] = opt.log;
+  j["data"] = {{"imu_samples", data.imu.size()},
+               {"gnss_epochs", data.gnss.size()},
+               {"truth_samples", data.truth.size()},
+               {"summary", load_report}};
+  j["method"] = {{"statistic", "wald_chi2_1"},
+                 {"alpha", cfg.alpha},
+                 {"tested_components", r.tested},
+                 {"threshold", r.threshold_z2},
+                 {"max_variance_ratio", cfg.max_variance_ratio},
+                 {"max_correlation", cfg.max_correlation}};
+  nlohmann::json screening = nlohmann::json::array();
+  for (std::size_t c = 0; c < cands.size() && c < r.screening_z2.size(); ++c)
+    screening.push_back({{"candidate", tools::candidate_name(cands[c])},
+                         {"statistic", r.screening_z2[c]},
+                         {"variance_ratio", r.screening_ratio[c]}});
+  j["screening"] = screening;
+  j["unobservable"] = r.unobservable;
+  nlohmann::json findings = nlohmann::json::array();
+  for (const tools::Finding& f : r.findings) {
+    nlohmann::json cw = nlohmann::json::array();
+    for (const auto& c : f.confounded_with) cw.push_back({{"candidate", c.first}, {"correlation", c.second}});
+    findings.push_back({{"effect", fsw::effect_info(f.effect).name},
+                        {"component", f.component},
+                        {"estimate", f.estimate},
+                        {"sigma", f.sigma},
+                        {"unit", f.unit},
+                        {"statistic", f.z2},
+                        {"p_value", f.p_value},
+                        {"confounded_with", cw}});
+  }
+  j["findings"] = findings;
+  std::string ext_name = opt.baseline;
+  for (const std::string& s : r.extended_model) ext_name += "+" + s;
+  j["extended_model"] = {{"name", ext_name}, {"added_states", r.extended_model}};
+  nlohmann::json gain;
+  gain["innovations"] = {{"before", innovations_json(r.base.innovations)},
+                         {"after", innovations_json(r.extended.innovations)},
+                         {"log_likelihood_gain", r.extended.innovations.log_likelihood - r.base.innovations.log_likelihood}};
+  if (r.base.nav.available && r.extended.nav.available)
+    gain["navigation"] = {{"reference", "TRUTH channel"},
+                          {"scored_from_s_after_init", cfg.gain_skip_s},
+                          {"before", nav_json(r.base.nav)},
+                          {"after", nav_json(r.extended.nav)}};
+  else
+    gain["navigation"] = nullptr;
+  j["gain"] = gain;
+  {
+    std::ofstream f(opt.json);
+    if (!f) throw std::runtime_error("cannot write " + opt.json);
+    f << j.dump(2) << "\n";
+  }
+
+  std::printf("baseline %s: NIS %.3f, innovation RMS %.3f m / %.4f m/s", opt.baseline.c_str(),
+              r.base.innovations.nis_mean, r.base.innovations.pr_rms_m, r.base.innovations.prr_rms_mps);
+  if (r.base.nav.available)
+    std::printf("; position %.2f m, velocity %.3f m/s, heading %.4f deg RMS", r.base.nav.pos_rms_m,
+                r.base.nav.vel_rms_mps, r.base.nav.heading_rms_deg);
+  std::printf("\n");
+  if (r.findings.empty()) std::printf("no finding (threshold z^2 %.2f over %d components)\n", r.threshold_z2, r.tested);
+  for (const tools::Finding& f : r.findings) {
+    std::printf("finding: %s%s%s = %.4g +- %.3g %s (z^2 %.1f, p %.2g)", fsw::effect_info(f.effect).name,
+                f.component.empty() ? "" : ".", f.component.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.z2,
+                f.p_value);
+    for (const auto& c : f.confounded_with) std::printf("; not separable from %s (rho %.3f)", c.first.c_str(), c.second);
+    std::printf("\n");
+  }
+  if (!r.findings.empty()) {
+    std::printf("extended %s: NIS %.3f, innovation RMS %.3f m / %.4f m/s, log-likelihood %+.1f", ext_name.c_str(),
+                r.extended.innovations.nis_mean, r.extended.innovations.pr_rms_m, r.extended.innovations.prr_rms_mps,
+                r.extended.innovations.log_likelihood - r.base.innovations.log_likelihood);
+    if (r.extended.nav.available)
+      std::printf("; position %.2f m, velocity %.3f m/s, heading %.4f deg RMS", r.extended.nav.pos_rms_m,
+                  r.extended.nav.vel_rms_mps, r.extended.nav.heading_rms_deg);
+    std::printf("\n");
+  }
+
+  if (!opt.report.empty()) {
+    std::filesystem::create_directories(opt.report);
+    write_traces(opt.report + "/baseline.csv", r.base);
+    write_traces(opt.report + "/extended.csv", r.extended);
+    std::ofstream(opt.report + "/diagnosis.json") << j.dump(2) << "\n";
+    const int rc = run_plot_script("plot_diagnosis.py", "'" + opt.report + "'");
+    std::ofstream md(opt.report + "/report.md");
+    md << "# Diagnosis of `" << opt.log << "`\n\n";
+    md << "Data: " << load_report << ".\n\n";
+    md << "Baseline model: " << opt.baseline << " states (+ clock, + Gauss-Markov GPS errors). Each of the "
+       << cands.size() << " catalogue components was tried as one extra state; " << r.tested
+       << " are observable with this data (posterior variance <= " << cfg.max_variance_ratio
+       << " x prior); the test is Wald chi-square(1) at a family-wise false-alarm rate of " << cfg.alpha
+       << " (threshold z^2 = " << fmt(r.threshold_z2, "%.2f") << ").\n\n";
+    md << "## Findings\n\n";
+    if (r.findings.empty()) md << "None: the baseline model explains the data.\n\n";
+    else {
+      md << "| effect | component | estimate | sigma | unit | z^2 | p | not separable from |\n|---|---|---|---|---|---|---|---|\n";
+      for (const tools::Finding& f : r.findings) {
+        std::string cw;
+        for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
+        md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | " << fmt(f.estimate) << " | "
+           << fmt(f.sigma, "%.3g") << " | " << f.unit << " | " << fmt(f.z2, "%.1f") << " | " << fmt(f.p_value, "%.2g")
+           << " | " << cw << " |\n";
+      }
+      md << "\n";
+    }
+    if (!r.unobservable.empty()) {
+      md << "Not observable with this data (never named as a cause): ";
+      for (std::size_t k = 0; k < r.unobservable.size(); ++k) md << (k ? ", " : "") << r.unobservable[k];
+      md << ".\n\n";
+    }
+    md << "## Gain (extended model " << ext_name << ")\n\n| | baseline | extended |\n|---|---|---|\n";
+    md << "| NIS per measurement | " << fmt(r.base.innovations.nis_mean, "%.3f") << " | "
+       << fmt(r.extended.innovations.nis_mean, "%.3f") << " |\n";
+    md << "| pseudorange innovation RMS [m] | " << fmt(r.base.innovations.pr_rms_m, "%.3f") << " | "
+       << fmt(r.extended.innovations.pr_rms_m, "%.3f") << " |\n";
+    md << "| pseudorange-rate innovation RMS [m/s] | " << fmt(r.base.innovations.prr_rms_mps, "%.4f") << " | "
+       << fmt(r.extended.innovations.prr_rms_mps, "%.4f") << " |\n";
+    md << "| log-likelihood (common measurements) | " << fmt(r.base.innovations.log_likelihood, "%.1f") << " | "
+       << fmt(r.extended.innovations.log_likelihood, "%.1f") << " |\n";
+    if (r.base.nav.available) {
+      md << "| position RMS [m] | " << fmt(r.base.nav.pos_rms_m, "%.2f") << " | " << fmt(r.extended.nav.pos_rms_m, "%.2f") << " |\n";
+      md << "| velocity RMS [m/s] | " << fmt(r.base.nav.vel_rms_mps, "%.3f") << " | " << fmt(r.extended.nav.vel_rms_mps, "%.3f") << " |\n";
+      md << "| tilt RMS [deg] | " << fmt(r.base.nav.tilt_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.tilt_rms_deg, "%.4f") << " |\n";
+      md << "| heading RMS [deg] | " << fmt(r.base.nav.heading_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.heading_rms_deg, "%.4f") << " |\n";
+    }
+    md << "\n";
+    if (rc == 0) {
+      md << "![innovations](innovations.png)\n\n";
+      if (r.base.nav.available) md << "![heading error](heading.png)\n\n";
+      if (!r.findings.empty()) md << "![estimates](estimates.png)\n\n";
+    } else {
+      md << "(plots not made: matplotlib unavailable)\n\n";
+    }
+    std::printf("report: %s/report.md\n", opt.report.c_str());
+  }
+  return 0;
+}
+
+}  // namespace sdins
