@@ -23,6 +23,7 @@ void register_audit(CLI::App& app);
 void register_bus_sim(CLI::App& app);
 void register_fsw(CLI::App& app);
 void register_diagnose(CLI::App& app);
+void register_sim(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -40,6 +41,7 @@ int run_audit();
 int run_bus_sim();
 int run_fsw();
 int run_diagnose();
+int run_sim();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   sdins::register_bus_sim(app);
   sdins::register_fsw(app);
   sdins::register_diagnose(app);
+  sdins::register_sim(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
