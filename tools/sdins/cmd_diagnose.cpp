@@ -17,7 +17,7 @@ struct Options {
   std::string json;
   std::string report;
   std::string baseline = "15";
-  double alpha = 0.01;
+  double alpha = 0.05;
 } opt;
 
 nlohmann::json innovations_json(const tools::InnovationStats& s) {
@@ -127,6 +127,8 @@ int run_diagnose() {
                         {"unit", f.unit},
                         {"statistic", f.z2},
                         {"p_value", f.p_value},
+                        {"threshold", r.threshold_z2},
+                        {"separable", f.confounded_with.empty()},
                         {"confounded_with", cw}});
   }
   j["findings"] = findings;

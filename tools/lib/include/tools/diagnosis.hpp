@@ -5,19 +5,21 @@
 //   The candidates are the components of the effect catalogue (fsw/effect_catalogue.hpp): every
 //   component is one state of the diagnosis model fsw::LayoutDiag, switched on by giving it a
 //   prior sigma (DiagnosisConfig::prior) and off by freezing it at zero.
-//   1. Screening: one run of the baseline model extended by every candidate at once. For a
-//      random-constant state with prior variance p0 and posterior variance p, the estimate under
-//      the null hypothesis (the effect is absent) is zero-mean with variance (p0 - p) p / p0 in a
-//      linear-Gaussian model, so z^2 = x_hat^2 p0 / ((p0 - p) p) is chi-square with one degree of
-//      freedom. A component is tested only if the data are informative about it
-//      (p <= max_variance_ratio * p0); the others are reported as unobservable with this data,
-//      never named. The threshold is the upper chi-square(1) quantile at alpha / (number of tested
-//      components): a family-wise false-alarm rate alpha per diagnosis (Bonferroni).
-//   2. Components that the data cannot tell apart: a significant component whose posterior
-//      correlation with another tested component exceeds max_correlation forms a group with it;
-//      the finding lists the group and the estimate of the group's sum direction.
-//   3. Confirmation: the baseline extended by the significant components only is re-run and the
-//      test repeated in that model; components no longer significant are dropped (until stable).
+//   The test: for a random-constant state with prior variance p0 and posterior variance p, the
+//   estimate under the null hypothesis (the effect is absent) is zero-mean with variance
+//   (p0 - p) p / p0 in a linear-Gaussian model, so the Wald statistic
+//   z^2 = x_hat^2 p0 / ((p0 - p) p) is chi-square with one degree of freedom.
+//   1. Screening (forward selection, round 1): the baseline extended by each component alone.
+//      A component is tested only if the data are informative about it (p <= max_variance_ratio
+//      p0); the others are reported as unobservable with this data, never named. The threshold is
+//      the upper chi-square(1) quantile at alpha / (number of tested components): a family-wise
+//      false-alarm rate alpha per diagnosis (Bonferroni).
+//   2. The most significant component above the threshold joins the model; the next round tries
+//      each remaining component on top of it, until none is significant (max_findings rounds). A
+//      component whose posterior correlation with one already in the model exceeds
+//      max_correlation cannot be told apart from it with this data: it is listed with that finding
+//      (confounded_with) and never named on its own.
+//   3. The extended model (all selected components) is run once more and the test repeated there.
 //   4. Gain: baseline and extended model over the same data: innovation statistics (NIS,
 //      innovation RMS per measurement type, log-likelihood over the measurements both used) and,
 //      where the data carry truth or a reference trajectory, navigation error RMS.
@@ -88,7 +90,7 @@ struct DiagnosisConfig {
   fsw::FlightAppConfig app{};  ///< the baseline model's configuration (the extension sigmas are set per run)
   /// Prior 1-sigma of each effect in catalogue units (index fsw::Effect).
   std::array<double, fsw::kEffectCount> prior{};
-  double alpha = 0.01;               ///< family-wise false-alarm rate of one diagnosis
+  double alpha = 0.05;               ///< family-wise false-alarm rate of one diagnosis
   double max_variance_ratio = 0.25;  ///< p / p0 above which a component counts as unobservable
   double max_correlation = 0.9;      ///< |posterior correlation| above which two components are not told apart
   int max_confirmation_passes = 3;
