@@ -1,5 +1,6 @@
 // sdins diagnose: which error the navigation model is missing in a recording, how large it is,
 // and how much better navigation gets with it (tools/diagnosis.hpp, README "Diagnosis").
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -78,7 +79,10 @@ void register_diagnose(CLI::App& app) {
   sub->add_option("--log", opt.log, "LCM log to diagnose")->required()->check(CLI::ExistingFile);
   sub->add_option("--json", opt.json, "write the result as JSON (README \"Diagnosis\")")->required();
   sub->add_option("--report", opt.report, "write a markdown report with plots and CSV traces into this directory");
-  sub->add_option("--baseline", opt.baseline, "baseline model")->check(CLI::IsMember({"15"}))->capture_default_str();
+  sub->add_option("--baseline", opt.baseline,
+                  "baseline model: 15 (position, velocity, attitude, biases) or 24 (plus the 9 misalignments)")
+      ->check(CLI::IsMember({"15", "24"}))
+      ->capture_default_str();
   sub->add_option("--alpha", opt.alpha, "family-wise false-alarm rate of the diagnosis")
       ->check(CLI::Range(1e-9, 0.5))
       ->capture_default_str();
@@ -91,6 +95,7 @@ int run_diagnose() {
   std::printf("diagnose: %s: %s\n", opt.log.c_str(), load_report.c_str());
   tools::DiagnosisConfig cfg = tools::default_diagnosis_config();
   cfg.alpha = opt.alpha;
+  if (!tools::set_diagnosis_baseline(cfg, opt.baseline)) throw std::runtime_error("unknown baseline " + opt.baseline);
   const tools::DiagnosisResult r =
       tools::diagnose(data, cfg, [](const std::string& m) { std::printf("  %s\n", m.c_str()); });
   if (!r.base.initialised) throw std::runtime_error("the flight software never initialised on this log");
@@ -111,11 +116,13 @@ int run_diagnose() {
                  {"max_correlation", cfg.max_correlation}};
   nlohmann::json screening = nlohmann::json::array();
   for (std::size_t c = 0; c < cands.size() && c < r.screening_z2.size(); ++c)
-    screening.push_back({{"candidate", tools::candidate_name(cands[c])},
+    if (std::find(cfg.baseline_states.begin(), cfg.baseline_states.end(), static_cast<int>(c)) == cfg.baseline_states.end())
+      screening.push_back({{"candidate", tools::candidate_name(cands[c])},
                          {"statistic", r.screening_z2[c]},
                          {"variance_ratio", r.screening_ratio[c]}});
   j["screening"] = screening;
   j["unobservable"] = r.unobservable;
+  j["confounded_with_baseline"] = r.confounded_with_baseline;
   nlohmann::json findings = nlohmann::json::array();
   for (const tools::Finding& f : r.findings) {
     nlohmann::json cw = nlohmann::json::array();

@@ -133,6 +133,20 @@ std::string candidate_name(const Candidate& c) {
   return s;
 }
 
+bool set_diagnosis_baseline(DiagnosisConfig& cfg, const std::string& name) {
+  cfg.baseline_states.clear();
+  if (name == "24") {
+    for (std::size_t c = 0; c < diagnosis_candidates().size(); ++c) {
+      const Effect e = diagnosis_candidates()[c].effect;
+      if (e == Effect::kGyroMisalignment || e == Effect::kAccelMisalignment) cfg.baseline_states.push_back(static_cast<int>(c));
+    }
+  } else if (name != "15") {
+    return false;
+  }
+  cfg.baseline_name = name;
+  return true;
+}
+
 DiagnosisConfig default_diagnosis_config() {
   DiagnosisConfig c;
   c.app = hal::default_flight_config();
@@ -467,6 +481,14 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     if (progress) progress(s);
   };
   DiagnosisResult res;
+  res.baseline = cfg.baseline_name;
+  const std::vector<int>& base = cfg.baseline_states;
+  auto in = [](const std::vector<int>& v, int c) { return std::find(v.begin(), v.end(), c) != v.end(); };
+  auto with_base = [&base](const std::vector<int>& v) {
+    std::vector<int> m = base;
+    m.insert(m.end(), v.begin(), v.end());
+    return m;
+  };
   std::vector<int> selected;
   std::vector<bool> excluded(static_cast<std::size_t>(nc), false);  // unobservable or confounded
   std::vector<std::vector<std::pair<std::string, double>>> confounded(static_cast<std::size_t>(nc));
@@ -474,9 +496,8 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     std::vector<std::vector<int>> models;
     std::vector<int> which;
     for (int c = 0; c < nc; ++c) {
-      if (excluded[static_cast<std::size_t>(c)] || std::find(selected.begin(), selected.end(), c) != selected.end())
-        continue;
-      std::vector<int> m = selected;
+      if (excluded[static_cast<std::size_t>(c)] || in(selected, c) || in(base, c)) continue;
+      std::vector<int> m = with_base(selected);
       m.push_back(c);
       models.push_back(m);
       which.push_back(c);
@@ -508,13 +529,22 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
         }
         ++res.tested;
       }
-      // Not separable from a component already in the model: named with it, never on its own.
+      // Not separable from a component already in the model: named with it, never on its own (a
+      // baseline state already explains it).
       bool confound = false;
       for (int s : selected) {
         const int b = position(r, s);
         const double rho = r.correlation(a, b);
         if (std::abs(rho) > cfg.max_correlation) {
           confounded[static_cast<std::size_t>(s)].emplace_back(candidate_name(cands[static_cast<std::size_t>(c)]), rho);
+          confound = true;
+        }
+      }
+      for (int s : base) {
+        const double rho = r.correlation(a, position(r, s));
+        if (std::abs(rho) > cfg.max_correlation) {
+          res.confounded_with_baseline.push_back(candidate_name(cands[static_cast<std::size_t>(c)]) + " ~ " +
+                                                 candidate_name(cands[static_cast<std::size_t>(s)]));
           confound = true;
         }
       }
@@ -544,20 +574,21 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
   // The extended model: confirmed in one run with every selected component.
   for (int pass = 0; !selected.empty(); ++pass) {
     say("extended model: baseline + " + std::to_string(selected.size()) + " components");
-    res.extended = run_diagnosis_model(data, cfg, selected);
+    res.extended = run_diagnosis_model(data, cfg, with_base(selected));
     std::vector<int> keep;
-    for (std::size_t a = 0; a < selected.size(); ++a)
-      if (res.extended.z2[a] > res.threshold_z2) keep.push_back(selected[a]);
+    for (int c : selected)
+      if (res.extended.z2[static_cast<std::size_t>(position(res.extended, c))] > res.threshold_z2) keep.push_back(c);
     if (keep.size() == selected.size() || pass + 1 >= cfg.max_confirmation_passes) break;
     selected = keep;
   }
   say("baseline model");
-  res.base = run_diagnosis_model(data, cfg, {});
+  res.base = run_diagnosis_model(data, cfg, base);
   if (selected.empty()) res.extended = res.base;
   compare_likelihood(res.base, res.extended);
 
   for (std::size_t a = 0; a < res.extended.active.size(); ++a) {
     const int c = res.extended.active[a];
+    if (in(base, c)) continue;
     const Candidate& cand = cands[static_cast<std::size_t>(c)];
     Finding f;
     f.effect = cand.effect;

@@ -96,7 +96,13 @@ struct DiagnosisConfig {
   int max_confirmation_passes = 3;
   int max_findings = 4;              ///< forward-selection rounds
   double gain_skip_s = 60.0;         ///< navigation errors are scored from initialisation + this
+  /// The baseline: "15" (no extension) or "24" (the paper's 24-state model: the 9 misalignments are
+  /// part of the baseline, never candidates). Set with set_diagnosis_baseline().
+  std::string baseline_name = "15";
+  std::vector<int> baseline_states;  ///< candidates that are always in the model
 };
+/// Sets the baseline model by name ("15", "24"); false for an unknown name.
+bool set_diagnosis_baseline(DiagnosisConfig& cfg, const std::string& name);
 /// The defaults: the simulated receiver and IMU of the project (hal::default_flight_config) and
 /// priors that cover the realistic range of each effect.
 DiagnosisConfig default_diagnosis_config();
@@ -166,6 +172,7 @@ struct DiagnosisResult {
   double threshold_z2 = 0.0;  ///< per-component threshold (Bonferroni)
   int tested = 0;
   std::vector<std::string> unobservable;  ///< candidates the data are not informative about
+  std::vector<std::string> confounded_with_baseline;  ///< "candidate ~ baseline state": explained by the baseline
   std::vector<Finding> findings;          ///< most significant first
   std::vector<std::string> extended_model;  ///< "effect.component" states added to the baseline
   std::vector<double> screening_z2;     ///< per candidate: z^2 in the baseline + that component alone
