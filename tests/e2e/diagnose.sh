@@ -36,6 +36,9 @@ for side in ("before", "after"):
     n = g["navigation"][side]
     for k in ("position_rms_m", "velocity_rms_mps", "tilt_rms_deg", "heading_rms_deg"):
         assert n[k] > 0, (side, k, n)
+o = g["outages"]
+assert o["length_s"] == 15 and o["before"]["windows"] >= 3 and o["before"]["windows"] == o["after"]["windows"], o
+assert o["before"]["epochs_withheld"] >= 15 * o["before"]["windows"] - 2 and o["after"]["horizontal_rms_m"] > 0, o
 assert j["method"]["alpha"] == 0.05 and j["method"]["tested_components"] > 5, j["method"]
 assert len(j["screening"]) == 24 and all(u in [s["candidate"] for s in j["screening"]] for u in j["unobservable"])
 for p in ("report.md", "innovations.png", "heading.png", "estimates.png", "baseline.csv", "extended.csv"):

@@ -153,6 +153,22 @@ int run_diagnose() {
                           {"after", nav_json(r.extended.nav)}};
   else
     gain["navigation"] = nullptr;
+  if (r.base.outages.windows > 0) {
+    auto oj = [](const tools::OutageStats& o) {
+      return nlohmann::json{{"windows", o.windows},
+                            {"epochs_withheld", o.epochs_withheld},
+                            {"horizontal_rms_m", o.horizontal_rms_m},
+                            {"horizontal_max_m", o.horizontal_max_m},
+                            {"velocity_rms_mps", o.velocity_rms_mps}};
+    };
+    gain["outages"] = {{"length_s", cfg.outage_length_s},
+                       {"period_s", cfg.outage_period_s},
+                       {"first_s_after_init", cfg.outage_first_s},
+                       {"before", oj(r.base.outages)},
+                       {"after", oj(r.extended.outages)}};
+  } else {
+    gain["outages"] = nullptr;
+  }
   j["gain"] = gain;
   {
     std::ofstream f(opt.json);
@@ -183,6 +199,12 @@ int run_diagnose() {
                   r.extended.nav.vel_rms_mps, r.extended.nav.heading_rms_deg);
     std::printf("\n");
   }
+  if (r.base.outages.windows > 0)
+    std::printf("coasting through %d GNSS outages of %.0f s: horizontal error RMS %.2f m (max %.2f) baseline, %.2f m "
+                "(max %.2f) extended\n",
+                r.base.outages.windows, cfg.outage_length_s, r.base.outages.horizontal_rms_m,
+                r.base.outages.horizontal_max_m, r.extended.outages.horizontal_rms_m,
+                r.extended.outages.horizontal_max_m);
 
   if (!opt.report.empty()) {
     std::filesystem::create_directories(opt.report);
@@ -230,6 +252,13 @@ int run_diagnose() {
       md << "| velocity RMS [m/s] | " << fmt(r.base.nav.vel_rms_mps, "%.3f") << " | " << fmt(r.extended.nav.vel_rms_mps, "%.3f") << " |\n";
       md << "| tilt RMS [deg] | " << fmt(r.base.nav.tilt_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.tilt_rms_deg, "%.4f") << " |\n";
       md << "| heading RMS [deg] | " << fmt(r.base.nav.heading_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.heading_rms_deg, "%.4f") << " |\n";
+    }
+    if (r.base.outages.windows > 0) {
+      md << "| horizontal error after " << fmt(cfg.outage_length_s, "%.0f") << " s GNSS outages, RMS of "
+         << r.base.outages.windows << " [m] | " << fmt(r.base.outages.horizontal_rms_m, "%.2f") << " | "
+         << fmt(r.extended.outages.horizontal_rms_m, "%.2f") << " |\n";
+      md << "| ... max [m] | " << fmt(r.base.outages.horizontal_max_m, "%.2f") << " | "
+         << fmt(r.extended.outages.horizontal_max_m, "%.2f") << " |\n";
     }
     md << "\n";
     if (rc == 0) {

@@ -265,7 +265,8 @@ RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double
 }
 
 // ---------------------------------------------------------------------------------------------
-ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active) {
+ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
+                             bool with_outages) {
   const std::vector<Candidate>& cands = diagnosis_candidates();
   ModelRun run;
   run.active = active;
@@ -297,10 +298,35 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
   int nav_frames = 0;
   double nav_pos_ss = 0.0, nav_vel_ss = 0.0, nav_tilt_ss = 0.0, nav_head_ss = 0.0;
   fsw::FrameOutput out;
+  // GNSS outages (with_outages): window k covers [t0 + k period, t0 + k period + length), GNSS time.
+  const auto outage_window = [&](double t) -> long {
+    if (!with_outages || !run.initialised) return -1;
+    const double t0 = run.init_t_s + cfg.outage_first_s;
+    if (t < t0) return -1;
+    const long k = static_cast<long>(std::floor((t - t0) / cfg.outage_period_s));
+    return t - t0 - static_cast<double>(k) * cfg.outage_period_s < cfg.outage_length_s ? k : -1;
+  };
+  long window_open = -1;
+  double window_err_h = 0.0, window_err_v = 0.0;
+  double out_h_ss = 0.0, out_v_ss = 0.0;
+  const auto close_window = [&]() {
+    if (window_open < 0) return;
+    ++run.outages.windows;
+    out_h_ss += window_err_h * window_err_h;
+    out_v_ss += window_err_v * window_err_v;
+    run.outages.horizontal_max_m = std::max(run.outages.horizontal_max_m, window_err_h);
+    window_open = -1;
+  };
   for (const RecordedData::Event& ev : data.order) {
     switch (ev.kind) {
       case RecordedData::Kind::kAlmanac: app->on_almanac(data.almanac[ev.index]); continue;
-      case RecordedData::Kind::kGnss: app->on_gnss(data.gnss[ev.index]); continue;
+      case RecordedData::Kind::kGnss:
+        if (outage_window(data.gnss[ev.index].t_s) >= 0) {
+          ++run.outages.epochs_withheld;
+          continue;
+        }
+        app->on_gnss(data.gnss[ev.index]);
+        continue;
       case RecordedData::Kind::kImu: break;
     }
     out.nav_valid = false;
@@ -314,7 +340,20 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     ++nav_frames;
     // Navigation error against truth, 10 Hz, from init + gain_skip_s; the solution's time tag is on
     // the IMU clock: the model's own offset estimate puts it on GNSS time.
-    if (!data.truth.empty() && nav_frames % 20 == 0 && out.nav.t_s >= run.init_t_s + cfg.gain_skip_s) {
+    if (with_outages && !data.truth.empty() && nav_frames % 20 == 0) {
+      // The error at the last 10 Hz sample inside a window: after (nearly) the whole outage.
+      const double tg = out.nav.t_s - ekf.time_offset_s();
+      const long w = outage_window(tg);
+      if (w != window_open) close_window();
+      TruthPoint t;
+      if (w >= 0 && truth_at(data.truth, tg, t)) {
+        window_open = w;
+        const fsw::Vec3 dp = fsw::enu_difference_m(out.nav.llh, t.llh);
+        window_err_h = dp.head<2>().norm();
+        window_err_v = (out.nav.vel_enu_mps - t.vel_enu_mps).norm();
+      }
+    }
+    if (!with_outages && !data.truth.empty() && nav_frames % 20 == 0 && out.nav.t_s >= run.init_t_s + cfg.gain_skip_s) {
       TruthPoint t;
       if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t)) {
         const fsw::Vec3 dp = fsw::enu_difference_m(out.nav.llh, t.llh);
@@ -377,6 +416,11 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     }
     run.est_trace.push_back(std::move(est));
     run.sigma_trace.push_back(std::move(sig));
+  }
+  close_window();
+  if (run.outages.windows > 0) {
+    run.outages.horizontal_rms_m = std::sqrt(out_h_ss / run.outages.windows);
+    run.outages.velocity_rms_mps = std::sqrt(out_v_ss / run.outages.windows);
   }
   const int nused = run.innovations.pr_used + run.innovations.prr_used;
   run.innovations.nis_mean = nused > 0 ? nis / nused : 0.0;
@@ -449,13 +493,13 @@ namespace {
 
 /// Runs the models in parallel (one per extension set), results in input order.
 std::vector<ModelRun> run_models(const RecordedData& data, const DiagnosisConfig& cfg,
-                                 const std::vector<std::vector<int>>& models) {
+                                 const std::vector<std::vector<int>>& models, bool with_outages = false) {
   std::vector<ModelRun> out(models.size());
   std::atomic<std::size_t> next{0};
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
   const unsigned n_threads = std::min<unsigned>(hw, static_cast<unsigned>(std::max<std::size_t>(1, models.size())));
   auto worker = [&]() {
-    for (std::size_t i = next++; i < models.size(); i = next++) out[i] = run_diagnosis_model(data, cfg, models[i]);
+    for (std::size_t i = next++; i < models.size(); i = next++) out[i] = run_diagnosis_model(data, cfg, models[i], with_outages);
   };
   std::vector<std::thread> threads;
   for (unsigned t = 1; t < n_threads; ++t) threads.emplace_back(worker);
@@ -585,6 +629,13 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
   res.base = run_diagnosis_model(data, cfg, base);
   if (selected.empty()) res.extended = res.base;
   compare_likelihood(res.base, res.extended);
+  if (!data.truth.empty() && cfg.outage_length_s > 0.0) {
+    say("GNSS outages: " + std::to_string(cfg.outage_length_s) + " s every " + std::to_string(cfg.outage_period_s) +
+        " s, baseline and extended model coasting");
+    std::vector<ModelRun> o = run_models(data, cfg, {base, res.extended.active}, true);
+    res.base.outages = o[0].outages;
+    res.extended.outages = o[1].outages;
+  }
 
   for (std::size_t a = 0; a < res.extended.active.size(); ++a) {
     const int c = res.extended.active[a];

@@ -22,7 +22,8 @@
 //   3. The extended model (all selected components) is run once more and the test repeated there.
 //   4. Gain: baseline and extended model over the same data: innovation statistics (NIS,
 //      innovation RMS per measurement type, log-likelihood over the measurements both used) and,
-//      where the data carry truth or a reference trajectory, navigation error RMS.
+//      where the data carry truth or a reference trajectory, navigation error RMS and the error
+//      after repeated GNSS outages (coasting).
 //   Truth is never used in steps 1 to 3.
 #pragma once
 
@@ -98,6 +99,11 @@ struct DiagnosisConfig {
   double gain_skip_s = 60.0;         ///< navigation errors are scored from initialisation + this
   /// The baseline: "15" (no extension) or "24" (the paper's 24-state model: the 9 misalignments are
   /// part of the baseline, never candidates). Set with set_diagnosis_baseline().
+  // Gain on coasting, the way the field measures it: GNSS withheld for outage_length_s every
+  // outage_period_s, from init + outage_first_s; 0 length: no outage runs.
+  double outage_length_s = 15.0;
+  double outage_period_s = 60.0;
+  double outage_first_s = 120.0;
   std::string baseline_name = "15";
   std::vector<int> baseline_states;  ///< candidates that are always in the model
 };
@@ -127,6 +133,14 @@ struct NavErrorStats {
   double heading_final_deg = 0.0;
 };
 
+/// Coasting through GNSS outages against truth/reference: the error at the end of each window.
+struct OutageStats {
+  int windows = 0;
+  int epochs_withheld = 0;
+  double horizontal_rms_m = 0.0, horizontal_max_m = 0.0;
+  double velocity_rms_mps = 0.0;
+};
+
 /// One run of the diagnosis model with a set of active candidates.
 struct ModelRun {
   std::vector<int> active;  ///< indices into diagnosis_candidates()
@@ -137,6 +151,7 @@ struct ModelRun {
   Eigen::MatrixXd correlation;  ///< posterior correlation of the active candidates
   InnovationStats innovations;
   NavErrorStats nav;
+  OutageStats outages;  ///< only in runs with outages
   // Per-epoch traces for the report.
   std::vector<double> t_s, pr_rms_m, prr_rms_mps, heading_err_deg;
   std::vector<std::vector<double>> est_trace, sigma_trace;  ///< [epoch][active]
@@ -148,8 +163,10 @@ struct ModelRun {
   std::vector<Scalar> scalars;
 };
 
-/// Runs the diagnosis model on the data with the given candidates active.
-ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active);
+/// Runs the diagnosis model on the data with the given candidates active. with_outages: GNSS is
+/// withheld over the configured windows and the coasting error scored (needs truth).
+ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
+                             bool with_outages = false);
 
 /// Log-likelihood of both runs over the scalar measurements both used: fills a.innovations and
 /// b.innovations' log_likelihood and common.
