@@ -292,6 +292,15 @@ TEST(StackAudit, MalformedInputIsRejectedWithItsLine) {
   EXPECT_NE(err.find("b.su:2:"), std::string::npos) << err;
   EXPECT_TRUE(su.empty());
   EXPECT_FALSE(parse_su("a.cpp:1:1:f()\t8\tweird\n", "k.su", su, err));
+  EXPECT_FALSE(parse_su("a.cpp:1:f()\t8\tstatic\n", "c.su", su, err));                     // no column
+  EXPECT_FALSE(parse_su("a.cpp:1:1:f()\t99999999999999999999\tstatic\n", "o.su", su, err));  // absurd size
+  EXPECT_FALSE(parse_su("a.cpp:1:1:f()\t-8\tstatic\n", "n.su", su, err));
+  EXPECT_TRUE(su.empty());
+  ASSERT_TRUE(parse_su("C:/w/a b.cpp:12:3:ns::f(int) const [with T = a:b]\t16\tdynamic,bounded\n", "w.su", su, err))
+      << err;
+  EXPECT_EQ(su[0].location, "C:/w/a b.cpp:12:3");
+  EXPECT_EQ(su[0].function, "ns::f(int) const [with T = a:b]");
+  EXPECT_EQ(su[0].kind, FrameKind::kDynamicBounded);
 }
 
 TEST(StackAudit, CompactNameDropsParametersAndNotes) {

@@ -9,7 +9,6 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -25,6 +24,46 @@ const char* to_string(FrameKind k) {
 }
 
 namespace {
+
+bool parse_kind(const std::string& s, FrameKind& k);
+
+/// A decimal byte count (1 to 15 digits).
+bool parse_bytes(const std::string& s, long& out) {
+  if (s.empty() || s.size() > 15) return false;
+  long v = 0;
+  for (char c : s) {
+    if (c < '0' || c > '9') return false;
+    v = v * 10 + (c - '0');
+  }
+  out = v;
+  return true;
+}
+
+/// GCC's "<N> bytes (<qualifier>)" of a .ci label.
+bool parse_usage(const std::string& s, long& bytes, FrameKind& kind) {
+  const std::string mid = " bytes (";
+  const std::size_t p = s.find(mid);
+  if (p == std::string::npos || s.size() < p + mid.size() + 2 || s.back() != ')') return false;
+  return parse_bytes(s.substr(0, p), bytes) &&
+         parse_kind(s.substr(p + mid.size(), s.size() - p - mid.size() - 1), kind);
+}
+
+/// Length of the leading "file:line:col" of a .su line (the first ":<digits>:<digits>:"), or 0.
+std::size_t su_location_length(const std::string& s) {
+  const auto digits = [&s](std::size_t i) {
+    std::size_t j = i;
+    while (j < s.size() && s[j] >= '0' && s[j] <= '9') ++j;
+    return j - i;
+  };
+  for (std::size_t i = s.find(':'); i != std::string::npos; i = s.find(':', i + 1)) {
+    const std::size_t a = digits(i + 1);
+    if (a == 0 || i + 1 + a >= s.size() || s[i + 1 + a] != ':') continue;
+    const std::size_t b = digits(i + 2 + a);
+    if (b == 0 || i + 2 + a + b >= s.size() || s[i + 2 + a + b] != ':') continue;
+    return i + 2 + a + b;
+  }
+  return 0;
+}
 
 bool parse_kind(const std::string& s, FrameKind& k) {
   if (s == "static") k = FrameKind::kStatic;
@@ -148,12 +187,10 @@ class VcgReader {
     if (f.label.empty() && !lines.empty()) f.label = lines[0];
     if (f.location.empty() && lines.size() > 1) f.location = lines[1];
     if (lines.size() > 2) {
-      static const std::regex kUsage(R"(^(\d+) bytes \(([a-z,]+)\)$)");
-      std::smatch m;
-      FrameKind kind;
-      if (!std::regex_match(lines[2], m, kUsage) || !parse_kind(m[2], kind))
+      long bytes = 0;
+      FrameKind kind = FrameKind::kStatic;
+      if (!parse_usage(lines[2], bytes, kind))
         return fail("unrecognised stack usage '" + lines[2] + "' of " + t->second, err);
-      const long bytes = std::stol(m[1]);
       g.frame_records.push_back(record(lines.size() > 1 ? lines[1] : "", bytes, kind));
       if (!f.defined || bytes > f.frame_bytes) f.frame_bytes = bytes;
       if (!f.defined || kind != FrameKind::kStatic) {
@@ -210,22 +247,24 @@ void link(CallGraph& g) {
 
 bool parse_su(const std::string& text, const std::string& source, std::vector<SuEntry>& out, std::string& err) {
   // "file:line:col:function<TAB>bytes<TAB>qualifier"; the function may contain ':' and spaces.
-  static const std::regex kLine(R"(^(.*?:\d+:\d+):(.*)\t(\d+)\t([a-z,]+)$)");
   std::stringstream ss(text);
   int n = 0;
   std::vector<SuEntry> add;
   for (std::string line; std::getline(ss, line);) {
     ++n;
     if (line.empty()) continue;
-    std::smatch m;
     SuEntry e;
-    if (!std::regex_match(line, m, kLine) || !parse_kind(m[4], e.kind)) {
+    const std::size_t t2 = line.rfind('\t');
+    const std::size_t t1 = t2 == std::string::npos || t2 == 0 ? std::string::npos : line.rfind('\t', t2 - 1);
+    const std::string head = t1 == std::string::npos ? "" : line.substr(0, t1);
+    const std::size_t loc = su_location_length(head);
+    if (t1 == std::string::npos || loc == 0 || !parse_bytes(line.substr(t1 + 1, t2 - t1 - 1), e.bytes) ||
+        !parse_kind(line.substr(t2 + 1), e.kind)) {
       err = source + ":" + std::to_string(n) + ": not a stack-usage line: " + line.substr(0, 200);
       return false;
     }
-    e.location = m[1];
-    e.function = m[2];
-    e.bytes = std::stol(m[3]);
+    e.location = head.substr(0, loc);
+    e.function = head.substr(loc + 1);
     add.push_back(std::move(e));
   }
   out.insert(out.end(), add.begin(), add.end());
