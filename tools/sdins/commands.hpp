@@ -22,6 +22,7 @@ void register_replay(CLI::App& app);
 void register_audit(CLI::App& app);
 void register_bus_sim(CLI::App& app);
 void register_fsw(CLI::App& app);
+void register_import(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -38,6 +39,7 @@ int run_can();
 int run_audit();
 int run_bus_sim();
 int run_fsw();
+int run_import();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

@@ -68,6 +68,7 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("audit")) return run_audit();
   if (app.got_subcommand("bus-sim")) return run_bus_sim();
   if (app.got_subcommand("fsw")) return run_fsw();
+  if (app.got_subcommand("import")) return run_import();
   return 1;
 }
 

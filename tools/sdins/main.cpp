@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   sdins::register_audit(app);
   sdins::register_bus_sim(app);
   sdins::register_fsw(app);
+  sdins::register_import(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
