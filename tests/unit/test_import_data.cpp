@@ -128,7 +128,7 @@ TEST(ImportData, WalkRawFixNearTheRtkSolutionAndImuOnTheSourcesTimeScale) {
     while (j + 1 < pvt.size() && pvt[j + 1].t_s <= x.t_s + 0.01) ++j;
     if (std::abs(pvt[j].t_s - x.t_s) > 0.01) continue;  // raw epochs are 1 ms before the solutions
     const double d = (x.pvt.r_ecef_m - fsw::ecef_from_llh(pvt[j].llh)).norm();
-    EXPECT_LT(d, 40.0) << x.t_s;
+    EXPECT_LT(d, 40.0) << x.t_s;  // measured 8-21 m
     ++compared;
   }
   EXPECT_GT(compared, 500);
