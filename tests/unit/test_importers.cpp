@@ -325,11 +325,15 @@ TEST(ImportPsins, ImuObservationAndEphemerisReaders) {
       "5,187200,-6.04419e-05,-1.25056e-12,0,43,-108.5625,4.320894268e-09,2.20221203,-5.707144737e-06,0.0060007086722,"
       "9.629875422e-06,5153.6190167687,187200,-5.587935448e-09,0.83860246341,-9.685754776e-08,0.95822938409,194.34375,"
       "1.015982021,-7.84318384e-09,2.078658013e-10,0,2183,0,nan,0,-1.11758709e-08,0,0,0\n"
-      "6,187200,0,0,0,1,0,0,0,0,0.5,0,5153.6,187200,0,0,0,0.95,0,0,0,0,0,2183,0,0,0,0,0,0,0\n");  // e = 0.5
+      "6,187200,0,0,0,1,0,0,0,0,0.5,0,5153.6,187200,0,0,0,0.95,0,0,0,0,0,2183,0,0,0,0,0,0,0\n"   // e = 0.5
+      "nan,187200,0,0,0,1,0,0,0,0,0.01,0,5153.6,187200,0,0,0,0.95,0,0,0,0,0,2183,0,0,0,0,0,0,0\n"  // PRN NaN
+      "7,187200,0,0,0,1,0,0,0,0,0.01,0,5153.6,187200,0,0,0,0.95,0,0,0,0,0,1e300,0,0,0,0,0,0,0\n");  // WN 1e300
   tools::LineStats es;
   const std::vector<tools::GpsEphemeris> e = tools::read_psins_eph(eph, es);
   EXPECT_EQ(es.accepted, 1u);
-  EXPECT_EQ(es.rejected, 1u);
+  EXPECT_EQ(es.rejected, 3u);
+  EXPECT_EQ(es.by_reason.at("implausible ephemeris"), 1u);
+  EXPECT_EQ(es.by_reason.at("PRN, IODE, WN or SatHl not an integer"), 2u);
   EXPECT_EQ(es.skipped.at("absent satellite (health 255, no elements)"), 1u);
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0].prn, 5);
@@ -541,6 +545,8 @@ TEST(ImportRinex, ObservationEpochs) {
   text += "                                                            COMMENT\n";
   text += "> 2025 08 28 17 30 40.2480000  0  1\n";
   text += sat("G10", {20576130.612, 108128295.213, 1064.500, 51.0}, {true, true, true, true});
+  text += "> 2025 08 28 17 30 40.2480000  0  1\n";  // the same time again
+  text += sat("G10", {20576130.612, 108128295.213, 1064.500, 51.0}, {true, true, true, true});
   text += "> 2025 08 28 17 30 40.4980000  0  1\n";
   text += "G10  20576130.612   108128";  // cut off
   std::istringstream in(text);
@@ -566,6 +572,7 @@ TEST(ImportRinex, ObservationEpochs) {
   EXPECT_EQ(ep[0].sats[3].d1c_hz, -585.078);
   EXPECT_NEAR(ep[1].time.tow_s, 408640.248, 1e-9);
   EXPECT_EQ(st.lines.by_reason.at("partial last line (no newline)"), 1u);
+  EXPECT_EQ(st.lines.by_reason.at("epoch time not increasing"), 1u);
   // Pseudorange rate from Doppler: -D * lambda_L1 (a satellite coming closer has a positive
   // Doppler and a falling range).
   EXPECT_NEAR(-g10.d1c_hz * tools::kGpsL1Wavelength_m, -202.54, 0.01);

@@ -70,6 +70,12 @@ bool parse_int(std::string_view s, std::int64_t& v) {
   return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
+bool to_int(double v, int& out) {
+  if (!std::isfinite(v) || v != std::floor(v) || std::abs(v) > 1e9) return false;
+  out = static_cast<int>(v);
+  return true;
+}
+
 bool parse_fortran_double(std::string_view s, double& v) {
   std::string t(trim(s));
   for (char& c : t)
@@ -672,12 +678,14 @@ std::vector<GpsEphemeris> read_psins_eph(std::istream& in, LineStats& stats) {
         return;
       }
     GpsEphemeris e;
-    e.prn = static_cast<int>(v[0]);
+    if (!to_int(v[0], e.prn) || !to_int(v[5], e.iode) || !to_int(v[22], e.week) || !to_int(v[23], e.health)) {
+      stats.reject(ln, "PRN, IODE, WN or SatHl not an integer");
+      return;
+    }
     e.toc_s = v[1];
     e.af0_s = v[2];
     e.af1_sps = v[3];
     e.af2_sps2 = v[4];
-    e.iode = static_cast<int>(v[5]);
     e.crs_m = v[6];
     e.delta_n_radps = v[7];
     e.m0_rad = v[8];
@@ -694,8 +702,6 @@ std::vector<GpsEphemeris> read_psins_eph(std::istream& in, LineStats& stats) {
     e.arg_perigee_rad = v[19];
     e.omega_dot_radps = v[20];
     e.idot_radps = v[21];
-    e.week = static_cast<int>(v[22]);
-    e.health = static_cast<int>(v[23]);
     e.tgd_s = std::isfinite(v[24]) ? v[24] : 0.0;
     if (e.health == 255 && e.sqrt_a_sqrtm == 0.0) {
       stats.skip("absent satellite (health 255, no elements)");
@@ -778,6 +784,7 @@ std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) 
       continue;
     }
     ++st.lines.lines;
+    const std::uint64_t epoch_line = ln;
     int y = 0, mo = 0, d = 0, h = 0, mi = 0, flag = 0, nsat = 0;
     double sec = 0.0;
     if (std::sscanf(line.c_str(), "> %d %d %d %d %d %lf %d %d", &y, &mo, &d, &h, &mi, &sec, &flag, &nsat) != 8 ||
@@ -835,6 +842,11 @@ std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) 
       continue;
     }
     if (!epoch_ok) continue;
+    if (!out.empty() && !(static_cast<double>(ep.time.week - out.back().time.week) * fsw::kSecondsPerWeek +
+                              (ep.time.tow_s - out.back().time.tow_s) > 0.0)) {
+      st.lines.reject(epoch_line, "epoch time not increasing");
+      continue;
+    }
     ++st.lines.accepted;
     out.push_back(std::move(ep));
   }
@@ -902,10 +914,14 @@ std::vector<GpsEphemeris> read_rinex3_nav(std::istream& in, LineStats& stats) {
     }
     GpsEphemeris e;
     e.prn = static_cast<int>(prn);
+    if (!to_int(v[3], e.iode) || !to_int(v[21], e.week) || !to_int(v[24], e.health)) {
+      stats.reject(rec_line, "IODE, week or health not an integer");
+      rec.clear();
+      return;
+    }
     e.af0_s = v[0];
     e.af1_sps = v[1];
     e.af2_sps2 = v[2];
-    e.iode = static_cast<int>(v[3]);
     e.crs_m = v[4];
     e.delta_n_radps = v[5];
     e.m0_rad = v[6];
@@ -922,8 +938,6 @@ std::vector<GpsEphemeris> read_rinex3_nav(std::istream& in, LineStats& stats) {
     e.arg_perigee_rad = v[17];
     e.omega_dot_radps = v[18];
     e.idot_radps = v[19];
-    e.week = static_cast<int>(v[21]);
-    e.health = static_cast<int>(v[24]);
     e.tgd_s = v[25];
     e.toc_s = static_cast<double>(toc.week - e.week) * fsw::kSecondsPerWeek + toc.tow_s;
     if (!ephemeris_valid(e)) {
