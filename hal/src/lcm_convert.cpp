@@ -195,6 +195,61 @@ LcmInputStatus from_msg(const sdins::gps_almanac_t& in, fsw::GpsAlmanac& out) {
 }
 
 // ---------------------------------------------------------------------------------------------
+void to_msg(const GnssPvtSample& in, sdins::gnss_pvt_t& out) {
+  out.utime = utime_from_t_s(in.t_s);
+  out.t_s = in.t_s;
+  out.gps_week = in.gps_week;
+  out.gps_tow_s = in.gps_tow_s;
+  for (int i = 0; i < 3; ++i) {
+    out.llh[i] = in.llh[i];
+    out.vel_enu_mps[i] = in.vel_enu_mps[i];
+    out.pos_sigma_enu_m[i] = in.pos_sigma_enu_m[i];
+    out.vel_sigma_enu_mps[i] = in.vel_sigma_enu_mps[i];
+  }
+  out.quality = in.quality;
+  out.n_sat = in.n_sat;
+}
+
+LcmInputStatus from_msg(const sdins::gnss_pvt_t& in, GnssPvtSample& out, const GnssPvtLimits& limits) {
+  if (!std::isfinite(in.t_s) || !std::isfinite(in.gps_tow_s) || !finite3(in.llh) || !finite3(in.vel_enu_mps) ||
+      !finite3(in.pos_sigma_enu_m) || !finite3(in.vel_sigma_enu_mps))
+    return LcmInputStatus::kNonFinite;
+  constexpr double kPi = 3.14159265358979323846;
+  if (in.gps_week < 0 || in.gps_tow_s < 0.0 || in.gps_tow_s >= fsw::kSecondsPerWeek)
+    return LcmInputStatus::kOutOfRange;
+  if (std::abs(in.llh[0]) > 0.5 * kPi || std::abs(in.llh[1]) > kPi || in.llh[2] < limits.min_height_m ||
+      in.llh[2] > limits.max_height_m)
+    return LcmInputStatus::kOutOfRange;
+  if (norm3(in.vel_enu_mps) > limits.max_speed_mps) return LcmInputStatus::kOutOfRange;
+  for (int i = 0; i < 3; ++i)
+    if (!(in.pos_sigma_enu_m[i] >= 0.0) || in.pos_sigma_enu_m[i] > limits.max_pos_sigma_m)
+      return LcmInputStatus::kOutOfRange;
+  const bool no_velocity = in.vel_sigma_enu_mps[0] < 0.0 && in.vel_sigma_enu_mps[1] < 0.0 && in.vel_sigma_enu_mps[2] < 0.0;
+  if (no_velocity) {
+    if (norm3(in.vel_enu_mps) != 0.0) return LcmInputStatus::kOutOfRange;
+  } else {
+    for (int i = 0; i < 3; ++i)
+      if (!(in.vel_sigma_enu_mps[i] >= 0.0) || in.vel_sigma_enu_mps[i] > limits.max_vel_sigma_mps)
+        return LcmInputStatus::kOutOfRange;
+  }
+  if (in.quality < sdins::gnss_pvt_t::QUALITY_NONE || in.quality > sdins::gnss_pvt_t::QUALITY_DR || in.n_sat < 0 ||
+      in.n_sat > 255)
+    return LcmInputStatus::kOutOfRange;
+  out.t_s = in.t_s;
+  out.gps_week = in.gps_week;
+  out.gps_tow_s = in.gps_tow_s;
+  for (int i = 0; i < 3; ++i) {
+    out.llh[i] = in.llh[i];
+    out.vel_enu_mps[i] = in.vel_enu_mps[i];
+    out.pos_sigma_enu_m[i] = in.pos_sigma_enu_m[i];
+    out.vel_sigma_enu_mps[i] = in.vel_sigma_enu_mps[i];
+  }
+  out.quality = in.quality;
+  out.n_sat = in.n_sat;
+  return LcmInputStatus::kOk;
+}
+
+// ---------------------------------------------------------------------------------------------
 void to_msg(const fsw::NavState& nav, bool valid, bool ekf_updated, sdins::nav_solution_t& out) {
   out.utime = utime_from_t_s(nav.t_s);
   out.t_s = nav.t_s;
@@ -219,6 +274,20 @@ void truth_to_msg(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps
   q.normalize();
   if (q.w() < 0.0) q.coeffs() *= -1.0;  // one sign for the same attitude
   attitude_to_msg(q, out.q_b_n_wxyz, out.roll_rad, out.pitch_rad, out.heading_rad);
+}
+
+void reference_to_msg(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, sdins::truth_t& out) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  out.utime = utime_from_t_s(t_s);
+  out.t_s = t_s;
+  out.lat_rad = llh.x();
+  out.lon_rad = llh.y();
+  out.height_m = llh.z();
+  for (int i = 0; i < 3; ++i) out.vel_enu_mps[i] = vel_enu_mps[i];
+  for (double& q : out.q_b_n_wxyz) q = kNaN;
+  out.roll_rad = kNaN;
+  out.pitch_rad = kNaN;
+  out.heading_rad = kNaN;
 }
 
 void compensation_to_msg(const fsw::ImuCompensation& comp, sdins::ekf_state_t& out) {

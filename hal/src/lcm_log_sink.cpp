@@ -46,6 +46,18 @@ LcmLogStatus LcmLogSink::write_truth(double t_s, const fsw::Vec3& llh, const fsw
   return publish(kLcmChannelTruth, m);
 }
 
+LcmLogStatus LcmLogSink::write_reference(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps) {
+  sdins::truth_t m{};
+  reference_to_msg(t_s, llh, vel_enu_mps, m);
+  return publish(kLcmChannelTruth, m);
+}
+
+LcmLogStatus LcmLogSink::write_pvt(const GnssPvtSample& pvt) {
+  sdins::gnss_pvt_t m{};
+  to_msg(pvt, m);
+  return publish(kLcmChannelGnssPvt, m);
+}
+
 LcmLogStatus LcmLogSink::write_health(double t_s, const fsw::ExecutiveHealth& health,
                                       const fsw::GnssConversionStats& conversion, const fsw::FrameOutput& frame,
                                       double gate_chi2) {
@@ -122,6 +134,14 @@ void LcmReplayReader::take(const LcmLogEvent& ev) {
     if (st != LcmInputStatus::kOk) return;
     in.kind = LcmReplayInput::Kind::kAlmanac;
     in.t_s = m.t_s;
+  } else if (!cfg_.gnss_pvt_channel.empty() && ev.channel == cfg_.gnss_pvt_channel) {
+    sdins::gnss_pvt_t m{};
+    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
+    if (st == LcmInputStatus::kOk) st = from_msg(m, in.pvt, cfg_.pvt_limits);
+    stats_.gnss_pvt.record(st);
+    if (st != LcmInputStatus::kOk) return;
+    in.kind = LcmReplayInput::Kind::kGnssPvt;
+    in.t_s = in.pvt.t_s;
   } else {
     ++stats_.other_events;
     return;

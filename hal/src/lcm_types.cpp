@@ -123,6 +123,23 @@ struct LcmFields<sdins::gps_almanac_t> {
   }
 };
 
+template <>
+struct LcmFields<sdins::gnss_pvt_t> {
+  static void visit(const sdins::gnss_pvt_t& m, LcmRow& r) {
+    add_time(m.utime, m.t_s, r);
+    r.add("gps_week", m.gps_week);
+    r.add("gps_tow_s", m.gps_tow_s);
+    r.add("lat_rad", m.llh[0]);
+    r.add("lon_rad", m.llh[1]);
+    r.add("height_m", m.llh[2]);
+    r.add_array("vel_enu_mps", m.vel_enu_mps, 3);
+    r.add_array("pos_sigma_enu_m", m.pos_sigma_enu_m, 3);
+    r.add_array("vel_sigma_enu_mps", m.vel_sigma_enu_mps, 3);
+    r.add("quality", m.quality);
+    r.add("n_sat", m.n_sat);
+  }
+};
+
 template <class M>
 void visit_pose(const M& m, LcmRow& r) {
   add_time(m.utime, m.t_s, r);
@@ -269,7 +286,7 @@ const std::vector<LcmTypeInfo>& lcm_types() {
       make_lcm_type<sdins::imu_sample_t>(),    make_lcm_type<sdins::gnss_raw_epoch_t>(),
       make_lcm_type<sdins::gps_almanac_t>(),   make_lcm_type<sdins::nav_solution_t>(),
       make_lcm_type<sdins::ekf_state_t>(),     make_lcm_type<sdins::filter_health_t>(),
-      make_lcm_type<sdins::truth_t>(),
+      make_lcm_type<sdins::truth_t>(),         make_lcm_type<sdins::gnss_pvt_t>(),
   };
   return kTypes;
 }

@@ -420,7 +420,7 @@ TEST(LcmConvert, HealthCarriesCountersAndPerObservationInnovations) {
 
 TEST(LcmConvert, EveryTypeHasAUniqueFingerprintAndEveryChannelAType) {
   const auto& types = hal::lcm_types();
-  ASSERT_EQ(types.size(), 7u);
+  ASSERT_EQ(types.size(), 8u);  // 7 + gnss_pvt_t
   for (std::size_t i = 0; i < types.size(); ++i)
     for (std::size_t j = i + 1; j < types.size(); ++j) EXPECT_NE(types[i].fingerprint, types[j].fingerprint);
   for (const hal::LcmChannelInfo& c : hal::kLcmChannels) {

@@ -40,6 +40,7 @@ int run_replay() {
       case hal::LcmReplayInput::Kind::kAlmanac: node.on_almanac(in.almanac, in.t_s); break;
       case hal::LcmReplayInput::Kind::kGnss: node.on_gnss(in.gnss); break;
       case hal::LcmReplayInput::Kind::kImu: node.on_imu(in.imu.sample, in.imu.counter, in.imu.status); break;
+      case hal::LcmReplayInput::Kind::kGnssPvt: break;  // not read: LcmReplayConfig::gnss_pvt_channel is empty
     }
   }
   if (!node.close(err)) throw std::runtime_error(err);

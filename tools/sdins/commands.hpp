@@ -24,6 +24,7 @@ void register_bus_sim(CLI::App& app);
 void register_fsw(CLI::App& app);
 void register_diagnose(CLI::App& app);
 void register_sim(CLI::App& app);
+void register_import(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -42,6 +43,7 @@ int run_bus_sim();
 int run_fsw();
 int run_diagnose();
 int run_sim();
+int run_import();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

@@ -70,6 +70,7 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("fsw")) return run_fsw();
   if (app.got_subcommand("diagnose")) return run_diagnose();
   if (app.got_subcommand("sim")) return run_sim();
+  if (app.got_subcommand("import")) return run_import();
   return 1;
 }
 

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   sdins::register_fsw(app);
   sdins::register_diagnose(app);
   sdins::register_sim(app);
+  sdins::register_import(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

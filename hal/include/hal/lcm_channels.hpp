@@ -11,7 +11,8 @@ inline constexpr const char* kLcmChannelGpsAlmanac = "GPS_ALMANAC";     ///< sdi
 inline constexpr const char* kLcmChannelNavSolution = "NAV_SOLUTION";   ///< sdins.nav_solution_t
 inline constexpr const char* kLcmChannelEkfState = "EKF_STATE";         ///< sdins.ekf_state_t
 inline constexpr const char* kLcmChannelFilterHealth = "FILTER_HEALTH"; ///< sdins.filter_health_t
-inline constexpr const char* kLcmChannelTruth = "TRUTH";                ///< sdins.truth_t (simulator only)
+inline constexpr const char* kLcmChannelTruth = "TRUTH";                ///< sdins.truth_t (simulator truth, or a recording's reference)
+inline constexpr const char* kLcmChannelGnssPvt = "GNSS_PVT";           ///< sdins.gnss_pvt_t
 
 /// A channel and the full name of the message type it carries.
 struct LcmChannelInfo {
@@ -29,6 +30,7 @@ inline constexpr LcmChannelInfo kLcmChannels[] = {
     {kLcmChannelEkfState, "sdins.ekf_state_t"},
     {kLcmChannelFilterHealth, "sdins.filter_health_t"},
     {kLcmChannelTruth, "sdins.truth_t"},
+    {kLcmChannelGnssPvt, "sdins.gnss_pvt_t"},
 };
 
 /// The UDP multicast URL telemetry uses when neither --lcm-url nor LCM_DEFAULT_URL says

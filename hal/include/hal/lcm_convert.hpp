@@ -21,6 +21,7 @@
 #include "fsw/strapdown.hpp"
 #include "sdins/ekf_state_t.hpp"
 #include "sdins/filter_health_t.hpp"
+#include "sdins/gnss_pvt_t.hpp"
 #include "sdins/gnss_raw_epoch_t.hpp"
 #include "sdins/gps_almanac_t.hpp"
 #include "sdins/imu_sample_t.hpp"
@@ -112,6 +113,46 @@ void to_msg(const fsw::GpsAlmanac& in, double t_s, sdins::gps_almanac_t& out);
 LcmInputStatus from_msg(const sdins::gps_almanac_t& in, fsw::GpsAlmanac& out);
 
 // ---------------------------------------------------------------------------------------------
+// GNSS position/velocity solutions (channel GNSS_PVT)
+
+/// One GNSS position/velocity solution as decoded from GNSS_PVT (sdins.gnss_pvt_t): e.g. a line of
+/// an RTKLIB .pos file. Host-side input type; the loosely coupled update that consumes it belongs
+/// to the flight software.
+struct GnssPvtSample {
+  double t_s = 0.0;                     ///< navigation time scale [s]
+  int gps_week = 0;                     ///< GPS time of the solution: full week ...
+  double gps_tow_s = 0.0;               ///< ... and seconds of the week
+  fsw::Vec3 llh = fsw::Vec3::Zero();    ///< WGS-84 latitude, longitude [rad], ellipsoidal height [m]
+  fsw::Vec3 vel_enu_mps = fsw::Vec3::Zero();
+  fsw::Vec3 pos_sigma_enu_m = fsw::Vec3::Zero();
+  /// All three negative (kGnssPvtNoVelocity): the solution has no velocity (vel_enu_mps is 0).
+  fsw::Vec3 vel_sigma_enu_mps = fsw::Vec3::Zero();
+  int quality = 0;                      ///< sdins::gnss_pvt_t::QUALITY_* (RTKLIB Q)
+  int n_sat = 0;
+  bool has_velocity() const { return vel_sigma_enu_mps.x() >= 0.0; }
+};
+
+/// vel_sigma_enu_mps of a solution without velocity.
+inline constexpr double kGnssPvtNoVelocity = -1.0;
+
+/// Plausibility limits of a GNSS solution.
+struct GnssPvtLimits {
+  double min_height_m = -1000.0;
+  double max_height_m = 100000.0;
+  double max_speed_mps = 10000.0;
+  double max_pos_sigma_m = 1.0e5;
+  double max_vel_sigma_mps = 1.0e4;
+};
+
+void to_msg(const GnssPvtSample& in, sdins::gnss_pvt_t& out);
+/// kNonFinite: any of t_s, gps_tow_s, llh, velocity, sigmas; kOutOfRange: gps_week < 0,
+/// gps_tow_s outside [0, 604800), |lat| > pi/2, |lon| > pi, height or speed outside GnssPvtLimits,
+/// a position sigma negative or above the limit, velocity sigmas neither all >= 0 (and within the
+/// limit) nor all negative (no velocity, then the velocity must be 0), quality outside 0..7,
+/// n_sat outside 0..255.
+LcmInputStatus from_msg(const sdins::gnss_pvt_t& in, GnssPvtSample& out, const GnssPvtLimits& limits = {});
+
+// ---------------------------------------------------------------------------------------------
 // Flight-software outputs
 
 /// valid: a navigation frame completed in this tick; ekf_updated: the EKF ran an update in it.
@@ -120,6 +161,10 @@ void to_msg(const fsw::NavState& nav, bool valid, bool ekf_updated, sdins::nav_s
 /// Simulator truth with the same conventions as the navigation solution.
 void truth_to_msg(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, const fsw::Mat3& C_b_n,
                   sdins::truth_t& out);
+
+/// A reference position and velocity without attitude (e.g. an RTK solution used as the reference
+/// of a recording): attitude fields are NaN.
+void reference_to_msg(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, sdins::truth_t& out);
 
 /// The non-template part of the EKF state: the accumulated IMU compensation.
 void compensation_to_msg(const fsw::ImuCompensation& comp, sdins::ekf_state_t& out);

@@ -5,8 +5,9 @@
 // timestamp is the message's utime, i.e. the navigation time in microseconds, so lcm-logplayer
 // replays a simulated run at its own pace.
 //
-// LcmReplayReader: reads a log's IMU, GNSS_RAW and GPS_ALMANAC channels (names configurable) and
-// returns them as fsw inputs in time order (t_s, then log order for equal times). Inputs may be
+// LcmReplayReader: reads a log's IMU, GNSS_RAW and GPS_ALMANAC channels (names configurable), and
+// GNSS_PVT solutions when LcmReplayConfig::gnss_pvt_channel names it (off by default: the flight
+// software of today has no loosely coupled update), and returns them as inputs in time order (t_s, then log order for equal times). Inputs may be
 // logged slightly out of order (e.g. an epoch written after the IMU samples that followed it); a
 // reorder window (reorder_window_s of input time) puts them back in order. An input that lags
 // more than the window behind the newest input read so far, or is older than one already
@@ -51,6 +52,10 @@ class LcmLogSink {
   LcmLogStatus write_nav(const fsw::NavState& nav, bool valid, bool ekf_updated);
   LcmLogStatus write_nav(const fsw::FrameOutput& frame) { return write_nav(frame.nav, frame.nav_valid, frame.ekf_updated); }
   LcmLogStatus write_truth(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, const fsw::Mat3& C_b_n);
+  /// A reference without attitude on TRUTH (e.g. the RTK solution of a recording; attitude NaN).
+  LcmLogStatus write_reference(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps);
+  /// A GNSS position/velocity solution on GNSS_PVT.
+  LcmLogStatus write_pvt(const GnssPvtSample& pvt);
 
   /// The EKF state after a run of the 1 Hz group (call when frame.ekf_ran).
   template <class Layout>
@@ -103,6 +108,9 @@ struct LcmReplayConfig {
   std::string imu_channel = kLcmChannelImu;
   std::string gnss_channel = kLcmChannelGnssRaw;
   std::string almanac_channel = kLcmChannelGpsAlmanac;
+  /// GNSS position/velocity solutions (sdins.gnss_pvt_t); empty: not read (counted as other events).
+  std::string gnss_pvt_channel;
+  GnssPvtLimits pvt_limits{};
   double reorder_window_s = 1.0;  ///< how far (input time) a logged input may lag behind later ones
   ImuInputLimits imu_limits{};
   std::size_t max_event_bytes = 64u << 20;
@@ -110,23 +118,27 @@ struct LcmReplayConfig {
 
 /// One flight-software input from a log.
 struct LcmReplayInput {
-  enum class Kind : std::uint8_t { kImu, kGnss, kAlmanac };
+  enum class Kind : std::uint8_t { kImu, kGnss, kAlmanac, kGnssPvt };
   Kind kind = Kind::kImu;
   double t_s = 0.0;
   ImuRecord imu{};             ///< kind == kImu
   fsw::GnssRawEpoch gnss{};    ///< kind == kGnss
   fsw::GpsAlmanac almanac{};   ///< kind == kAlmanac
+  GnssPvtSample pvt{};         ///< kind == kGnssPvt (only with LcmReplayConfig::gnss_pvt_channel)
 };
 
 struct LcmReplayStats {
   LcmInputStats imu, gnss, almanac;  ///< per input channel: accepted and each rejection reason
+  LcmInputStats gnss_pvt;            ///< GNSS_PVT (all zero while the channel is not read)
   std::uint64_t other_events = 0;    ///< events on other channels (outputs, truth, foreign data)
   std::uint64_t imu_counter_gaps = 0;     ///< accepted samples whose counter is not previous + 1
   std::uint64_t imu_counter_missing = 0;  ///< samples missing according to forward counter jumps
   std::uint64_t out_of_order = 0;    ///< inputs lagging > window behind the newest, or older than one returned: dropped
   std::uint64_t delivered = 0;       ///< inputs returned by next()
 
-  std::uint64_t rejected() const { return imu.rejected() + gnss.rejected() + almanac.rejected() + out_of_order; }
+  std::uint64_t rejected() const {
+    return imu.rejected() + gnss.rejected() + almanac.rejected() + gnss_pvt.rejected() + out_of_order;
+  }
 };
 
 class LcmReplayReader {

@@ -188,6 +188,8 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
         out.order.push_back({RecordedData::Kind::kAlmanac, static_cast<std::uint32_t>(out.almanac.size())});
         out.almanac.push_back(in.almanac);
         break;
+      case hal::LcmReplayInput::Kind::kGnssPvt:  // not read: the reader's PVT channel is off here
+        break;
     }
   }
   if (st != hal::LcmLogStatus::kEndOfLog) {
