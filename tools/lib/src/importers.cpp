@@ -557,22 +557,29 @@ void require_header(const std::string& header, const char* what) {
     throw std::runtime_error(std::string(what) + ": the first line must be the header of column names");
 }
 
+/// A CSV row of exactly n numbers into v; false (and the row rejected with the reason) otherwise.
+bool parse_number_row(const std::vector<std::string_view>& f, std::size_t n, double* v, LineStats& stats,
+                      std::uint64_t ln) {
+  if (f.size() != n) {
+    stats.reject(ln, "wrong field count (" + std::to_string(f.size()) + ", expected " + std::to_string(n) + ")");
+    return false;
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (!parse_double(f[i], v[i])) {
+      stats.reject(ln, "unparsable number");
+      return false;
+    }
+  return true;
+}
+
 }  // namespace
 
 std::vector<PsinsImuRow> read_psins_imu(std::istream& in, LineStats& stats) {
   std::vector<PsinsImuRow> out;
   std::string header;
   read_csv_rows(in, stats, header, [&](std::uint64_t ln, const std::vector<std::string_view>& f) {
-    if (f.size() != 7) {
-      stats.reject(ln, "wrong field count (" + std::to_string(f.size()) + ", expected 7)");
-      return;
-    }
     double v[7];
-    for (int i = 0; i < 7; ++i)
-      if (!parse_double(f[static_cast<std::size_t>(i)], v[i])) {
-        stats.reject(ln, "unparsable number");
-        return;
-      }
+    if (!parse_number_row(f, 7, v, stats, ln)) return;
     for (double x : v)
       if (!std::isfinite(x)) {
         stats.reject(ln, "non-finite value");
@@ -602,16 +609,8 @@ std::vector<PsinsObsRow> read_psins_obs(std::istream& in, LineStats& stats) {
   std::vector<PsinsObsRow> out;
   std::string header;
   read_csv_rows(in, stats, header, [&](std::uint64_t ln, const std::vector<std::string_view>& f) {
-    if (f.size() != 6) {
-      stats.reject(ln, "wrong field count (" + std::to_string(f.size()) + ", expected 6)");
-      return;
-    }
     double v[6];
-    for (int i = 0; i < 6; ++i)
-      if (!parse_double(f[static_cast<std::size_t>(i)], v[i])) {
-        stats.reject(ln, "unparsable number");
-        return;
-      }
+    if (!parse_number_row(f, 6, v, stats, ln)) return;
     // Column 5 (undocumented) is not used: NaN there does not matter.
     if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]) || !std::isfinite(v[3]) ||
         !std::isfinite(v[5])) {
