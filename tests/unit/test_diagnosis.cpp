@@ -5,8 +5,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iterator>
+#include <limits>
 #include <random>
 
+#include "hal/lcm_log_sink.hpp"
+#include "lcm_test_util.hpp"
 #include "sim/effects.hpp"
 #include "tools/diagnosis.hpp"
 
@@ -192,6 +195,48 @@ TEST(Diagnosis, MisalignmentIsAFindingFor15AndPartOfTheModelFor24) {
   for (const tools::Finding& g : r24.findings) EXPECT_NE(g.effect, fsw::Effect::kGyroMisalignment);
   EXPECT_TRUE(r24.findings.empty()) << fsw::effect_info(r24.findings.front().effect).name;
   EXPECT_LT(r24.base.nav.heading_rms_deg, r15.base.nav.heading_rms_deg);
+}
+
+}  // namespace
+
+namespace {
+
+// A reference without attitude (what `sdins import` writes from a GNSS solution: NaN attitude)
+// is kept for position and velocity; a broken one (NaN position) is counted.
+TEST(Diagnosis, LoadsAReferenceWithoutAttitudeAndCountsBrokenTruth) {
+  const std::string path = lcm_test::scratch("diag_reference.lcmlog");
+  hal::LcmLogSink sink;
+  hal::LcmTelemetryConfig cfg;
+  cfg.lcm_url = "none";
+  cfg.log_path = path;
+  ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
+  fsw::ImuSample s;
+  s.dt_s = 0.001;
+  s.dv_mps = fsw::Vec3(0.0, 0.0, -0.0098);
+  for (int k = 1; k <= 10; ++k) {
+    s.t_s = 0.001 * k;
+    ASSERT_EQ(sink.write_imu(s, 0), hal::LcmLogStatus::kOk);
+  }
+  fsw::GnssRawEpoch e;
+  e.t_s = 0.005;
+  e.gps_tow_s = 100.0;
+  ASSERT_EQ(sink.write_gnss(e), hal::LcmLogStatus::kOk);
+  const fsw::Vec3 llh(0.7, 0.2, 100.0), v(1.0, 2.0, 0.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_EQ(sink.write_truth(0.001, llh, v, fsw::Mat3::Constant(nan)), hal::LcmLogStatus::kOk);  // no attitude
+  ASSERT_EQ(sink.write_truth(0.002, llh, v, fsw::Mat3::Identity()), hal::LcmLogStatus::kOk);     // full truth
+  ASSERT_EQ(sink.write_truth(0.003, fsw::Vec3(nan, 0.2, 100.0), v, fsw::Mat3::Identity()), hal::LcmLogStatus::kOk);
+  ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
+  tools::RecordedData data;
+  std::string err, report;
+  ASSERT_TRUE(tools::load_recorded_data(path, data, err, report)) << err;
+  EXPECT_EQ(data.imu.size(), 10u);
+  EXPECT_EQ(data.gnss.size(), 1u);
+  ASSERT_EQ(data.truth.size(), 2u) << report;
+  EXPECT_FALSE(data.truth[0].has_attitude);
+  EXPECT_TRUE(data.truth[1].has_attitude);
+  EXPECT_NE(report.find("1 truth samples"), std::string::npos) << report;
+  std::remove(path.c_str());
 }
 
 }  // namespace

@@ -34,6 +34,7 @@ nlohmann::json innovations_json(const tools::InnovationStats& s) {
 
 nlohmann::json nav_json(const tools::NavErrorStats& s) {
   return {{"samples", s.samples},
+          {"attitude_samples", s.attitude_samples},
           {"position_rms_m", s.pos_rms_m},
           {"velocity_rms_mps", s.vel_rms_mps},
           {"tilt_rms_deg", s.tilt_rms_deg},

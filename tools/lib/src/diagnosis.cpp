@@ -92,7 +92,8 @@ bool truth_at(const std::vector<TruthPoint>& truth, double t, TruthPoint& out) {
   out.t_s = t;
   out.llh = a.llh + w * (b.llh - a.llh);
   out.vel_enu_mps = a.vel_enu_mps + w * (b.vel_enu_mps - a.vel_enu_mps);
-  out.q_b_n = a.q_b_n.slerp(w, b.q_b_n);
+  out.has_attitude = a.has_attitude && b.has_attitude;
+  out.q_b_n = out.has_attitude ? a.q_b_n.slerp(w, b.q_b_n) : fsw::Quat::Identity();
   return true;
 }
 
@@ -213,13 +214,23 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
       p.llh = fsw::Vec3(m.lat_rad, m.lon_rad, m.height_m);
       p.vel_enu_mps = fsw::Vec3(m.vel_enu_mps[0], m.vel_enu_mps[1], m.vel_enu_mps[2]);
       p.q_b_n = fsw::Quat(m.q_b_n_wxyz[0], m.q_b_n_wxyz[1], m.q_b_n_wxyz[2], m.q_b_n_wxyz[3]);
-      const double qn = p.q_b_n.norm();
-      if (!std::isfinite(p.t_s) || !p.llh.allFinite() || !p.vel_enu_mps.allFinite() || !(std::abs(qn - 1.0) < 1e-3) ||
+      if (!std::isfinite(p.t_s) || !p.llh.allFinite() || !p.vel_enu_mps.allFinite() ||
           (!out.truth.empty() && !(p.t_s > out.truth.back().t_s))) {
         ++truth_rejected;
         continue;
       }
-      p.q_b_n.normalize();
+      // A reference without attitude (an imported GNSS solution: NaN) scores position and
+      // velocity only; an attitude that is there must be a unit quaternion.
+      const bool att_nan = !p.q_b_n.coeffs().allFinite();
+      if (!att_nan && !(std::abs(p.q_b_n.norm() - 1.0) < 1e-3)) {
+        ++truth_rejected;
+        continue;
+      }
+      p.has_attitude = !att_nan;
+      if (p.has_attitude)
+        p.q_b_n.normalize();
+      else
+        p.q_b_n = fsw::Quat::Identity();
       out.truth.push_back(p);
     }
   }
@@ -360,13 +371,16 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
       if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t)) {
         const fsw::Vec3 dp = fsw::enu_difference_m(out.nav.llh, t.llh);
         const fsw::Vec3 dv = out.nav.vel_enu_mps - t.vel_enu_mps;
-        const fsw::Vec3 phi = fsw::attitude_error_enu(out.nav.C_b_n(), t.q_b_n.toRotationMatrix());
         nav_pos_ss += dp.squaredNorm();
         nav_vel_ss += dv.squaredNorm();
-        nav_tilt_ss += phi.head<2>().squaredNorm();
-        nav_head_ss += phi.z() * phi.z();
         ++run.nav.samples;
-        run.nav.heading_final_deg = phi.z() * fsw::kRadToDeg;
+        if (t.has_attitude) {
+          const fsw::Vec3 phi = fsw::attitude_error_enu(out.nav.C_b_n(), t.q_b_n.toRotationMatrix());
+          nav_tilt_ss += phi.head<2>().squaredNorm();
+          nav_head_ss += phi.z() * phi.z();
+          ++run.nav.attitude_samples;
+          run.nav.heading_final_deg = phi.z() * fsw::kRadToDeg;
+        }
       }
     }
     if (!out.ekf_ran || !out.ekf_updated) continue;
@@ -405,7 +419,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     double head = NAN;
     if (!data.truth.empty()) {
       TruthPoint t;
-      if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t))
+      if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t) && t.has_attitude)
         head = fsw::attitude_error_enu(out.nav.C_b_n(), t.q_b_n.toRotationMatrix()).z() * fsw::kRadToDeg;
     }
     run.heading_err_deg.push_back(head);
@@ -437,8 +451,9 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     run.nav.available = true;
     run.nav.pos_rms_m = std::sqrt(nav_pos_ss / n);
     run.nav.vel_rms_mps = std::sqrt(nav_vel_ss / n);
-    run.nav.tilt_rms_deg = std::sqrt(nav_tilt_ss / n) * fsw::kRadToDeg;
-    run.nav.heading_rms_deg = std::sqrt(nav_head_ss / n) * fsw::kRadToDeg;
+    const double n_att = std::max(1, run.nav.attitude_samples);
+    run.nav.tilt_rms_deg = run.nav.attitude_samples > 0 ? std::sqrt(nav_tilt_ss / n_att) * fsw::kRadToDeg : NAN;
+    run.nav.heading_rms_deg = run.nav.attitude_samples > 0 ? std::sqrt(nav_head_ss / n_att) * fsw::kRadToDeg : NAN;
   }
   // Final estimates, Wald statistics and the posterior correlation of the active candidates.
   const auto& P = app->executive().ekf().P();

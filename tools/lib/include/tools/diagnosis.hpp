@@ -49,6 +49,7 @@ struct TruthPoint {
   fsw::Vec3 llh = fsw::Vec3::Zero();
   fsw::Vec3 vel_enu_mps = fsw::Vec3::Zero();
   fsw::Quat q_b_n = fsw::Quat::Identity();
+  bool has_attitude = true;  ///< false for a position/velocity reference (an imported GNSS solution)
 };
 
 /// A recording in memory, in arrival order: the inputs of the flight software and, separately,
@@ -128,6 +129,7 @@ struct InnovationStats {
 struct NavErrorStats {
   bool available = false;
   int samples = 0;
+  int attitude_samples = 0;  ///< of which with a reference attitude (tilt/heading: NaN without)
   double pos_rms_m = 0.0, vel_rms_mps = 0.0;
   double tilt_rms_deg = 0.0, heading_rms_deg = 0.0;
   double heading_final_deg = 0.0;
