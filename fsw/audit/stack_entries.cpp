@@ -8,6 +8,7 @@
 // names. The wrappers' own frames are not counted: every task is rooted at the callee.
 #include "fsw/ekf.hpp"
 #include "fsw/executive.hpp"
+#include "fsw/flight_app.hpp"
 #include "fsw/strapdown.hpp"
 
 #define SDINS_STACK_ENTRIES(L)                                                                                    \
@@ -25,6 +26,11 @@
                                                       fsw::EkfUpdateReport& rep) {                               \
     return k.update(epoch, nav, w, rep);                                                                          \
   }                                                                                                               \
+  extern "C" fsw::Status sdins_stack_entry_update_pvt_##L(fsw::Ekf<fsw::L>& k, const fsw::GnssPvtMeasurement& m, \
+                                                          const fsw::NavState& nav, const fsw::Vec3& w,          \
+                                                          fsw::EkfUpdateReport& rep) {                           \
+    return k.update_pvt(m, nav, w, rep);                                                                          \
+  }                                                                                                               \
   extern "C" fsw::Status sdins_stack_entry_feedback_##L(fsw::Ekf<fsw::L>& k, fsw::Strapdown& ins,                \
                                                         fsw::ImuCompensation& comp) {                            \
     return k.feedback(ins, comp);                                                                                 \
@@ -34,6 +40,16 @@ SDINS_STACK_ENTRIES(Layout15)
 SDINS_STACK_ENTRIES(Layout24)
 SDINS_STACK_ENTRIES(Layout15Full)
 SDINS_STACK_ENTRIES(Layout24Full)
+
+// The flight application's solution input (validation, and the initialisation from a solution).
+extern "C" fsw::Status sdins_stack_entry_on_gnss_pvt_Layout15Full(fsw::FlightApp<fsw::Layout15Full>& a,
+                                                                   const fsw::GnssPvtMeasurement& m) {
+  return a.on_gnss_pvt(m);
+}
+extern "C" fsw::Status sdins_stack_entry_on_gnss_pvt_Layout24Full(fsw::FlightApp<fsw::Layout24Full>& a,
+                                                                   const fsw::GnssPvtMeasurement& m) {
+  return a.on_gnss_pvt(m);
+}
 
 extern "C" fsw::Status sdins_stack_entry_strapdown_step(fsw::Strapdown& s, const fsw::FrameIncrement& inc) {
   return s.step(inc);

@@ -61,13 +61,48 @@ double chi2_upper_quantile(int k, double z) {
 
 }  // namespace
 
+PvtModel pvt_measurement_model(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
+                               const Vec3& lever_arm_b_m, double time_offset_s, const Vec3& accel_n_mps2) {
+  PvtModel o;
+  const Mat3 C = nav.C_b_n();
+  const Vec3 l_n = C * lever_arm_b_m;
+  const Vec3 w_ie = omega_ie_n(nav.llh.x());
+  const Vec3 w_rel_b = omega_ib_b_radps - C.transpose() * w_ie;
+  const Vec3 lw_n = C * w_rel_b.cross(lever_arm_b_m);
+  // As update(): the INS at the solution's GNSS time plus the estimated IMU-GNSS offset.
+  const double dt_ins = m.t_s + time_offset_s - nav.t_s;
+  const Vec3 v_ant = nav.vel_enu_mps + lw_n;
+  const Vec3 d_ant = l_n + v_ant * dt_ins;  // antenna relative to the INS solution, ENU
+  o.llh_ant = nav.llh + llh_delta_from_enu(nav.llh, d_ant);
+  o.vel_ant_enu_mps = v_ant + accel_n_mps2 * time_offset_s;
+  // The measured antenna relative to the INS solution in ENU metres at the solution's point (the
+  // exact inverse of llh_delta_from_enu there), so no rounded llh sum enters the innovation.
+  o.pos_innovation_m = d_ant - enu_difference_m(m.llh, nav.llh);
+  o.vel_innovation_mps = o.vel_ant_enu_mps - m.vel_enu_mps;
+  // v_a = v + C (w_ib x l) - w_ie x (C l): with C_hat = (I - [phi x]) C both terms move.
+  const Mat3 vel_att = skew(lw_n) + skew(w_ie.cross(l_n)) - skew(w_ie) * skew(l_n);
+  const Mat3 vel_lever = C * skew(w_rel_b);
+  o.H.block<3, 3>(0, 0).setIdentity();
+  o.H.block<3, 3>(0, 3) = Mat3::Identity() * dt_ins;
+  o.H.block<3, 3>(0, 6) = skew(l_n) + dt_ins * vel_att;
+  o.H.block<3, 3>(0, 9) = C + dt_ins * vel_lever;
+  o.H.block<3, 1>(0, 12) = v_ant;
+  o.H.block<3, 3>(3, 3).setIdentity();
+  o.H.block<3, 3>(3, 6) = vel_att;
+  o.H.block<3, 3>(3, 9) = vel_lever;
+  o.H.block<3, 1>(3, 12) = accel_n_mps2;
+  return o;
+}
+
 template <class Layout>
 Status Ekf<Layout>::init(const EkfConfig& cfg) {
   if (cfg.propagation_substep_frames < 1 || !(cfg.pseudorange_sigma_m > 0.0) ||
       !(cfg.pseudorange_rate_sigma_mps > 0.0) || !(cfg.gate_chi2 > 0.0) || !cfg.att_sigma_rad.allFinite() ||
       !cfg.lever_arm_b_m.allFinite() || !(cfg.gyro_g_sens_sigma_radps_per_mps2 >= 0.0) ||
       !(cfg.time_offset_sigma_s >= 0.0) || !(cfg.lever_arm_sigma_m >= 0.0) || !(cfg.tropo_scale_sigma >= 0.0) ||
-      !(cfg.iono_scale_sigma >= 0.0) || cfg.nis_window < 1 || cfg.nis_window > kMaxNisWindow ||
+      !(cfg.iono_scale_sigma >= 0.0) || !(cfg.pvt_pos_sigma_floor_m >= 0.0) || !std::isfinite(cfg.pvt_pos_sigma_floor_m) ||
+      !(cfg.pvt_vel_sigma_floor_mps >= 0.0) || !std::isfinite(cfg.pvt_vel_sigma_floor_mps) ||
+      !(cfg.pvt_sigma_scale > 0.0) || !std::isfinite(cfg.pvt_sigma_scale) || cfg.nis_window < 1 || cfg.nis_window > kMaxNisWindow ||
       cfg.runaway_epochs < 0)
     return Status::kBadConfig;
   cfg_ = cfg;
@@ -495,6 +530,66 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
 }
 
 template <class Layout>
+Status Ekf<Layout>::update_pvt(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
+                               EkfUpdateReport& report) {
+  report = EkfUpdateReport{};
+  report.pvt = true;
+  if (!initialised_) return Status::kNotInitialised;
+  if (!std::isfinite(m.t_s) || !omega_ib_b_radps.allFinite() || !nav.llh.allFinite() || !nav.vel_enu_mps.allFinite() ||
+      !nav.q_b_n.coeffs().allFinite()) {
+    ++health_.nonfinite_rejected;
+    return Status::kBadInput;
+  }
+  const bool pos_ok = m.llh.allFinite() && std::abs(m.llh.x()) <= 0.5 * kPi && m.pos_sigma_enu_m.allFinite() &&
+                      (m.pos_sigma_enu_m.array() > 0.0).all();
+  const bool vel_ok = m.has_velocity && m.vel_enu_mps.allFinite() && m.vel_sigma_enu_mps.allFinite() &&
+                      (m.vel_sigma_enu_mps.array() > 0.0).all();
+  if (!pos_ok) {
+    ++report.obs_invalid;
+    for (int i = 0; i < 3; ++i) report.pvt_obs[static_cast<std::size_t>(i)].outcome = InnovationOutcome::kInvalid;
+  }
+  if (m.has_velocity && !vel_ok) {
+    ++report.obs_invalid;
+    for (int i = 3; i < 6; ++i) report.pvt_obs[static_cast<std::size_t>(i)].outcome = InnovationOutcome::kInvalid;
+  }
+  if (pos_ok || vel_ok) {
+    const double lat = nav.llh.x();
+    // The frame's kinematic acceleration, exactly as update() forms it for the time-offset terms.
+    const Vec3 a_n = last_f_n_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
+    const PvtModel mdl =
+        pvt_measurement_model(m, nav, omega_ib_b_radps, lever_arm_hat_b_m_, time_offset_hat_s_, a_n);
+    const double scale2 = cfg_.pvt_sigma_scale * cfg_.pvt_sigma_scale;
+    RowVec h;
+    for (int i = 0; i < 6; ++i) {
+      const bool is_pos = i < 3;
+      if (is_pos ? !pos_ok : !vel_ok) continue;
+      const int a = is_pos ? i : i - 3;
+      const double sig = is_pos ? std::max(m.pos_sigma_enu_m(a), cfg_.pvt_pos_sigma_floor_m)
+                                : std::max(m.vel_sigma_enu_mps(a), cfg_.pvt_vel_sigma_floor_mps);
+      h.setZero();
+      h.template head<9>() = mdl.H.template block<1, 9>(i, 0);
+      if constexpr (Layout::has(Block::kLeverArm))
+        h.template segment<3>(Layout::offset(Block::kLeverArm)) = mdl.H.template block<1, 3>(i, 9);
+      if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = mdl.H(i, 12);
+      const double y = is_pos ? mdl.pos_innovation_m(a) : mdl.vel_innovation_mps(a);
+      PvtInnovation& inn = report.pvt_obs[static_cast<std::size_t>(i)];
+      if (scalar_update(h, y, scale2 * sig * sig, inn.innovation, inn.variance)) {
+        inn.outcome = InnovationOutcome::kUsed;
+        ++(is_pos ? report.pos_used : report.vel_used);
+        report.nis_sum += inn.innovation * inn.innovation / inn.variance;
+        ++report.nis_dof;
+      } else {
+        inn.outcome = InnovationOutcome::kGated;
+        ++(is_pos ? report.pos_rejected : report.vel_rejected);
+      }
+    }
+  }
+  check_covariance();
+  track_consistency(report);
+  return Status::kOk;
+}
+
+template <class Layout>
 Status Ekf<Layout>::set_covariance(const Mat& P) {
   if (!initialised_) return Status::kNotInitialised;
   if (!P.allFinite()) {
@@ -598,7 +693,12 @@ void Ekf<Layout>::track_consistency(const EkfUpdateReport& report) {
   // (Per measurement type: a clock jump fails every pseudorange and no rate.)
   const int pr_seen = report.pr_used + report.pr_rejected;
   const int prr_seen = report.prr_used + report.prr_rejected;
-  if ((pr_seen >= 4 && 2 * report.pr_rejected > pr_seen) || (prr_seen >= 4 && 2 * report.prr_rejected > prr_seen)) {
+  // A PVT update has three scalars per type: at least two of the three positions (or velocities)
+  // gated counts the same way (a position jump fails the positions, not the velocities).
+  const int pos_seen = report.pos_used + report.pos_rejected;
+  const int vel_seen = report.vel_used + report.vel_rejected;
+  if ((pr_seen >= 4 && 2 * report.pr_rejected > pr_seen) || (prr_seen >= 4 && 2 * report.prr_rejected > prr_seen) ||
+      (pos_seen >= 3 && 2 * report.pos_rejected > pos_seen) || (vel_seen >= 3 && 2 * report.vel_rejected > vel_seen)) {
     ++runaway_count_;
     ++health_.gating_runaway_epochs;
   } else {

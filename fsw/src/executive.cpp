@@ -20,6 +20,7 @@ Status Executive<Layout>::init(const ExecutiveConfig& cfg, const NavState& initi
   comp_ = ImuCompensation{};
   health_ = ExecutiveHealth{};
   have_pending_ = false;
+  have_pending_pvt_ = false;
   frames_since_ekf_ = 0;
   have_last_sample_ = false;
   last_accel_n_mps2_.setZero();
@@ -47,6 +48,16 @@ Status Executive<Layout>::tick(const FrameInput& in, FrameOutput& out) {
       if (have_pending_) ++health_.gnss_replaced;
       pending_ = *in.gnss;
       have_pending_ = true;
+    }
+  }
+  if (in.pvt != nullptr) {
+    ++health_.pvt_received;
+    if (!std::isfinite(in.pvt->t_s)) {
+      ++health_.pvt_invalid;
+    } else {
+      if (have_pending_pvt_) ++health_.pvt_replaced;
+      pending_pvt_ = *in.pvt;
+      have_pending_pvt_ = true;
     }
   }
   const int n = (in.imu == nullptr || in.n_imu < 0) ? 0 : in.n_imu;
@@ -93,26 +104,36 @@ void Executive<Layout>::run_ekf(FrameOutput& out) {
       have_pending_ = false;
     }
   }
+  if (have_pending_pvt_ && nav.t_s - pending_pvt_.t_s > cfg_.max_gnss_age_s) {
+    ++health_.pvt_stale;
+    have_pending_pvt_ = false;
+  }
   const bool epoch_ready = have_pending_ && pending_.t_s <= nav.t_s + half_frame_s;
-  if (!epoch_ready && frames_since_ekf_ < cfg_.frames_per_ekf + cfg_.gnss_wait_frames) return;
+  const bool pvt_ready = have_pending_pvt_ && pending_pvt_.t_s <= nav.t_s + half_frame_s;
+  if (!epoch_ready && !pvt_ready && frames_since_ekf_ < cfg_.frames_per_ekf + cfg_.gnss_wait_frames) return;
 
   frames_since_ekf_ = 0;
   out.ekf_ran = true;
   ++health_.ekf_runs;
   if (ekf_.propagate() != Status::kOk) ++health_.fsw_errors;
   health_.ekf = ekf_.health();
-  if (!epoch_ready) {
+  if (!epoch_ready && !pvt_ready) {
     ++health_.ekf_without_gnss;
     return;
   }
-  have_pending_ = false;
-  // Align: the solution at the epoch's time tag, extrapolated back (or forward) from the frame end.
-  const double dt = pending_.t_s - nav.t_s;
-  NavState at_epoch = nav;
-  at_epoch.t_s = pending_.t_s;
-  at_epoch.llh += llh_rate(nav.llh, nav.vel_enu_mps) * dt;
-  at_epoch.vel_enu_mps += last_accel_n_mps2_ * dt;
-  const Status st = ekf_.update(pending_, at_epoch, ins_.omega_ib_b_radps(), out.report);
+  Status st = Status::kOk;
+  if (epoch_ready) {
+    if (pvt_ready) {  // both: the raw epoch wins, the solution is dropped
+      ++health_.pvt_unused;
+      have_pending_pvt_ = false;
+    }
+    have_pending_ = false;
+    // Align: the solution at the epoch's time tag.
+    st = ekf_.update(pending_, aligned(pending_.t_s), ins_.omega_ib_b_radps(), out.report);
+  } else {
+    have_pending_pvt_ = false;
+    st = ekf_.update_pvt(pending_pvt_, aligned(pending_pvt_.t_s), ins_.omega_ib_b_radps(), out.report);
+  }
   health_.ekf = ekf_.health();
   if (st != Status::kOk) {
     ++health_.fsw_errors;
@@ -123,9 +144,24 @@ void Executive<Layout>::run_ekf(FrameOutput& out) {
   health_.pr_rejected += static_cast<std::uint32_t>(out.report.pr_rejected);
   health_.prr_rejected += static_cast<std::uint32_t>(out.report.prr_rejected);
   health_.obs_invalid += static_cast<std::uint32_t>(out.report.obs_invalid);
+  health_.pos_used += static_cast<std::uint32_t>(out.report.pos_used);
+  health_.vel_used += static_cast<std::uint32_t>(out.report.vel_used);
+  health_.pos_rejected += static_cast<std::uint32_t>(out.report.pos_rejected);
+  health_.vel_rejected += static_cast<std::uint32_t>(out.report.vel_rejected);
   if (ekf_.feedback(ins_, comp_) != Status::kOk) ++health_.fsw_errors;
   ++health_.ekf_updates;
   out.ekf_updated = true;
+}
+
+template <class Layout>
+NavState Executive<Layout>::aligned(double t_s) const {
+  const NavState& nav = ins_.state();
+  const double dt = t_s - nav.t_s;
+  NavState at = nav;
+  at.t_s = t_s;
+  at.llh += llh_rate(nav.llh, nav.vel_enu_mps) * dt;
+  at.vel_enu_mps += last_accel_n_mps2_ * dt;
+  return at;
 }
 
 template class Executive<Layout15>;

@@ -17,6 +17,8 @@
 #include "fsw/alignment.hpp"
 #include "fsw/ekf.hpp"
 #include "fsw/executive.hpp"
+#include "fsw/flight_app.hpp"
+#include "sim/imu_model.hpp"
 #include "fsw/gps_orbit.hpp"
 #include "fsw/strapdown.hpp"
 #include "hal/lcm_convert.hpp"
@@ -142,6 +144,7 @@ struct FlightInputs {
   std::vector<fsw::ImuSample> imu;
   std::vector<fsw::GnssRawEpoch> raw;  ///< raw[k] arrives with the frame ending at k + 1 s
   std::vector<sim::AlmanacEntry> almanac;
+  std::vector<fsw::GnssPvtMeasurement> pvt;  ///< pvt[k]: the antenna at (k + 1) * 0.25 s
   fsw::NavState init{};
 };
 
@@ -171,6 +174,17 @@ const FlightInputs& flight_inputs() {
         fsw::GnssRawEpoch r;
         gps.raw(e, r);
         f.raw.push_back(r);
+      }
+      if ((i + 1) % 250 == 0) {
+        fsw::GnssPvtMeasurement m;
+        m.t_s = t.t_s;
+        sim::antenna_truth(t, fsw::Vec3::Zero(), m.llh, m.vel_enu_mps);
+        m.pos_sigma_enu_m = fsw::Vec3::Constant(0.5);
+        m.vel_sigma_enu_mps = fsw::Vec3::Constant(0.05);
+        m.has_velocity = true;
+        m.quality = 5;
+        m.n_sat = 8;
+        f.pvt.push_back(m);
       }
     }
     return f;
@@ -222,6 +236,82 @@ void fly_executive_without_allocating() {
   EXPECT_EQ(exec.health().fsw_errors, 0u);
   EXPECT_EQ(g_allocs.load(), 0) << "executive (" << Layout::kSize << " states) allocated " << g_allocs.load()
                                 << " times";
+}
+
+/// The loosely coupled path: 4 Hz solutions (frames_per_ekf 50) and 1 Hz raw epochs through the
+/// executive (solution updates, raw epochs winning over simultaneous solutions, an invalid one),
+/// then the flight application initialising from a solution and updating with the rest.
+template <class Layout>
+void fly_pvt_without_allocating() {
+  const FlightInputs& in = flight_inputs();
+  ASSERT_EQ(in.pvt.size(), 480u);
+  static fsw::Executive<Layout> exec;
+  static fsw::GpsAlmanacTable table;
+  fsw::ExecutiveConfig cfg;
+  cfg.frames_per_ekf = 50;
+  ASSERT_EQ(exec.init(cfg, in.init), fsw::Status::kOk);
+  fsw::GnssPvtMeasurement bad = in.pvt[0];
+  bad.t_s = std::nan("");
+  int pvt_updates = 0;
+  long n_exec = 0;
+  {
+    Armed a;
+    table.clear();
+    for (const auto& e : in.almanac) table.set(e);
+    fsw::GnssEpoch epoch;
+    fsw::GnssConversionStats conv;
+    fsw::FrameOutput out;
+    for (std::size_t k = 0; k + 5 <= in.imu.size(); k += 5) {
+      fsw::FrameInput fi;
+      fi.imu = &in.imu[k];
+      fi.n_imu = 5;
+      const std::size_t ms = k + 5;
+      if (ms % 250 == 0) fi.pvt = &in.pvt[ms / 250 - 1];
+      if (ms % 1000 == 0) {
+        const fsw::Vec3 hint = exec.ins().state().llh;
+        if (fsw::gnss_epoch_from_raw(in.raw[ms / 1000 - 1], table, &hint, epoch, conv) == fsw::Status::kOk)
+          fi.gnss = &epoch;
+      }
+      if (ms == 60000) fi.pvt = &bad;
+      exec.tick(fi, out);
+      if (out.ekf_updated && out.report.pvt) ++pvt_updates;
+    }
+    n_exec = g_allocs;
+  }
+  EXPECT_GE(pvt_updates, 300);
+  EXPECT_GE(exec.health().pvt_unused, 100u);
+  EXPECT_EQ(exec.health().pvt_invalid, 1u);
+  EXPECT_EQ(exec.health().fsw_errors, 0u);
+  EXPECT_EQ(n_exec, 0) << "executive with solutions (" << Layout::kSize << " states) allocated " << n_exec << " times";
+}
+
+TEST(NoAlloc, PvtUpdatesDoNotAllocate15) { fly_pvt_without_allocating<fsw::Layout15>(); }
+TEST(NoAlloc, PvtUpdatesDoNotAllocate24) { fly_pvt_without_allocating<fsw::Layout24>(); }
+TEST(NoAlloc, PvtUpdatesDoNotAllocate24Full) { fly_pvt_without_allocating<fsw::Layout24Full>(); }
+TEST(NoAlloc, PvtUpdatesDoNotAllocateDiag) { fly_pvt_without_allocating<fsw::LayoutDiag>(); }
+
+TEST(NoAlloc, FlightAppOnGnssPvtDoesNotAllocate) {
+  const FlightInputs& in = flight_inputs();
+  static fsw::FlightApp<fsw::Layout24Full> app;
+  fsw::FlightAppConfig cfg;
+  cfg.exec.frames_per_ekf = 50;
+  ASSERT_EQ(app.init(cfg), fsw::Status::kOk);
+  fsw::GnssPvtMeasurement bad = in.pvt[0];
+  bad.quality = 0;
+  {
+    Armed a;
+    fsw::FrameOutput out;
+    std::size_t next = 0;
+    for (const fsw::ImuSample& s : in.imu) {
+      while (next < in.pvt.size() && in.pvt[next].t_s <= s.t_s - 0.02) app.on_gnss_pvt(in.pvt[next++]);
+      app.on_imu(s, out);
+    }
+    app.on_gnss_pvt(bad);
+  }
+  EXPECT_TRUE(app.initialised());
+  EXPECT_EQ(app.health().pvt_rejected, 1u);
+  EXPECT_GE(app.executive().health().pos_used, 900u);
+  EXPECT_EQ(g_allocs.load(), 0) << "FlightApp::on_gnss_pvt path allocated " << g_allocs.load() << " times";
 }
 
 TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate15) { fly_executive_without_allocating<fsw::Layout15>(); }

@@ -36,6 +36,23 @@
 //   A block whose initial sigma is zero stays exactly zero (it has no process noise): the
 //   diagnosis switches extensions on and off that way.
 //
+// LOOSELY COUPLED UPDATE (update_pvt: a GNSS position/velocity solution of the antenna)
+//   The antenna p_a = p + C_b_n l, v_a = v + C_b_n (w x l) (w = w_ib_b - C_n_b w_ie_n), read at
+//   the solution's time plus tau_hat like the pseudoranges. Six sequential scalar updates in ENU,
+//   position E N U then velocity E N U (axes uncorrelated), each gated with gate_chi2, Joseph form:
+//     y_pos = d_a - enu_difference_m(llh_meas, llh_nav)  H: pos I, att [(C_b_n l) x], lever C_b_n,
+//                                                          tau v_a (= v_n + C_b_n (w x l))
+//     y_vel = v_a_hat - v_meas                           H: vel I, att [(C_b_n (w x l)) x]
+//                                                          + [(w_ie_n x C_b_n l) x] - [w_ie_n x][(C_b_n l) x]
+//                                                          (the Earth-rate part of w depends on the
+//                                                          attitude too), lever C_b_n [w x], tau a_n
+//   (d_a = C_b_n l + v_a dt: the predicted antenna relative to the INS solution; the velocity term
+//   tau a_n is applied to v_a_hat as in update()). The position is read
+//   dt = t_meas + tau_hat - t_nav after nav (0 when the executive has aligned nav to the solution
+//   and tau_hat = 0), so its rows also get dt times the velocity rows' nav, attitude and lever terms.
+//   R = (pvt_sigma_scale * max(sigma, floor))^2 per axis. The clock and the channel errors are
+//   not involved. pvt_measurement_model() is the model itself (tests check it by differences).
+//
 // TIME-CORRELATED MEASUREMENT ERRORS (layouts with kRangeError / kRangeRateError): each tracked
 //   satellite is bound to a channel; the channel's first-order Gauss-Markov error is a state
 //   (H = 1), propagated with a = exp(-T / tau) and Qd = sigma^2 (1 - a^2). A newly tracked
@@ -101,13 +118,18 @@ struct EkfConfig {
   double range_rate_gm_tau_s = 10.0;
   bool use_pseudorange_rate = true;
   double gate_chi2 = 10.83;  ///< 1 degree of freedom, P(reject | good) = 0.001
+  // Loosely coupled update (update_pvt): R = (pvt_sigma_scale * max(sigma, floor))^2 per ENU axis,
+  // sigma the solver's own 1-sigma of the solution.
+  double pvt_pos_sigma_floor_m = 0.02;
+  double pvt_vel_sigma_floor_mps = 0.01;
+  double pvt_sigma_scale = 1.0;
   Vec3 lever_arm_b_m = Vec3::Zero();  ///< IMU reference point -> GNSS antenna, body axes
 
   int propagation_substep_frames = 10;  ///< navigation frames per transition-matrix sub-step
 
   // Divergence guard. NIS window for the consistency test, and the gating runaway: when more than
-  // half of an epoch's pseudoranges (or of its rates; at least 4 of them) fail the gate for
-  // runaway_epochs epochs in a row, the filter
+  // half of an epoch's pseudoranges (or of its rates; at least 4 of them), or of a PVT update's
+  // positions (or velocities; 2 of 3), fail the gate for runaway_epochs updates in a row, the filter
   // no longer accepts the data that would correct it; the navigation and clock covariance is then
   // re-inflated to its initial values (counted in EkfHealth::resets). 0 disables the reset.
   int nis_window = 10;
@@ -135,7 +157,16 @@ struct ObservationInnovation {
   double prr_variance_m2ps2 = 0.0;
 };
 
-/// What one measurement update did.
+/// One scalar of a loosely coupled (position/velocity) update. innovation = predicted minus
+/// measured [m or m/s], after the earlier scalars of the same update; variance = H P H^T + R.
+struct PvtInnovation {
+  InnovationOutcome outcome = InnovationOutcome::kNotProcessed;
+  double innovation = 0.0;
+  double variance = 0.0;
+};
+
+/// What one measurement update did (a raw epoch, update(); or a position/velocity solution,
+/// update_pvt(), then pvt is set and the pseudorange fields stay zero).
 struct EkfUpdateReport {
   int pr_used = 0;
   int prr_used = 0;
@@ -147,8 +178,31 @@ struct EkfUpdateReport {
   int n_obs = 0;                   ///< entries of obs: the epoch's observations, in epoch order
   std::array<ObservationInnovation, kMaxGnssChannels> obs{};
   double nis_sum = 0.0;            ///< sum of the NIS of the accepted scalar measurements ...
-  int nis_dof = 0;                 ///< ... and their number
+  int nis_dof = 0;                 ///< ... and their number (pseudoranges, rates or PVT scalars)
+  // Loosely coupled update (update_pvt). obs_invalid counts an invalid position or velocity part.
+  bool pvt = false;                       ///< this report is a PVT update
+  std::array<PvtInnovation, 6> pvt_obs{}; ///< pos E, N, U, vel E, N, U
+  int pos_used = 0;
+  int vel_used = 0;
+  int pos_rejected = 0;  ///< failed the innovation gate
+  int vel_rejected = 0;
 };
+
+/// The loosely coupled measurement model at one solution (see the file comment): the predicted
+/// antenna, the innovations (predicted minus measured) and the exact Jacobian of the predicted
+/// measurement. lever_arm_b_m and time_offset_s are the filter's estimates, accel_n_mps2 the
+/// frame's kinematic acceleration (ENU).
+struct PvtModel {
+  Vec3 llh_ant = Vec3::Zero();         ///< predicted antenna position
+  Vec3 vel_ant_enu_mps = Vec3::Zero(); ///< predicted antenna velocity
+  Vec3 pos_innovation_m = Vec3::Zero();
+  Vec3 vel_innovation_mps = Vec3::Zero();
+  /// Rows: pos E N U, vel E N U. Columns: position (0..2), velocity (3..5), attitude phi (6..8),
+  /// lever arm (9..11), time offset (12), in the error definitions of error_state.hpp.
+  Eigen::Matrix<double, 6, 13> H = Eigen::Matrix<double, 6, 13>::Zero();
+};
+PvtModel pvt_measurement_model(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
+                               const Vec3& lever_arm_b_m, double time_offset_s, const Vec3& accel_n_mps2);
 
 /// Numerical and statistical health of the filter (F Prime style counters, never asserts).
 struct EkfHealth {
@@ -190,6 +244,14 @@ class Ekf {
   /// Measurement update with one epoch. nav: the INS solution at the frame closest to the epoch;
   /// omega_ib_b: body rate of that frame (for the lever-arm velocity).
   Status update(const GnssEpoch& epoch, const NavState& nav, const Vec3& omega_ib_b_radps, EkfUpdateReport& report);
+
+  /// Loosely coupled update with one GNSS position/velocity solution of the antenna; nav and
+  /// omega_ib_b as for update() (the frame acceleration of the time-offset term is the filter's
+  /// own, from accumulate(), as in update()). Non-finite nav/rate/time: kBadInput, counted in
+  /// nonfinite_rejected. An invalid position or velocity part (non-finite, sigma <= 0, latitude
+  /// beyond +-90 deg) is not used and counted in report.obs_invalid; the rest is.
+  Status update_pvt(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
+                    EkfUpdateReport& report);
 
   /// Applies the estimate to the solution and the IMU compensation and resets it to zero.
   Status feedback(Strapdown& ins, ImuCompensation& comp);

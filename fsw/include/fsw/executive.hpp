@@ -12,6 +12,13 @@
 // is extrapolated from the frame end to the epoch's time with the frame's velocity and
 // acceleration.
 //
+// A GNSS position/velocity solution (FrameInput::pvt, the loosely coupled update) has its own
+// pending slot, handled like the raw epoch's (aligned to the INS time, stale/replaced/invalid
+// counted): a due EKF step runs as soon as either is ready. When both are ready the raw epoch is
+// used and the solution is dropped (pvt_unused); a solution that is ready while the raw epoch is
+// not (yet) is used. With frames_per_ekf = nav rate / solution rate (50 for 4 Hz) the EKF follows
+// the solutions, one update per solution.
+//
 // Everything arrives through FrameInput and leaves through FrameOutput and Health: no clocks, no
 // I/O, no allocation; the same inputs give bit-identical outputs. Frame overruns are measured by
 // the caller (HAL), which passes the previous tick's execution time in.
@@ -53,6 +60,13 @@ struct ExecutiveHealth {
   std::uint32_t gnss_replaced = 0;       ///< overwritten by a newer epoch before use
   std::uint32_t gnss_invalid = 0;        ///< malformed epochs (n_obs out of range, non-finite time)
   std::uint32_t pr_used = 0, prr_used = 0, pr_rejected = 0, prr_rejected = 0, obs_invalid = 0;
+  // GNSS position/velocity solutions (loosely coupled update).
+  std::uint32_t pvt_received = 0;
+  std::uint32_t pvt_stale = 0;     ///< too old when the EKF could use them
+  std::uint32_t pvt_replaced = 0;  ///< overwritten by a newer solution before use
+  std::uint32_t pvt_invalid = 0;   ///< non-finite time
+  std::uint32_t pvt_unused = 0;    ///< ready together with a raw epoch, which was used instead
+  std::uint32_t pos_used = 0, vel_used = 0, pos_rejected = 0, vel_rejected = 0;  ///< PVT scalars
   std::uint32_t overruns = 0;
   double worst_tick_s = 0.0;
   std::uint32_t fsw_errors = 0;          ///< fsw calls that returned an unexpected status
@@ -63,6 +77,7 @@ struct FrameInput {
   const ImuSample* imu = nullptr;  ///< the raw IMU samples that arrived during this minor frame
   int n_imu = 0;
   const GnssEpoch* gnss = nullptr;  ///< an epoch that arrived during this frame, or nullptr
+  const GnssPvtMeasurement* pvt = nullptr;  ///< a position/velocity solution that arrived during this frame
   double prev_tick_exec_s = -1.0;   ///< measured execution time of the previous tick (< 0: unknown)
 };
 
@@ -88,6 +103,8 @@ class Executive {
 
  private:
   void run_ekf(FrameOutput& out);
+  /// The solution at time t_s, extrapolated back (or forward) from the frame end.
+  NavState aligned(double t_s) const;
 
   ExecutiveConfig cfg_{};
   bool initialised_ = false;
@@ -98,6 +115,8 @@ class Executive {
   ExecutiveHealth health_{};
   GnssEpoch pending_{};
   bool have_pending_ = false;
+  GnssPvtMeasurement pending_pvt_{};
+  bool have_pending_pvt_ = false;
   int frames_since_ekf_ = 0;
   bool have_last_sample_ = false;
   double last_sample_t_s_ = 0.0;

@@ -227,7 +227,9 @@ inline Mat3 C_n_e(double lat_rad, double lon_rad) {
   return c;
 }
 
-/// Horizontal/vertical position difference of two (lat, lon, h) points, in ENU metres at a.
+/// Position difference a - b of two (lat, lon, h) points in ENU metres, with the radii of b: the
+/// exact inverse of llh_delta_from_enu at b (enu_difference_m(b + llh_delta_from_enu(b, d), b) == d
+/// up to rounding). Ekf::update_pvt forms its position innovation with it.
 inline Vec3 enu_difference_m(const Vec3& llh_a, const Vec3& llh_b) {
   const double lat = llh_b.x();
   return Vec3((llh_a.y() - llh_b.y()) * (normal_radius_m(lat) + llh_b.z()) * std::cos(lat),

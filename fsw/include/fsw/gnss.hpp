@@ -45,6 +45,19 @@ struct GnssEpoch {
   std::array<GnssObservation, kMaxGnssChannels> obs{};
 };
 
+/// One GNSS position/velocity solution (of the antenna), the input of the loosely coupled update
+/// (Ekf::update_pvt). Recorded data sets give these instead of raw pseudoranges (RTKLIB .pos).
+struct GnssPvtMeasurement {
+  double t_s = 0.0;                    ///< time of the solution on the navigation time scale [s]
+  Vec3 llh = Vec3::Zero();             ///< antenna: lat [rad], lon [rad], ellipsoidal h [m]
+  Vec3 vel_enu_mps = Vec3::Zero();     ///< antenna velocity relative to the Earth, ENU
+  Vec3 pos_sigma_enu_m = Vec3::Zero(); ///< the solver's 1-sigma, E N U [m] (> 0)
+  Vec3 vel_sigma_enu_mps = Vec3::Zero();
+  bool has_velocity = false;           ///< false: position only
+  int quality = 0;                     ///< RTKLIB Q: 1 fix, 2 float, 3 SBAS, 4 DGPS, 5 single, 6 PPP
+  int n_sat = 0;
+};
+
 /// Zenith tropospheric delay at sea level [m] and its scale height [m].
 inline constexpr double kTropoZenithDelay_m = 2.4;
 inline constexpr double kTropoScaleHeight_m = 7000.0;

@@ -561,31 +561,45 @@ void fsw_task_specs(const CallGraph& g, long budget_bytes, long red_zone_bytes, 
     const std::string tick = single_callee(g, w + "tick_" + l);
     const std::string propagate = single_callee(g, w + "propagate_" + l);
     const std::string update = single_callee(g, w + "update_" + l);
+    const std::string update_pvt = single_callee(g, w + "update_pvt_" + l);
     const std::string feedback = single_callee(g, w + "feedback_" + l);
     const std::string accumulate = single_callee(g, w + "accumulate_" + l);
     TaskSpec mech;
     mech.name = "mech_200hz/" + l;
     mech.root = tick;
-    mech.cut = {propagate, update, feedback};
+    mech.cut = {propagate, update, update_pvt, feedback};
     mech.budget_bytes = budget_bytes;
     mech.red_zone_bytes = red_zone_bytes;
-    mech.description = "Executive<" + l + ">::tick without the 1 Hz group (Ekf::propagate/update/feedback cut)";
+    mech.description =
+        "Executive<" + l + ">::tick without the 1 Hz group (Ekf::propagate/update/update_pvt/feedback cut)";
     tasks.push_back(mech);
     TaskSpec ekf;
     ekf.name = "ekf_1hz/" + l;
     ekf.root = tick;
     ekf.budget_bytes = budget_bytes;
     ekf.red_zone_bytes = red_zone_bytes;
-    ekf.description = "Executive<" + l + ">::tick of the minor frame that runs the 1 Hz group (propagate, update, feedback)";
+    ekf.description = "Executive<" + l +
+                      ">::tick of the minor frame that runs the 1 Hz group (propagate, update or update_pvt, feedback)";
     tasks.push_back(ekf);
     for (const auto& [what, id] : {std::pair<std::string, std::string>{"accumulate", accumulate},
-                                   {"propagate", propagate}, {"update", update}, {"feedback", feedback}}) {
+                                   {"propagate", propagate}, {"update", update}, {"update_pvt", update_pvt},
+                                   {"feedback", feedback}}) {
       TaskSpec f;
       f.name = "Ekf<" + l + ">::" + what;
       f.root = id;
       f.red_zone_bytes = red_zone_bytes;
       functions.push_back(f);
     }
+  }
+  // The flight application's solution input: validation, or the initialisation from a solution.
+  for (const std::string l : {"Layout15Full", "Layout24Full"}) {
+    TaskSpec app;
+    app.name = "pvt_input/" + l;
+    app.root = single_callee(g, w + "on_gnss_pvt_" + l);
+    app.budget_bytes = budget_bytes;
+    app.red_zone_bytes = red_zone_bytes;
+    app.description = "FlightApp<" + l + ">::on_gnss_pvt (validation; initialisation from a solution)";
+    tasks.push_back(app);
   }
   for (const auto& [name, wrapper] : {std::pair<std::string, std::string>{"Strapdown::step", "strapdown_step"},
                                       {"FrameBuilder::add", "frame_builder_add"}}) {
