@@ -1,6 +1,7 @@
 // Standard atmospheric delay models (fsw/gnss_delays.hpp): Saastamoinen against RTKLIB's
 // tropmodel() values, Klobuchar against cases worked by hand from IS-GPS-200 20.3.3.5.2.5, their
-// limits and symmetries, and the defined results for out-of-range and non-finite inputs.
+// limits and symmetries, the defined results for out-of-range and non-finite inputs, and the
+// diagnosis EKF's pseudorange H of the tropo / iono scale states being these models.
 //
 // The reference numbers come from an independent Python implementation of the published
 // formulas (RTKLIB rtkcmn.c tropmodel() / ionmodel(), IS-GPS-200), written out here so they can
@@ -38,6 +39,8 @@
 #include <cmath>
 #include <limits>
 
+#include "fsw/ekf.hpp"
+#include "fsw/error_state.hpp"
 #include "fsw/frames.hpp"
 #include "fsw/gnss.hpp"
 #include "fsw/gnss_delays.hpp"
@@ -350,6 +353,68 @@ TEST(Klobuchar, InvalidInputsGiveZero) {
             klobuchar_delay_m(kKlobucharDefault, tow, lat, lon, az, kPi / 2));
   EXPECT_TRUE(std::isfinite(klobuchar_delay_m(kKlobucharDefault, 1e300, lat, lon, az, 0.5)));
   EXPECT_GT(klobuchar_delay_m(kKlobucharDefault, 1e300, lat, lon, az, 0.5), 0.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The diagnosis EKF (LayoutDiag): the pseudorange row of the scale states is the shared model.
+
+/// Prior innovation variance of the first pseudorange of the second epoch (the first sets the
+/// clock), H P0 H^T + R, with the given scale sigmas; satellite `first` of six is put first.
+double first_pr_variance(double tropo_sigma, double iono_sigma, int first, double& d_tropo, double& d_iono) {
+  fsw::EkfConfig cfg;
+  cfg.tropo_scale_sigma = tropo_sigma;
+  cfg.iono_scale_sigma = iono_sigma;
+  cfg.gate_chi2 = 1e9;
+  fsw::Ekf<fsw::LayoutDiag> ekf;
+  EXPECT_EQ(ekf.init(cfg), fsw::Status::kOk);
+  fsw::NavState nav;
+  nav.llh = fsw::Vec3(35.0 * kDegToRad, 127.0 * kDegToRad, 5000.0);
+  nav.vel_enu_mps = fsw::Vec3(0.0, 250.0, 0.0);
+  const fsw::Vec3 r_rx = fsw::ecef_from_llh(nav.llh);
+  const fsw::Mat3 Cne = fsw::C_n_e(nav.llh.x(), nav.llh.y());
+  fsw::GnssEpoch ep;
+  ep.gps_tow_s = 279120.0;  // 14:00 local time at 127 E: the Klobuchar delay is near its daily peak
+  const double az[6] = {0.3, 1.4, 2.5, 3.6, 4.7, 5.8}, el[6] = {0.3, 0.6, 0.9, 1.2, 0.1, 0.8};
+  ep.n_obs = 6;
+  for (int i = 0; i < 6; ++i) {
+    const int k = (first + i) % 6;
+    const fsw::Vec3 u_n(std::cos(el[k]) * std::sin(az[k]), std::cos(el[k]) * std::cos(az[k]), std::sin(el[k]));
+    auto& o = ep.obs[static_cast<std::size_t>(i)];
+    o.prn = static_cast<std::uint8_t>(k + 1);
+    o.sat_pos_ecef_m = r_rx + Cne * u_n * 2.2e7;
+    o.sat_vel_ecef_mps = fsw::Vec3(1000.0 * k, -500.0, 2000.0);
+    const fsw::GnssGeometry g = fsw::gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r_rx, Cne * nav.vel_enu_mps);
+    o.pseudorange_m = g.range_m + 100.0;
+    o.pseudorange_rate_mps = g.range_rate_mps + 2.0;
+  }
+  // The model delays of the first satellite, from its line of sight as the filter predicts it.
+  const fsw::GnssGeometry g =
+      fsw::gnss_geometry(ep.obs[0].sat_pos_ecef_m, ep.obs[0].sat_vel_ecef_mps, r_rx, Cne * nav.vel_enu_mps);
+  const fsw::Vec3 e_n = Cne.transpose() * g.los_ecef;
+  const double e = std::asin(e_n.z()), a = std::atan2(e_n.x(), e_n.y());
+  d_tropo = saastamoinen_delay_m(nav.llh.x(), nav.llh.z(), e);
+  d_iono = klobuchar_delay_m(kKlobucharDefault, ep.gps_tow_s, nav.llh.x(), nav.llh.y(), a, e);
+  fsw::EkfUpdateReport rep;
+  EXPECT_EQ(ekf.update(ep, nav, fsw::Vec3::Zero(), rep), fsw::Status::kOk);
+  EXPECT_TRUE(rep.clock_initialised);
+  EXPECT_EQ(ekf.update(ep, nav, fsw::Vec3::Zero(), rep), fsw::Status::kOk);
+  EXPECT_EQ(rep.obs[0].pr_outcome, fsw::InnovationOutcome::kUsed);
+  return rep.obs[0].pr_variance_m2;
+}
+
+TEST(EkfDelayBlocks, PseudorangeRowOfTheScaleStatesIsTheSharedDelayModel) {
+  // The blocks start uncorrelated, so a scale sigma s adds exactly s^2 D^2 to H P0 H^T.
+  for (int first = 0; first < 6; ++first) {
+    SCOPED_TRACE(first);
+    double dt = 0.0, di = 0.0;
+    const double none = first_pr_variance(0.0, 0.0, first, dt, di);
+    const double tropo = first_pr_variance(2.0, 0.0, first, dt, di);
+    const double iono = first_pr_variance(0.0, 3.0, first, dt, di);
+    EXPECT_GT(dt, 1.2);  // 1.24 m zenith at 5000 m
+    EXPECT_GT(di, 3.0);  // afternoon: well above the 1.5 m night floor
+    EXPECT_NEAR(tropo - none, 4.0 * dt * dt, 1e-7 * none);
+    EXPECT_NEAR(iono - none, 9.0 * di * di, 1e-7 * none);
+  }
 }
 
 }  // namespace
