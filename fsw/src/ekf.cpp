@@ -432,9 +432,11 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
     valid[k] = true;
     // Modelled delays (diagnosis extensions): added to the predicted range.
     if constexpr (Layout::has(Block::kTropoScale) || Layout::has(Block::kIonoScale)) {
-      const double el = std::asin(std::clamp((Cne.transpose() * geo[k].los_ecef).z(), -1.0, 1.0));
-      delay_tropo[k] = tropospheric_delay_m(el, h_ant_m);
-      delay_iono[k] = ionospheric_delay_m(el);
+      const Vec3 los_n = Cne.transpose() * geo[k].los_ecef;
+      const double el = std::asin(std::clamp(los_n.z(), -1.0, 1.0));
+      delay_tropo[k] = saastamoinen_delay_m(lat, h_ant_m, el);
+      const double az = std::atan2(los_n.x(), los_n.y());
+      delay_iono[k] = klobuchar_delay_m(kKlobucharDefault, epoch.gps_tow_s, lat, lon, az, el);
       geo[k].range_m += tropo_scale_hat_ * delay_tropo[k] + iono_scale_hat_ * delay_iono[k];
     }
     sum_b += o.pseudorange_m - geo[k].range_m;

@@ -203,9 +203,15 @@ void GpsModel::measure(const TruthSample& truth, fsw::GnssEpoch& out) noexcept {
             [](const Candidate& a, const Candidate& b) { return a.index < b.index; });
 
   const bool delays = tropo_scale_ != 0.0 || iono_scale_ != 0.0;
-  const auto delay_m = [&](const Vec3& llh_rx, const Vec3& r_sat) {
-    const double el = look_angles(llh_rx, r_sat).elevation_rad;
-    return tropo_scale_ * tropospheric_delay_m(el, llh_rx.z()) + iono_scale_ * ionospheric_delay_m(el);
+  // Scale 1 = the full model delay; tow_s is the GPS time of week (Klobuchar's local time).
+  const auto delay_m = [&](const Vec3& llh_rx, const Vec3& r_sat, double tow_s) {
+    const LookAngles la = look_angles(llh_rx, r_sat);
+    double d = 0.0;
+    if (tropo_scale_ != 0.0) d += tropo_scale_ * saastamoinen_delay_m(llh_rx.x(), llh_rx.z(), la.elevation_rad);
+    if (iono_scale_ != 0.0)
+      d += iono_scale_ *
+           klobuchar_delay_m(kKlobucharDefault, tow_s, llh_rx.x(), llh_rx.y(), la.azimuth_rad, la.elevation_rad);
+    return d;
   };
 
   for (std::size_t k = 0; k < n; ++k) {
@@ -215,14 +221,15 @@ void GpsModel::measure(const TruthSample& truth, fsw::GnssEpoch& out) noexcept {
     const fsw::GnssGeometry g = fsw::gnss_geometry(c.transit.sat_pos_tx_m, c.transit.sat_vel_tx_mps, r_rx, v_rx);
     double delay = 0.0, delay_rate = 0.0;
     if (delays) {
-      delay = delay_m(llh_ant, c.transit.sat_pos_rx_frame_m);
-      // Central difference over +-0.5 s of linearly extrapolated positions (receive-time ECEF).
+      delay = delay_m(llh_ant, c.transit.sat_pos_rx_frame_m, tow);
+      // Central difference over +-0.5 s of linearly extrapolated positions (receive-time ECEF)
+      // and of the time.
       const Vec3 v_sat = earth_rotation(c.transit.tau_s) * c.transit.sat_vel_tx_mps;
       const double h = 0.5;
       const double d_plus =
-          delay_m(fsw::llh_from_ecef(r_rx + h * v_rx), c.transit.sat_pos_rx_frame_m + h * v_sat);
+          delay_m(fsw::llh_from_ecef(r_rx + h * v_rx), c.transit.sat_pos_rx_frame_m + h * v_sat, tow + h);
       const double d_minus =
-          delay_m(fsw::llh_from_ecef(r_rx - h * v_rx), c.transit.sat_pos_rx_frame_m - h * v_sat);
+          delay_m(fsw::llh_from_ecef(r_rx - h * v_rx), c.transit.sat_pos_rx_frame_m - h * v_sat, tow - h);
       delay_rate = (d_plus - d_minus) / (2.0 * h);
     }
     fsw::GnssObservation& o = out.obs[k];

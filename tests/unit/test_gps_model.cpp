@@ -531,28 +531,6 @@ TEST(GpsEffects, LeverArmMovesThePseudorangeAlongTheLineOfSight) {
   }
 }
 
-TEST(GpsEffects, AtmosphericDelayFormulas) {
-  EXPECT_NEAR(sim::tropospheric_delay_m(fsw::kPi / 2, 0.0), 2.4, 1e-3);
-  // The mapping is 1 / sin(el) within 0.3% at 30 deg, 3.1% at 10 deg, and finite at the horizon.
-  EXPECT_NEAR(sim::tropospheric_delay_m(30.0 * kDegToRad, 0.0), 2.4 / std::sin(30.0 * kDegToRad), 0.003 * 4.8);
-  EXPECT_NEAR(sim::tropospheric_delay_m(10.0 * kDegToRad, 0.0), 2.4 / std::sin(10.0 * kDegToRad), 0.031 * 13.82);
-  EXPECT_NEAR(sim::tropospheric_delay_m(0.0, 0.0), 2.4 * 1.001 / std::sqrt(0.002001), 1e-9);
-  EXPECT_NEAR(sim::tropospheric_delay_m(0.3, 5000.0), sim::tropospheric_delay_m(0.3, 0.0) * std::exp(-5000.0 / 7000.0),
-              1e-12);
-  EXPECT_DOUBLE_EQ(sim::ionospheric_delay_m(fsw::kPi / 2), 5.0);
-  const double x = 6371.0 / 6721.0;
-  EXPECT_NEAR(sim::ionospheric_delay_m(0.0), 5.0 / std::sqrt(1.0 - x * x), 1e-9);
-  double prev_t = 0.0, prev_i = 0.0;
-  for (double el_deg = 90.0; el_deg >= 0.0; el_deg -= 1.0) {
-    const double t = sim::tropospheric_delay_m(el_deg * kDegToRad, 5000.0);
-    const double i = sim::ionospheric_delay_m(el_deg * kDegToRad);
-    EXPECT_GT(t, prev_t) << el_deg;
-    EXPECT_GT(i, prev_i) << el_deg;
-    prev_t = t;
-    prev_i = i;
-  }
-}
-
 TEST(GpsEffects, TroposphereAndIonosphereAddPositiveDelays) {
   const std::vector<sim::AlmanacEntry> alm = shipped();
   GpsConfig cfg = error_free();
@@ -570,20 +548,35 @@ TEST(GpsEffects, TroposphereAndIonosphereAddPositiveDelays) {
     GpsModel twice(cfg, alm, fx, 1);
     const fsw::GnssEpoch c = measure(twice, static_truth(0.0));
     ASSERT_EQ(a.n_obs, b.n_obs);
+    const Vec3 r_rx = fsw::ecef_from_llh(kSite);
     std::vector<std::pair<double, double>> el_delay;
     for (int i = 0; i < a.n_obs; ++i) {
       const auto idx = static_cast<std::size_t>(i);
       const double delay = b.obs[idx].pseudorange_m - a.obs[idx].pseudorange_m;
-      const double el = a.obs[idx].elevation_rad;
-      const double want = effect == Effect::kTroposphericDelay ? sim::tropospheric_delay_m(el, kSite.z())
-                                                                : sim::ionospheric_delay_m(el);
+      // Look angles of the satellite in the receive-time frame (Sagnac), as the model takes them.
+      const fsw::GnssGeometry g =
+          fsw::gnss_geometry(a.obs[idx].sat_pos_ecef_m, a.obs[idx].sat_vel_ecef_mps, r_rx, Vec3::Zero());
+      const sim::LookAngles la = sim::look_angles(kSite, r_rx + g.range_m * g.los_ecef);
+      const double el = la.elevation_rad;
+      EXPECT_NEAR(el, a.obs[idx].elevation_rad, 1e-9);
+      const double want =
+          effect == Effect::kTroposphericDelay
+              ? fsw::saastamoinen_delay_m(kSite.x(), kSite.z(), el)
+              : fsw::klobuchar_delay_m(fsw::kKlobucharDefault, a.gps_tow_s, kSite.x(), kSite.y(), la.azimuth_rad, el);
       EXPECT_NEAR(delay, want, 1e-6);
       EXPECT_GT(delay, 0.0);
       EXPECT_NEAR(c.obs[idx].pseudorange_m - a.obs[idx].pseudorange_m, 2.0 * delay, 1e-6);
+      if (effect == Effect::kIonosphericDelay) {  // at least the night-time floor 5 ns c F
+        const double e = el / fsw::kPi;
+        EXPECT_GE(delay, 5e-9 * kSpeedOfLight_mps * (1.0 + 16.0 * std::pow(0.53 - e, 3.0)) - 1e-6);
+      }
       el_delay.emplace_back(el, delay);
     }
+    // The tropospheric delay falls with elevation; the ionospheric one depends on the pierce
+    // point's local time and geomagnetic latitude too (azimuth), so only its obliquity does.
     std::sort(el_delay.begin(), el_delay.end());
-    for (std::size_t i = 1; i < el_delay.size(); ++i) EXPECT_LT(el_delay[i].second, el_delay[i - 1].second);
+    if (effect == Effect::kTroposphericDelay)
+      for (std::size_t i = 1; i < el_delay.size(); ++i) EXPECT_LT(el_delay[i].second, el_delay[i - 1].second);
   }
 }
 

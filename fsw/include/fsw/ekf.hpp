@@ -31,8 +31,11 @@
 //     tau_hat; H_pr = -e_n^T v_n, H_prr = -e_n^T a_n (a_n: the frame's acceleration).
 //   lever arm l: the antenna at l_hat; H_pr = -e_n^T C_b_n, H_prr = -e_n^T C_b_n [w x]
 //     (w = w_ib_b - w_ie_b).
-//   tropospheric / ionospheric scale s: z_hat += s_hat * T(el, h) (fsw::tropospheric_delay_m,
-//     ionospheric_delay_m); H_pr = T(el, h). Their rates (< 1 cm/s) are left out.
+//   tropospheric / ionospheric scale s: z_hat += s_hat * D, H_pr = D, with D the model delay
+//     (fsw/gnss_delays.hpp, the simulator's too; s = 1 is the full model): troposphere
+//     saastamoinen_delay_m(lat, h_ant, el), ionosphere klobuchar_delay_m(kKlobucharDefault,
+//     epoch.gps_tow_s, lat, lon, az, el); lat / lon of the INS, el / az of the predicted line of
+//     sight in ENU. Their rates (< 1 cm/s) are left out.
 //   A block whose initial sigma is zero stays exactly zero (it has no process noise): the
 //   diagnosis switches extensions on and off that way.
 //

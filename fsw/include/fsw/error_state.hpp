@@ -23,8 +23,8 @@
 //                   rad/s per m/s^2, body axes
 //   kTimeOffset     IMU-GNSS time offset (IMU time tag minus GNSS time) s, estimate minus truth
 //   kLeverArm       IMU reference point -> antenna, body axes m, estimate minus truth
-//   kTropoScale     scale of the tropospheric delay model (tropospheric_delay_m), estimate minus truth
-//   kIonoScale      scale of the ionospheric delay model (ionospheric_delay_m), estimate minus truth
+//   kTropoScale     scale of the tropospheric delay model (saastamoinen_delay_m), estimate minus truth
+//   kIonoScale      scale of the ionospheric delay model (klobuchar_delay_m), estimate minus truth
 // The residual sensor errors are what remains after the IMU compensation that the filter feeds
 // back: measured = (I + SF + M) true + b, compensated = measured - b_hat - (SF_hat + M_hat) measured,
 // so compensated ~ true + delta b + (delta SF + delta M) true.

@@ -19,6 +19,7 @@
 #include <cstdint>
 
 #include "fsw/frames.hpp"
+#include "fsw/gnss_delays.hpp"
 
 namespace fsw {
 
@@ -58,28 +59,8 @@ struct GnssPvtMeasurement {
   int n_sat = 0;
 };
 
-/// Zenith tropospheric delay at sea level [m] and its scale height [m].
-inline constexpr double kTropoZenithDelay_m = 2.4;
-inline constexpr double kTropoScaleHeight_m = 7000.0;
-/// Zenith ionospheric delay [m], thin-shell height [m] and the Earth radius of the shell model [m].
-inline constexpr double kIonoZenithDelay_m = 5.0;
-inline constexpr double kIonoShellHeight_m = 350e3;
-inline constexpr double kIonoEarthRadius_m = 6371e3;
-
-/// Tropospheric delay [m] at elevation el and ellipsoidal height h:
-///   T = 2.4 m * exp(-h / 7000 m) * 1.001 / sqrt(0.002001 + sin^2(el))
-/// (the RTCA DO-229 mapping: 1 / sin(el) within 0.3% at 30 deg and 3% at 10 deg, 22.4 at el = 0).
-inline double tropospheric_delay_m(double elevation_rad, double height_m) {
-  const double s = std::sin(elevation_rad);
-  return kTropoZenithDelay_m * std::exp(-height_m / kTropoScaleHeight_m) * 1.001 / std::sqrt(0.002001 + s * s);
-}
-
-/// Ionospheric delay [m] at elevation el, thin-shell obliquity factor:
-///   I = 5 m / sqrt(1 - (Re cos(el) / (Re + 350 km))^2),  Re = 6371 km  (1 at zenith, ~3.1 at 0 deg).
-inline double ionospheric_delay_m(double elevation_rad) {
-  const double x = kIonoEarthRadius_m * std::cos(elevation_rad) / (kIonoEarthRadius_m + kIonoShellHeight_m);
-  return kIonoZenithDelay_m / std::sqrt(1.0 - x * x);
-}
+// The atmospheric delay models (Saastamoinen troposphere, Klobuchar ionosphere) that the
+// simulator's delay effects and the EKF's diagnosis blocks share are in fsw/gnss_delays.hpp.
 
 /// Predicted range, range rate and line of sight of one satellite from a receiver.
 struct GnssGeometry {

@@ -27,10 +27,15 @@
 //                 the stationary distribution N(0, sigma^2). All 32 PRN slots are advanced every
 //                 epoch in PRN order, so the draws do not depend on visibility.
 //   n_pr, n_prr   white noise, drawn every epoch for all 32 PRN slots in PRN order.
-//   T  tropospheric delay, tropospheric_delay_m(); s_T the tropospheric_delay effect (scale).
-//   I  ionospheric delay, ionospheric_delay_m(); s_I the ionospheric_delay effect (scale).
+//   T  tropospheric delay, fsw::saastamoinen_delay_m(lat, h, el) of the antenna (Saastamoinen,
+//      standard atmosphere, relative humidity 0.7, DO-229 mapping); s_T the tropospheric_delay
+//      effect (scale, 1 = the full model delay).
+//   I  ionospheric L1 delay, fsw::klobuchar_delay_m(fsw::kKlobucharDefault, tow, lat, lon, az, el)
+//      (IS-GPS-200 Klobuchar with RTKLIB's default coefficients); s_I the ionospheric_delay effect.
+//   el, az: look_angles() of R3(we tau) r_sat from the antenna (fsw/gnss_delays.hpp has the models).
 //   The delay rate (about 1 cm/s at most, for low satellites) is a central difference over
-//   +-0.5 s of the linearly extrapolated receiver and satellite positions; 0 when both scales are 0.
+//   +-0.5 s of the linearly extrapolated receiver and satellite positions and of the GPS time
+//   (the Klobuchar delay follows the local time); 0 when both scales are 0.
 // The satellite clock is not simulated: the measurements are "satellite clock removed".
 // The range rate is fsw::gnss_geometry's e . (v_sat_i - v_rx_i), which leaves out the light-time
 // factor of the exact derivative of the range, e . v_sat_i (1 - rhodot / c): the pseudorange rate
@@ -55,15 +60,11 @@ namespace sim {
 
 using fsw::kMaxGpsPrn;
 
-// The delay models are the flight software's (fsw/gnss.hpp), so the diagnosis's extension states
-// and the truth side use one definition.
-using fsw::ionospheric_delay_m;
-using fsw::kIonoEarthRadius_m;
-using fsw::kIonoShellHeight_m;
-using fsw::kIonoZenithDelay_m;
-using fsw::kTropoScaleHeight_m;
-using fsw::kTropoZenithDelay_m;
-using fsw::tropospheric_delay_m;
+// The delay models are the flight software's (fsw/gnss_delays.hpp), so the diagnosis's extension
+// states and the truth side use one definition.
+using fsw::klobuchar_delay_m;
+using fsw::kKlobucharDefault;
+using fsw::saastamoinen_delay_m;
 
 struct GpsClockState {
   double bias_m = 0.0;     ///< c * receiver clock bias
