@@ -144,6 +144,9 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   nis_head_ = 0;
   nis_count_ = 0;
   runaway_count_ = 0;
+  reacquire_pvt_ = false;
+  ungated_ = false;
+  pvt_gated_run_.fill(0);
   Phi_.setIdentity();
   interval_s_ = 0.0;
   sub_frames_ = 0;
@@ -333,7 +336,7 @@ bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu,
     if (h(j) != 0.0) s.noalias() += h(j) * P_.col(j);
   S = h.dot(s) + r;
   nu = y - h.dot(x_);
-  if (!(S > 0.0) || !(nu * nu <= cfg_.gate_chi2 * S)) return false;
+  if (!(S > 0.0) || (!ungated_ && !(nu * nu <= cfg_.gate_chi2 * S))) return false;
   Vec K = s / S;
   // Consider states get no gain; the Joseph form below stays exact for this suboptimal gain.
   for (int b = 0; b < Layout::kNumBlocks; ++b) {
@@ -561,6 +564,10 @@ Status Ekf<Layout>::update_pvt(const GnssPvtMeasurement& m, const NavState& nav,
     const PvtModel mdl =
         pvt_measurement_model(m, nav, omega_ib_b_radps, lever_arm_hat_b_m_, time_offset_hat_s_, a_n);
     const double scale2 = cfg_.pvt_sigma_scale * cfg_.pvt_sigma_scale;
+    // Re-acquisition after a PVT runaway reset: this update is not gated (the reset opened the
+    // position and velocity variances, so the solution is taken nearly as it is).
+    ungated_ = reacquire_pvt_;
+    reacquire_pvt_ = false;
     RowVec h;
     for (int i = 0; i < 6; ++i) {
       const bool is_pos = i < 3;
@@ -585,6 +592,7 @@ Status Ekf<Layout>::update_pvt(const GnssPvtMeasurement& m, const NavState& nav,
         ++(is_pos ? report.pos_rejected : report.vel_rejected);
       }
     }
+    ungated_ = false;
   }
   check_covariance();
   track_consistency(report);
@@ -695,12 +703,24 @@ void Ekf<Layout>::track_consistency(const EkfUpdateReport& report) {
   // (Per measurement type: a clock jump fails every pseudorange and no rate.)
   const int pr_seen = report.pr_used + report.pr_rejected;
   const int prr_seen = report.prr_used + report.prr_rejected;
-  // A PVT update has three scalars per type: at least two of the three positions (or velocities)
-  // gated counts the same way (a position jump fails the positions, not the velocities).
-  const int pos_seen = report.pos_used + report.pos_rejected;
-  const int vel_seen = report.vel_used + report.vel_rejected;
-  if ((pr_seen >= 4 && 2 * report.pr_rejected > pr_seen) || (prr_seen >= 4 && 2 * report.prr_rejected > prr_seen) ||
-      (pos_seen >= 3 && 2 * report.pos_rejected > pos_seen) || (vel_seen >= 3 && 2 * report.vel_rejected > vel_seen)) {
+  // A PVT update: per axis, since its scalars are not redundant like the satellites of an epoch
+  // (an overconfident filter can reject one axis for ever, as on a car whose East error grew while
+  // the filter trusted its cm-level position: the other axes kept it from a reset). An axis gated
+  // in every update of the run counts.
+  if (report.pvt) {
+    int longest = 0;
+    for (std::size_t i = 0; i < pvt_gated_run_.size(); ++i) {
+      const InnovationOutcome o = report.pvt_obs[i].outcome;
+      if (o == InnovationOutcome::kGated)
+        ++pvt_gated_run_[i];
+      else if (o == InnovationOutcome::kUsed)
+        pvt_gated_run_[i] = 0;
+      longest = pvt_gated_run_[i] > longest ? pvt_gated_run_[i] : longest;
+    }
+    if (longest > 0) ++health_.gating_runaway_epochs;
+    runaway_count_ = longest;
+  } else if ((pr_seen >= 4 && 2 * report.pr_rejected > pr_seen) ||
+             (prr_seen >= 4 && 2 * report.prr_rejected > prr_seen)) {
     ++runaway_count_;
     ++health_.gating_runaway_epochs;
   } else {
@@ -717,7 +737,18 @@ void Ekf<Layout>::track_consistency(const EkfUpdateReport& report) {
       x_(i) = 0.0;
     }
     clock_initialised_ = false;
+    if (report.pvt) {
+      // A runaway on position/velocity solutions: the filter no longer believes the solutions
+      // because its own position/velocity drifted while it was confident (an unmodelled error, a
+      // coasting interval); re-initialise them from the next solution, ungated.
+      for (int i = 0; i < 3; ++i) {
+        P_(i, i) = kReacquirePosVar_m2;
+        P_(3 + i, 3 + i) = kReacquireVelVar_m2ps2;
+      }
+      reacquire_pvt_ = true;
+    }
     runaway_count_ = 0;
+    pvt_gated_run_.fill(0);
     nis_count_ = 0;
     nis_head_ = 0;
     ++health_.resets;

@@ -131,8 +131,9 @@ struct EkfConfig {
   int propagation_substep_frames = 10;  ///< navigation frames per transition-matrix sub-step
 
   // Divergence guard. NIS window for the consistency test, and the gating runaway: when more than
-  // half of an epoch's pseudoranges (or of its rates; at least 4 of them), or of a PVT update's
-  // positions (or velocities; 2 of 3), fail the gate for runaway_epochs updates in a row, the filter
+  // half of an epoch's pseudoranges (or of its rates; at least 4 of them) fail the gate, or one
+  // axis of the PVT updates' positions or velocities is gated, for runaway_epochs updates in a row
+  // (after a PVT runaway the position and velocity re-initialise from the next solution, ungated), the filter
   // no longer accepts the data that would correct it; the navigation and clock covariance is then
   // re-inflated to its initial values (counted in EkfHealth::resets). 0 disables the reset.
   int nis_window = 10;
@@ -309,6 +310,13 @@ class Ekf {
   int nis_head_ = 0;
   int nis_count_ = 0;
   int runaway_count_ = 0;
+  std::array<int, 6> pvt_gated_run_{};  ///< consecutive PVT updates in which each axis was gated
+  bool reacquire_pvt_ = false;  ///< the next update_pvt is ungated (after a PVT runaway reset)
+  bool ungated_ = false;        ///< scalar_update skips the gate (during that update)
+  /// Position and velocity variance after a PVT runaway reset: (1 km)^2 and (10 m/s)^2, so the
+  /// next solution is taken nearly as it is.
+  static constexpr double kReacquirePosVar_m2 = 1.0e6;
+  static constexpr double kReacquireVelVar_m2ps2 = 100.0;
   Vec init_var_ = Vec::Zero();  ///< initial variances (covariance repair, resets)
   double interval_s_ = 0.0;    ///< time covered by Phi_
   // Sub-step sums.
