@@ -1,0 +1,188 @@
+// Filter configuration TOML reader (filter_config.hpp; schema in config/README.md).
+#include "sim/filter_config.hpp"
+
+#include <cmath>
+
+#include "sim/effects.hpp"
+#include "sim/text_file.hpp"
+#include "toml_schema.hpp"
+
+namespace sim {
+
+const char* to_string(GnssSource s) { return s == GnssSource::kPvt ? "pvt" : "raw"; }
+
+namespace {
+
+using toml_schema::closed;
+using toml_schema::got;
+using toml_schema::left_open;
+using toml_schema::non_negative;
+using toml_schema::positive;
+using toml_schema::Range;
+
+/// Values read in the file's units; converted into the FlightAppConfig after the whole file parsed.
+struct Units {
+  std::optional<double> nav_rate_hz, ekf_rate_hz, gnss_wait_s;
+  std::optional<double> vrw_mps_per_rthr, arw_deg_per_rthr, accel_bias_sigma_mg, gyro_bias_sigma_degph;
+  std::optional<double> accel_scale_ppm, gyro_scale_ppm, accel_mis_arcsec, gyro_mis_arcsec;
+  std::optional<double> heading_offset_deg, roll_pitch_sigma_deg, heading_sigma_deg;
+};
+
+class Parser : public toml_schema::Reader {
+ public:
+  using Reader::Reader;
+
+  bool file(const toml::table& root, FilterConfig& c, Units& u) {
+    fsw::FlightAppConfig& a = c.app;
+    fsw::ExecutiveConfig& x = a.exec;
+    fsw::EkfConfig& e = a.exec.ekf;
+    return fields(root, "", {
+        {"name", text(c.name)},
+        {"description", text(c.description)},
+        {"executive", [&](const toml::node& n, const std::string& p) {
+           const toml::table* t = table(n, p);
+           return t && fields(*t, p + ".", {
+               {"imu_samples_per_frame", integer(x.imu_samples_per_frame, 1, fsw::FrameBuilder::kMaxSamplesPerFrame)},
+               {"nav_rate_hz", opt(u.nav_rate_hz, left_open(0.0, 2000.0))},
+               {"ekf_rate_hz", opt(u.ekf_rate_hz, left_open(0.0, 100.0))},
+               {"gnss_wait_s", opt(u.gnss_wait_s, closed(0.0, 10.0))},
+               {"max_gnss_age_s", number(x.max_gnss_age_s, closed(0.0, 10.0))},
+           });
+         }},
+        {"gnss", [&](const toml::node& n, const std::string& p) {
+           const toml::table* t = table(n, p);
+           return t && fields(*t, p + ".", {
+               {"source", choice(c.gnss_source, {{"raw", GnssSource::kRaw}, {"pvt", GnssSource::kPvt}})},
+               {"pvt_max_quality", integer(a.pvt_max_quality, 1, 7)},
+               {"pvt_sigma_scale", number(e.pvt_sigma_scale, positive())},
+               {"pvt_pos_sigma_floor_m", number(e.pvt_pos_sigma_floor_m, non_negative())},
+               {"pvt_vel_sigma_floor_mps", number(e.pvt_vel_sigma_floor_mps, non_negative())},
+               {"pseudorange_sigma_m", number(e.pseudorange_sigma_m, positive())},
+               {"pseudorange_rate_sigma_mps", number(e.pseudorange_rate_sigma_mps, positive())},
+               {"use_pseudorange_rate", boolean(e.use_pseudorange_rate)},
+               {"gate_chi2", number(e.gate_chi2, positive())},
+           });
+         }},
+        {"imu", [&](const toml::node& n, const std::string& p) {
+           const toml::table* t = table(n, p);
+           return t && fields(*t, p + ".", {
+               {"vrw_mps_per_rthr", opt(u.vrw_mps_per_rthr, non_negative())},
+               {"arw_deg_per_rthr", opt(u.arw_deg_per_rthr, non_negative())},
+               {"accel_bias_sigma_mg", opt(u.accel_bias_sigma_mg, non_negative())},
+               {"gyro_bias_sigma_degph", opt(u.gyro_bias_sigma_degph, non_negative())},
+               {"accel_bias_rw_mps2_per_rts", number(e.accel_bias_rw_mps2_per_rts, non_negative())},
+               {"gyro_bias_rw_radps_per_rts", number(e.gyro_bias_rw_radps_per_rts, non_negative())},
+               {"accel_scale_factor_sigma_ppm", opt(u.accel_scale_ppm, non_negative())},
+               {"gyro_scale_factor_sigma_ppm", opt(u.gyro_scale_ppm, non_negative())},
+               {"accel_misalignment_sigma_arcsec", opt(u.accel_mis_arcsec, non_negative())},
+               {"gyro_misalignment_sigma_arcsec", opt(u.gyro_mis_arcsec, non_negative())},
+           });
+         }},
+        {"init", [&](const toml::node& n, const std::string& p) {
+           const toml::table* t = table(n, p);
+           return t && fields(*t, p + ".", {
+               {"min_satellites", integer(a.min_satellites_for_init, 4, fsw::kMaxGnssChannels)},
+               {"max_pdop", number(a.max_init_pdop, positive())},
+               {"min_speed_mps", number(a.min_init_speed_mps, non_negative())},
+               {"heading_offset_deg", opt(u.heading_offset_deg, closed(-180.0, 180.0))},
+               {"levelling_samples", integer(a.levelling_samples, 1, 1024)},
+               {"pos_sigma_m", number(a.init_pos_sigma_m, positive())},
+               {"vel_sigma_mps", number(a.init_vel_sigma_mps, positive())},
+               {"roll_pitch_sigma_deg", opt(u.roll_pitch_sigma_deg, left_open(0.0, 90.0))},
+               {"heading_sigma_deg", opt(u.heading_sigma_deg, left_open(0.0, 180.0))},
+           });
+         }},
+        {"mounting", [&](const toml::node& n, const std::string& p) {
+           const toml::table* t = table(n, p);
+           return t && fields(*t, p + ".", {{"lever_arm_b_m", vector3(e.lever_arm_b_m, closed(-100.0, 100.0))}});
+         }},
+        {"diagnosis", [&](const toml::node& n, const std::string& p) { return diagnosis(n, p, c); }},
+    });
+  }
+
+ private:
+  Handler opt(std::optional<double>& out, Range range) {
+    return [this, &out, range](const toml::node& n, const std::string& p) {
+      double v = 0.0;
+      if (!read_number(n, p, range, v)) return false;
+      out = v;
+      return true;
+    };
+  }
+
+  bool diagnosis(const toml::node& n, const std::string& path, FilterConfig& c) {
+    const toml::table* t = table(n, path);
+    return t && fields(*t, path + ".", {
+        {"outage_length_s", opt(c.outage_length_s, non_negative())},
+        {"outage_period_s", opt(c.outage_period_s, positive())},
+        {"outage_first_s", opt(c.outage_first_s, non_negative())},
+        {"gain_skip_s", opt(c.gain_skip_s, non_negative())},
+        {"prior", [&](const toml::node& pn, const std::string& pp) {
+           const toml::table* pt = table(pn, pp);
+           if (!pt) return false;
+           for (auto&& [key, value] : *pt) {
+             const std::string name(key.str());
+             const std::optional<fsw::Effect> e = effect_from_name(name);
+             if (!e) return fail(key, "unknown effect '" + pp + "." + name + "' (valid: " + effect_names() + ")");
+             double v = 0.0;
+             if (!read_number(value, pp + "." + name, positive(), v)) return false;
+             c.diagnosis_prior[static_cast<std::size_t>(*e)] = v;
+           }
+           return true;
+         }},
+    });
+  }
+};
+
+}  // namespace
+
+FilterConfigParseResult parse_filter_config_text(const std::string& toml_text, const std::string& source_name,
+                                                 FilterConfig& cfg) {
+  toml::table root;
+  std::string error;
+  if (!toml_schema::parse_document(toml_text, source_name, root, error)) return {false, error};
+  FilterConfig c = cfg;
+  Units u;
+  Parser parser(source_name);
+  if (!parser.file(root, c, u)) return {false, parser.error()};
+
+  fsw::FlightAppConfig& a = c.app;
+  fsw::ExecutiveConfig& x = a.exec;
+  fsw::EkfConfig& e = a.exec.ekf;
+  if (u.nav_rate_hz) x.nav_rate_hz = *u.nav_rate_hz;
+  if (u.ekf_rate_hz) {
+    const double frames = x.nav_rate_hz / *u.ekf_rate_hz;
+    if (std::abs(frames - std::round(frames)) > 1e-6 || std::round(frames) < 1.0) {
+      return {false, source_name + ": 'executive.ekf_rate_hz' (" + toml_schema::format_number(*u.ekf_rate_hz) +
+                         ") must divide 'executive.nav_rate_hz' (" + toml_schema::format_number(x.nav_rate_hz) +
+                         ") into a whole number of navigation frames"};
+    }
+    x.frames_per_ekf = static_cast<int>(std::round(frames));
+  }
+  if (u.gnss_wait_s) x.gnss_wait_frames = static_cast<int>(std::lround(*u.gnss_wait_s * x.nav_rate_hz));
+  constexpr double kRth = 60.0;  // sqrt(3600 s / h)
+  if (u.vrw_mps_per_rthr) e.vrw_mps_per_rts = *u.vrw_mps_per_rthr / kRth;
+  if (u.arw_deg_per_rthr) e.arw_rad_per_rts = *u.arw_deg_per_rthr * fsw::kDegToRad / kRth;
+  if (u.accel_bias_sigma_mg) e.accel_bias_sigma_mps2 = *u.accel_bias_sigma_mg * 1e3 * fsw::kMicroG_mps2;
+  if (u.gyro_bias_sigma_degph) e.gyro_bias_sigma_radps = *u.gyro_bias_sigma_degph * fsw::kDegPerHourToRadps;
+  if (u.accel_scale_ppm) e.accel_scale_sigma = *u.accel_scale_ppm * 1e-6;
+  if (u.gyro_scale_ppm) e.gyro_scale_sigma = *u.gyro_scale_ppm * 1e-6;
+  if (u.accel_mis_arcsec) e.accel_misalign_sigma_rad = *u.accel_mis_arcsec * fsw::kArcsecToRad;
+  if (u.gyro_mis_arcsec) e.gyro_misalign_sigma_rad = *u.gyro_mis_arcsec * fsw::kArcsecToRad;
+  if (u.heading_offset_deg) a.init_heading_offset_rad = *u.heading_offset_deg * fsw::kDegToRad;
+  if (u.roll_pitch_sigma_deg) {
+    a.init_att_sigma_rad.x() = *u.roll_pitch_sigma_deg * fsw::kDegToRad;
+    a.init_att_sigma_rad.y() = *u.roll_pitch_sigma_deg * fsw::kDegToRad;
+  }
+  if (u.heading_sigma_deg) a.init_att_sigma_rad.z() = *u.heading_sigma_deg * fsw::kDegToRad;
+  cfg = std::move(c);
+  return {true, ""};
+}
+
+FilterConfigParseResult parse_filter_config_file(const std::string& path, FilterConfig& cfg) {
+  const std::optional<std::string> text = read_text_file(path);
+  if (!text) return {false, path + ": cannot open filter configuration"};
+  return parse_filter_config_text(*text, path, cfg);
+}
+
+}  // namespace sim

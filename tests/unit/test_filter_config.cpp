@@ -1,0 +1,98 @@
+// Filter configuration files (sim/filter_config.hpp, config/README.md): the data sets' files parse
+// into the fields and units they say, and broken files are rejected with the key and position.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "fsw/frames.hpp"
+#include "sim/filter_config.hpp"
+
+namespace {
+
+const std::filesystem::path kConfigDir = std::filesystem::path(__FILE__).parent_path() / "../../config/datasets";
+
+sim::FilterConfig defaults() {
+  sim::FilterConfig f;
+  f.app.exec.ekf.arw_rad_per_rts = 2e-7;
+  return f;
+}
+
+}  // namespace
+
+TEST(FilterConfig, EveryDataSetFileParses) {
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(kConfigDir)) {
+    if (e.path().extension() != ".toml") continue;
+    sim::FilterConfig f = defaults();
+    const sim::FilterConfigParseResult r = sim::parse_filter_config_file(e.path().string(), f);
+    EXPECT_TRUE(r.ok) << r.error;
+    EXPECT_FALSE(f.name.empty()) << e.path();
+    fsw::FlightApp<fsw::Layout15Full> app;
+    EXPECT_EQ(app.init(f.app), fsw::Status::kOk) << e.path();
+    ++files;
+  }
+  EXPECT_GE(files, 1);
+}
+
+TEST(FilterConfig, DriveFileSetsFieldsInTheirUnits) {
+  sim::FilterConfig f = defaults();
+  const sim::FilterConfigParseResult r =
+      sim::parse_filter_config_file((kConfigDir / "gnss-imu-drive.toml").string(), f);
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(f.gnss_source, sim::GnssSource::kPvt);
+  EXPECT_EQ(f.app.exec.imu_samples_per_frame, 1);
+  EXPECT_DOUBLE_EQ(f.app.exec.nav_rate_hz, 100.0);
+  EXPECT_EQ(f.app.exec.frames_per_ekf, 25);  // 100 Hz / 4 Hz
+  EXPECT_EQ(f.app.exec.gnss_wait_frames, 10);  // 0.1 s at 100 Hz
+  EXPECT_NEAR(f.app.exec.ekf.arw_rad_per_rts, 1.0 * fsw::kDegToRad / 60.0, 1e-15);
+  EXPECT_NEAR(f.app.exec.ekf.vrw_mps_per_rts, 0.3 / 60.0, 1e-15);
+  EXPECT_NEAR(f.app.exec.ekf.gyro_bias_sigma_radps, 1000.0 * fsw::kDegPerHourToRadps, 1e-15);
+  EXPECT_NEAR(f.app.exec.ekf.accel_bias_sigma_mps2, 0.030 * fsw::kStandardGravity_mps2, 1e-12);
+  EXPECT_NEAR(f.app.init_att_sigma_rad.z(), 5.0 * fsw::kDegToRad, 1e-15);
+  EXPECT_DOUBLE_EQ(f.app.min_init_speed_mps, 3.0);
+  EXPECT_EQ(f.app.pvt_max_quality, 2);
+  ASSERT_TRUE(f.diagnosis_prior[static_cast<std::size_t>(fsw::Effect::kImuGnssTimeOffset)].has_value());
+  EXPECT_DOUBLE_EQ(*f.diagnosis_prior[static_cast<std::size_t>(fsw::Effect::kImuGnssTimeOffset)], 0.2);
+  EXPECT_FALSE(f.diagnosis_prior[static_cast<std::size_t>(fsw::Effect::kTroposphericDelay)].has_value());
+  ASSERT_TRUE(f.outage_length_s.has_value());
+  EXPECT_DOUBLE_EQ(*f.outage_length_s, 15.0);
+}
+
+TEST(FilterConfig, KeysNotSetKeepTheBase) {
+  sim::FilterConfig f = defaults();
+  const sim::FilterConfigParseResult r = sim::parse_filter_config_text("[gnss]\nsource = \"raw\"\n", "t.toml", f);
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(f.gnss_source, sim::GnssSource::kRaw);
+  EXPECT_DOUBLE_EQ(f.app.exec.ekf.arw_rad_per_rts, 2e-7);
+  EXPECT_EQ(f.app.exec.frames_per_ekf, 200);
+}
+
+TEST(FilterConfig, BrokenFilesNameTheKeyAndPositionAndChangeNothing) {
+  struct Case {
+    const char* text;
+    const char* error;
+  };
+  const Case cases[] = {
+      {"[imu]\narw = 1.0\n", "t.toml:2:1: unknown key 'imu.arw'"},
+      {"[gnss]\nsource = \"loose\"\n", "t.toml:2:10: 'gnss.source' must be \"raw\" or \"pvt\" (got \"loose\")"},
+      {"[imu]\narw_deg_per_rthr = -1.0\n", "'imu.arw_deg_per_rthr' must be a finite number >= 0"},
+      {"[executive]\nnav_rate_hz = 100.0\nekf_rate_hz = 3.0\n", "must divide 'executive.nav_rate_hz' (100)"},
+      {"[mounting]\nlever_arm_b_m = [0.1, 0.2]\n", "'mounting.lever_arm_b_m' must be an array of 3 numbers"},
+      {"[diagnosis.prior]\nwheel_slip = 1.0\n", "unknown effect 'diagnosis.prior.wheel_slip'"},
+      {"[init]\nlevelling_samples = 2000\n", "'init.levelling_samples' must be an integer in [1, 1024]"},
+      {"imu = 3\n", "'imu' must be a table"},
+      {"[imu\n", "t.toml:1:"},
+  };
+  for (const Case& c : cases) {
+    sim::FilterConfig f = defaults();
+    const sim::FilterConfigParseResult r = sim::parse_filter_config_text(c.text, "t.toml", f);
+    EXPECT_FALSE(r.ok) << c.text;
+    EXPECT_NE(r.error.find(c.error), std::string::npos) << c.text << " -> " << r.error;
+    EXPECT_DOUBLE_EQ(f.app.exec.ekf.arw_rad_per_rts, 2e-7);
+    EXPECT_EQ(f.gnss_source, sim::GnssSource::kRaw);
+  }
+  sim::FilterConfig f = defaults();
+  const sim::FilterConfigParseResult r = sim::parse_filter_config_file("/nonexistent/x.toml", f);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.error.find("cannot open filter configuration"), std::string::npos);
+}
