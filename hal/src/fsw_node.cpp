@@ -9,6 +9,7 @@ struct FswNode::App {
   virtual fsw::Status init(const fsw::FlightAppConfig& cfg) = 0;
   virtual void on_almanac(const fsw::GpsAlmanac& s) = 0;
   virtual void on_gnss(const fsw::GnssRawEpoch& e) = 0;
+  virtual void on_gnss_pvt(const fsw::GnssPvtMeasurement& m) = 0;
   virtual fsw::Status on_imu(const fsw::ImuSample& s, fsw::FrameOutput& out) = 0;
   virtual void set_prev_tick_exec_s(double s) = 0;
   virtual const fsw::FlightAppHealth& health() const = 0;
@@ -25,6 +26,7 @@ struct AppOf final : FswNode::App {
   fsw::Status init(const fsw::FlightAppConfig& cfg) override { return app.init(cfg); }
   void on_almanac(const fsw::GpsAlmanac& s) override { app.on_almanac(s); }
   void on_gnss(const fsw::GnssRawEpoch& e) override { app.on_gnss(e); }
+  void on_gnss_pvt(const fsw::GnssPvtMeasurement& m) override { app.on_gnss_pvt(m); }
   fsw::Status on_imu(const fsw::ImuSample& s, fsw::FrameOutput& out) override { return app.on_imu(s, out); }
   void set_prev_tick_exec_s(double s) override { app.set_prev_tick_exec_s(s); }
   const fsw::FlightAppHealth& health() const override { return app.health(); }
@@ -121,6 +123,12 @@ void FswNode::on_gnss(const fsw::GnssRawEpoch& epoch) {
   if (!app_) return;
   if (cfg_.log_inputs) sink_.write_gnss(epoch);
   app_->on_gnss(epoch);
+}
+
+void FswNode::on_gnss_pvt(const GnssPvtSample& pvt) {
+  if (!app_) return;
+  if (cfg_.log_inputs) sink_.write_pvt(pvt);
+  app_->on_gnss_pvt(to_fsw(pvt));
 }
 
 void FswNode::on_imu(const fsw::ImuSample& s, std::int32_t counter, std::int16_t status) {

@@ -1,9 +1,12 @@
-// sdins replay: re-runs the flight software on a log's IMU, GNSS raw and almanac channels (in
+// sdins replay: re-runs the flight software on a log's IMU, GNSS raw and almanac channels, or with
+// a filter configuration that takes GNSS solutions (gnss.source = "pvt") on IMU and GNSS_PVT (in
 // time order, bad events counted and skipped) and writes a new log of the outputs. The same log
 // replayed twice gives the same digest; a log written by sil/fsw replays to that run's digest.
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
+#include <vector>
 
 #include "commands.hpp"
 #include "hal/fsw_node.hpp"
@@ -15,6 +18,7 @@ namespace {
 struct Options {
   std::string in;
   FswRunOptions run;
+  std::vector<double> outages;  ///< length, period, first (s after initialisation)
 } opt;
 }  // namespace
 
@@ -24,44 +28,82 @@ void register_replay(CLI::App& app) {
                 "the navigation digest, optionally writes a new log (inputs and outputs).");
   sub->add_option("LOG", opt.in, "LCM log with the input channels")->required();
   add_fsw_run_options(sub, opt.run, "none");
+  sub->add_option("--outages", opt.outages,
+                  "withhold GNSS (raw epochs and solutions) for LENGTH s every PERIOD s from FIRST s after the "
+                  "initialisation, to score the coasting solution against a reference (LENGTH PERIOD FIRST)")
+      ->expected(3);
 }
 
 int run_replay() {
+  const sim::FilterConfig filter = opt.run.filter();
+  const bool pvt = filter.gnss_source == sim::GnssSource::kPvt;
+  hal::LcmReplayConfig rc;
+  if (pvt) rc.gnss_pvt_channel = hal::kLcmChannelGnssPvt;
   hal::LcmReplayReader reader;
-  const hal::LcmLogStatus os = reader.open(opt.in);
+  const hal::LcmLogStatus os = reader.open(opt.in, rc);
   if (os != hal::LcmLogStatus::kOk) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
   const hal::FswNodeConfig cfg = opt.run.node_config();
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
   hal::LcmReplayInput in;
+  std::uint64_t raw_not_used = 0, withheld = 0;
+  // GNSS outages: inputs at times within [t0 + k period, t0 + k period + length) are withheld.
+  const auto in_outage = [&](double t) {
+    if (opt.outages.size() != 3 || !node.summary().initialised) return false;
+    const double t0 = node.summary().init_t_s + opt.outages[2];
+    if (t < t0) return false;
+    return std::fmod(t - t0, opt.outages[1]) < opt.outages[0];
+  };
   while (reader.next(in) == hal::LcmLogStatus::kOk) {
     switch (in.kind) {
       case hal::LcmReplayInput::Kind::kAlmanac: node.on_almanac(in.almanac, in.t_s); break;
-      case hal::LcmReplayInput::Kind::kGnss: node.on_gnss(in.gnss); break;
+      case hal::LcmReplayInput::Kind::kGnss:
+        if (in_outage(in.t_s))
+          ++withheld;
+        else if (pvt)
+          ++raw_not_used;  // the configuration takes solutions
+        else
+          node.on_gnss(in.gnss);
+        break;
       case hal::LcmReplayInput::Kind::kImu: node.on_imu(in.imu.sample, in.imu.counter, in.imu.status); break;
-      case hal::LcmReplayInput::Kind::kGnssPvt: break;  // not read: LcmReplayConfig::gnss_pvt_channel is empty
+      case hal::LcmReplayInput::Kind::kGnssPvt:
+        if (in_outage(in.t_s))
+          ++withheld;
+        else
+          node.on_gnss_pvt(in.pvt);
+        break;
     }
   }
   if (!node.close(err)) throw std::runtime_error(err);
   const hal::LcmReplayStats& st = reader.stats();
   const hal::LcmLogReadStats& ls = reader.log_stats();
-  std::printf("replay: %s, %llu inputs (%llu IMU, %llu GNSS, %llu almanac accepted), %llu rejected, %llu other events; "
+  std::printf("replay: %s, %llu inputs (%llu IMU, %llu GNSS, %llu GNSS solutions, %llu almanac accepted; %llu raw "
+              "epochs not used: the filter takes solutions), %llu rejected, %llu other events; "
               "log: %llu events, %llu rejections\n",
               opt.in.c_str(), static_cast<unsigned long long>(st.delivered),
               static_cast<unsigned long long>(st.imu.accepted()), static_cast<unsigned long long>(st.gnss.accepted()),
+              static_cast<unsigned long long>(st.gnss_pvt.accepted()), static_cast<unsigned long long>(raw_not_used),
               static_cast<unsigned long long>(st.almanac.accepted()), static_cast<unsigned long long>(st.rejected()),
               static_cast<unsigned long long>(st.other_events), static_cast<unsigned long long>(ls.events),
               static_cast<unsigned long long>(ls.total_rejections()));
+  if (opt.outages.size() == 3)
+    std::printf("GNSS outages: %.1f s every %.1f s from %.1f s after initialisation, %llu inputs withheld\n",
+                opt.outages[0], opt.outages[1], opt.outages[2], static_cast<unsigned long long>(withheld));
   tools::print_fsw_summary(node);
   if (!opt.run.json.empty()) {
     nlohmann::json j = tools::fsw_summary_json(node);
     j["mode"] = "replay";
     j["model"] = opt.run.model;
     j["input_log"] = opt.in;
+    j["filter_config"] = opt.run.filter_config;
+    j["gnss_source"] = sim::to_string(filter.gnss_source);
     j["inputs"] = {{"delivered", st.delivered},
                    {"imu_accepted", st.imu.accepted()},
                    {"gnss_accepted", st.gnss.accepted()},
+                   {"gnss_pvt_accepted", st.gnss_pvt.accepted()},
+                   {"gnss_raw_not_used", raw_not_used},
+                   {"gnss_withheld", withheld},
                    {"almanac_accepted", st.almanac.accepted()},
                    {"rejected", st.rejected()},
                    {"out_of_order", st.out_of_order},

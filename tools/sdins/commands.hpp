@@ -6,6 +6,7 @@
 #include <string>
 
 #include "hal/fsw_node.hpp"
+#include "sim/filter_config.hpp"
 #include "sim/scenario.hpp"
 
 namespace sdins {
@@ -64,7 +65,11 @@ struct FswRunOptions {
   std::string lcm_url;  ///< "": $LCM_DEFAULT_URL or LCM's default group; "none": no network
   std::string json;
   int nav_decimation = 10;
-  /// The flight-software node's configuration (hal::default_flight_config()); throws on a bad model.
+  std::string filter_config;  ///< --filter-config FILE: applied on top of hal::default_flight_config()
+  /// The filter configuration: hal::default_flight_config() with --filter-config applied; throws
+  /// with the file's error.
+  sim::FilterConfig filter() const;
+  /// The flight-software node's configuration (filter()); throws on a bad model or configuration.
   hal::FswNodeConfig node_config() const;
 };
 void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& default_lcm_url);

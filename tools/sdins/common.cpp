@@ -25,10 +25,20 @@ void add_scenario_options(CLI::App* sub, ScenarioOptions& opt) {
       ->check(CLI::Range(0LL, std::numeric_limits<long long>::max()));
 }
 
+sim::FilterConfig FswRunOptions::filter() const {
+  sim::FilterConfig f;
+  f.app = hal::default_flight_config();
+  if (!filter_config.empty()) {
+    const sim::FilterConfigParseResult r = sim::parse_filter_config_file(filter_config, f);
+    if (!r.ok) throw std::runtime_error(r.error);
+  }
+  return f;
+}
+
 hal::FswNodeConfig FswRunOptions::node_config() const {
   hal::FswNodeConfig cfg;
   if (!hal::parse_fsw_model(model, cfg.model)) throw std::runtime_error("--model: 15 or 24");
-  cfg.app = hal::default_flight_config();
+  cfg.app = filter().app;
   cfg.telemetry.lcm_url = lcm_url;
   cfg.telemetry.log_path = log;
   cfg.nav_decimation = nav_decimation;
@@ -47,6 +57,9 @@ void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& d
       ->check(CLI::Range(1, 200))
       ->capture_default_str();
   sub->add_option("--json", opt.json, "write the end-of-run summary as JSON");
+  sub->add_option("--filter-config", opt.filter_config,
+                  "filter configuration TOML (config/README.md; e.g. config/datasets/gnss-imu-drive.toml) applied on "
+                  "top of the simulated aircraft's defaults");
 }
 
 int run_plot_script(const std::string& script, const std::string& args) {

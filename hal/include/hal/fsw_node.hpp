@@ -52,6 +52,8 @@ class FswNode {
   bool open(const FswNodeConfig& cfg, std::string& error);
   void on_almanac(const fsw::GpsAlmanac& sat, double t_s);
   void on_gnss(const fsw::GnssRawEpoch& epoch);
+  /// A GNSS position/velocity solution (loosely coupled update; logged on GNSS_PVT with the inputs).
+  void on_gnss_pvt(const GnssPvtSample& pvt);
   /// counter/status: the sensor's, when known (bus, log); -1 lets the sink count.
   void on_imu(const fsw::ImuSample& s, std::int32_t counter = -1, std::int16_t status = 0);
   /// Truth (simulator runs only) on the TRUTH channel.

@@ -116,8 +116,7 @@ LcmInputStatus from_msg(const sdins::gps_almanac_t& in, fsw::GpsAlmanac& out);
 // GNSS position/velocity solutions (channel GNSS_PVT)
 
 /// One GNSS position/velocity solution as decoded from GNSS_PVT (sdins.gnss_pvt_t): e.g. a line of
-/// an RTKLIB .pos file. Host-side input type; the loosely coupled update that consumes it belongs
-/// to the flight software.
+/// an RTKLIB .pos file. Host-side input type; to_fsw() gives the flight software's measurement.
 struct GnssPvtSample {
   double t_s = 0.0;                     ///< navigation time scale [s]
   int gps_week = 0;                     ///< GPS time of the solution: full week ...
@@ -134,6 +133,21 @@ struct GnssPvtSample {
 
 /// vel_sigma_enu_mps of a solution without velocity.
 inline constexpr double kGnssPvtNoVelocity = -1.0;
+
+/// The flight software's measurement of a solution (fsw::GnssPvtMeasurement, the input of the
+/// loosely coupled update): the same values; a solution without velocity has has_velocity false.
+inline fsw::GnssPvtMeasurement to_fsw(const GnssPvtSample& s) {
+  fsw::GnssPvtMeasurement m;
+  m.t_s = s.t_s;
+  m.llh = s.llh;
+  m.vel_enu_mps = s.vel_enu_mps;
+  m.pos_sigma_enu_m = s.pos_sigma_enu_m;
+  m.vel_sigma_enu_mps = s.vel_sigma_enu_mps;
+  m.has_velocity = s.has_velocity();
+  m.quality = s.quality;
+  m.n_sat = s.n_sat;
+  return m;
+}
 
 /// Plausibility limits of a GNSS solution.
 struct GnssPvtLimits {

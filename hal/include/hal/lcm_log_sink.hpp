@@ -6,8 +6,8 @@
 // replays a simulated run at its own pace.
 //
 // LcmReplayReader: reads a log's IMU, GNSS_RAW and GPS_ALMANAC channels (names configurable), and
-// GNSS_PVT solutions when LcmReplayConfig::gnss_pvt_channel names it (off by default: the flight
-// software of today has no loosely coupled update), and returns them as inputs in time order (t_s, then log order for equal times). Inputs may be
+// GNSS_PVT solutions when LcmReplayConfig::gnss_pvt_channel names it (off by default: a replay reads
+// them when its filter configuration takes solutions, gnss.source = "pvt"), and returns them as inputs in time order (t_s, then log order for equal times). Inputs may be
 // logged slightly out of order (e.g. an epoch written after the IMU samples that followed it); a
 // reorder window (reorder_window_s of input time) puts them back in order. An input that lags
 // more than the window behind the newest input read so far, or is older than one already

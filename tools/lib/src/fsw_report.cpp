@@ -38,7 +38,9 @@ json app_json(const fsw::FlightAppHealth& a) {
           {"almanac_received", a.almanac_received}, {"almanac_rejected", a.almanac_rejected},
           {"gnss_no_almanac", a.conversion.no_almanac}, {"gnss_unhealthy", a.conversion.unhealthy},
           {"gnss_invalid", a.conversion.invalid}, {"gnss_duplicate_prn", a.conversion.duplicate_prn},
-          {"init_satellites", a.init_fix.n_used}, {"init_pdop", a.init_fix.pdop}};
+          {"init_satellites", a.init_fix.n_used}, {"init_pdop", a.init_fix.pdop},
+          {"pvt_received", a.pvt_received},       {"pvt_rejected", a.pvt_rejected},
+          {"pvt_before_init", a.pvt_before_init}};
 }
 
 json executive_json(const fsw::ExecutiveHealth& e) {
@@ -60,6 +62,15 @@ json executive_json(const fsw::ExecutiveHealth& e) {
           {"pr_rejected", e.pr_rejected},
           {"prr_rejected", e.prr_rejected},
           {"obs_invalid", e.obs_invalid},
+          {"pvt_received", e.pvt_received},
+          {"pvt_stale", e.pvt_stale},
+          {"pvt_replaced", e.pvt_replaced},
+          {"pvt_invalid", e.pvt_invalid},
+          {"pvt_unused", e.pvt_unused},
+          {"pos_used", e.pos_used},
+          {"vel_used", e.vel_used},
+          {"pos_rejected", e.pos_rejected},
+          {"vel_rejected", e.vel_rejected},
           {"overruns", e.overruns},
           {"worst_tick_s", e.worst_tick_s},
           {"fsw_errors", e.fsw_errors},
@@ -93,9 +104,9 @@ void print_fsw_summary(const hal::FswNode& node) {
   const fsw::ExecutiveHealth& e = node.exec_health();
   const auto& tel = node.sink().telemetry();
   if (!a.initialised) {
-    std::printf("flight software: NOT initialised (%u IMU samples, %u GNSS epochs received; no fix %u, geometry %u, "
-                "too slow %u, levelling %u, no almanac %u)\n",
-                a.imu_received, a.gnss_received, a.init_no_fix, a.init_bad_geometry, a.init_too_slow, a.init_not_level,
+    std::printf("flight software: NOT initialised (%u IMU samples, %u GNSS epochs, %u GNSS solutions received; no fix "
+                "%u, geometry %u, too slow %u, levelling %u, no almanac %u)\n",
+                a.imu_received, a.gnss_received, a.pvt_received, a.init_no_fix, a.init_bad_geometry, a.init_too_slow, a.init_not_level,
                 a.conversion.no_almanac);
   } else {
     std::printf("flight software: initialised at t = %.3f s (%d satellites, PDOP %.2f); %llu navigation frames, "
@@ -107,6 +118,11 @@ void print_fsw_summary(const hal::FswNode& node) {
               "overruns %u; fsw errors %u; covariance repairs %u; resets %u\n",
               e.ekf_runs, e.ekf_updates, e.ekf_without_gnss, e.pr_used, e.pr_rejected, e.prr_used, e.prr_rejected,
               e.overruns, e.fsw_errors, e.ekf.cov_repairs, e.ekf.resets);
+  if (e.pvt_received > 0)
+    std::printf("GNSS solutions: %u received, %u stale, %u replaced, %u unused; position used/gated %u/%u, velocity "
+                "used/gated %u/%u\n",
+                e.pvt_received, e.pvt_stale, e.pvt_replaced, e.pvt_unused, e.pos_used, e.pos_rejected, e.vel_used,
+                e.vel_rejected);
   std::printf("telemetry: %s, %llu published, %llu logged\n",
               tel.network_active() ? tel.url().c_str() : "network off (log only)",
               static_cast<unsigned long long>(tel.published()), static_cast<unsigned long long>(tel.logged()));
