@@ -32,7 +32,7 @@ g = j["gain"]
 assert g["innovations"]["log_likelihood_gain"] > 0, g["innovations"]
 for side in ("before", "after"):
     i = g["innovations"][side]
-    assert set(i["innovation_rms"]) == {"pseudorange_m", "pseudorange_rate_mps"} and i["nis_mean"] > 0, i
+    assert set(i["innovation_rms"]) == {"pseudorange_m", "pseudorange_rate_mps", "position_m", "velocity_mps"} and i["nis_mean"] > 0, i
     n = g["navigation"][side]
     for k in ("position_rms_m", "velocity_rms_mps", "tilt_rms_deg", "heading_rms_deg"):
         assert n[k] > 0, (side, k, n)

@@ -35,10 +35,14 @@ def main(d):
     name = j["extended_model"]["name"]
 
     fig, axes = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
-    for ax, key, unit in ((axes[0], "pr_rms_m", "m"), (axes[1], "prr_rms_mps", "m/s")):
+    # Loosely coupled runs (GNSS solutions) have position/velocity innovations instead.
+    pvt = j.get("gnss_source") == "pvt"
+    keys = (("pos_rms_m", "position", "m"), ("vel_rms_mps", "velocity", "m/s")) if pvt else \
+        (("pr_rms_m", "pseudorange", "m"), ("prr_rms_mps", "pseudorange rate", "m/s"))
+    for ax, (key, what, unit) in zip(axes, keys):
         ax.plot(base["t_s"], base[key], lw=0.8, label="baseline " + j["baseline"])
         ax.plot(ext["t_s"], ext[key], lw=0.8, label="extended " + name)
-        ax.set_ylabel(("pseudorange" if key.startswith("pr_") else "pseudorange rate") + " innovation RMS [" + unit + "]")
+        ax.set_ylabel(what + " innovation RMS [" + unit + "]")
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper right")
     axes[1].set_xlabel("time [s]")

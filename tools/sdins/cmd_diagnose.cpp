@@ -19,6 +19,7 @@ struct Options {
   std::string report;
   std::string baseline = "15";
   double alpha = 0.05;
+  std::string filter_config;
 } opt;
 
 nlohmann::json innovations_json(const tools::InnovationStats& s) {
@@ -27,7 +28,13 @@ nlohmann::json innovations_json(const tools::InnovationStats& s) {
           {"pseudorange_rate_used", s.prr_used},
           {"gated", s.rejected},
           {"nis_mean", s.nis_mean},
-          {"innovation_rms", {{"pseudorange_m", s.pr_rms_m}, {"pseudorange_rate_mps", s.prr_rms_mps}}},
+          {"position_used", s.pos_used},
+          {"velocity_used", s.vel_used},
+          {"innovation_rms",
+           {{"pseudorange_m", s.pr_rms_m},
+            {"pseudorange_rate_mps", s.prr_rms_mps},
+            {"position_m", s.pos_rms_m},
+            {"velocity_mps", s.vel_rms_mps}}},
           {"log_likelihood", s.log_likelihood},
           {"log_likelihood_measurements", s.common}};
 }
@@ -46,7 +53,7 @@ void write_traces(const std::string& path, const tools::ModelRun& r) {
   std::ofstream f(path);
   if (!f) throw std::runtime_error("cannot write " + path);
   const auto& cands = tools::diagnosis_candidates();
-  f << "t_s,pr_rms_m,prr_rms_mps,heading_err_deg";
+  f << "t_s,pr_rms_m,prr_rms_mps,pos_rms_m,vel_rms_mps,heading_err_deg";
   for (int c : r.active) {
     const std::string n = tools::candidate_name(cands[static_cast<std::size_t>(c)]);
     f << "," << n << "," << n << "_sigma";
@@ -55,7 +62,8 @@ void write_traces(const std::string& path, const tools::ModelRun& r) {
   char buf[64];
   for (std::size_t k = 0; k < r.t_s.size(); ++k) {
     std::snprintf(buf, sizeof buf, "%.3f", r.t_s[k]);
-    f << buf << "," << r.pr_rms_m[k] << "," << r.prr_rms_mps[k] << ",";
+    f << buf << "," << r.pr_rms_m[k] << "," << r.prr_rms_mps[k] << "," << r.pos_rms_m[k] << "," << r.vel_rms_mps[k]
+      << ",";
     if (std::isfinite(r.heading_err_deg[k])) f << r.heading_err_deg[k];
     for (std::size_t a = 0; a < r.active.size(); ++a) f << "," << r.est_trace[k][a] << "," << r.sigma_trace[k][a];
     f << "\n";
@@ -87,6 +95,9 @@ void register_diagnose(CLI::App& app) {
   sub->add_option("--alpha", opt.alpha, "family-wise false-alarm rate of the diagnosis")
       ->check(CLI::Range(1e-9, 0.5))
       ->capture_default_str();
+  sub->add_option("--filter-config", opt.filter_config,
+                  "filter configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
+                  "(raw or solutions), initialisation, priors and outage pattern of the diagnosis");
 }
 
 int run_diagnose() {
@@ -95,6 +106,13 @@ int run_diagnose() {
   if (!tools::load_recorded_data(opt.log, data, err, load_report)) throw std::runtime_error(err);
   std::printf("diagnose: %s: %s\n", opt.log.c_str(), load_report.c_str());
   tools::DiagnosisConfig cfg = tools::default_diagnosis_config();
+  if (!opt.filter_config.empty()) {
+    sim::FilterConfig f;
+    f.app = cfg.app;
+    const sim::FilterConfigParseResult fr = sim::parse_filter_config_file(opt.filter_config, f);
+    if (!fr.ok) throw std::runtime_error(fr.error);
+    tools::apply_filter_config(cfg, f);
+  }
   cfg.alpha = opt.alpha;
   if (!tools::set_diagnosis_baseline(cfg, opt.baseline)) throw std::runtime_error("unknown baseline " + opt.baseline);
   const tools::DiagnosisResult r =
@@ -105,8 +123,11 @@ int run_diagnose() {
   nlohmann::json j;
   j["baseline"] = opt.baseline;
   j["log"] = opt.log;
+  j["filter_config"] = opt.filter_config;
+  j["gnss_source"] = sim::to_string(cfg.gnss_source);
   j["data"] = {{"imu_samples", data.imu.size()},
                {"gnss_epochs", data.gnss.size()},
+               {"gnss_solutions", data.pvt.size()},
                {"truth_samples", data.truth.size()},
                {"summary", load_report}};
   j["method"] = {{"statistic", "wald_chi2_1"},
@@ -177,8 +198,12 @@ int run_diagnose() {
     f << j.dump(2) << "\n";
   }
 
-  std::printf("baseline %s: NIS %.3f, innovation RMS %.3f m / %.4f m/s", opt.baseline.c_str(),
-              r.base.innovations.nis_mean, r.base.innovations.pr_rms_m, r.base.innovations.prr_rms_mps);
+  const bool pvt = cfg.gnss_source == sim::GnssSource::kPvt;
+  const auto rms = [pvt](const tools::InnovationStats& i) { return pvt ? i.pos_rms_m : i.pr_rms_m; };
+  const auto rms_rate = [pvt](const tools::InnovationStats& i) { return pvt ? i.vel_rms_mps : i.prr_rms_mps; };
+  std::printf("baseline %s: NIS %.3f, %s innovation RMS %.3f m / %.4f m/s", opt.baseline.c_str(),
+              r.base.innovations.nis_mean, pvt ? "position/velocity" : "pseudorange/rate", rms(r.base.innovations),
+              rms_rate(r.base.innovations));
   if (r.base.nav.available)
     std::printf("; position %.2f m, velocity %.3f m/s, heading %.4f deg RMS", r.base.nav.pos_rms_m,
                 r.base.nav.vel_rms_mps, r.base.nav.heading_rms_deg);
@@ -193,7 +218,7 @@ int run_diagnose() {
   }
   if (!r.findings.empty()) {
     std::printf("extended %s: NIS %.3f, innovation RMS %.3f m / %.4f m/s, log-likelihood %+.1f", ext_name.c_str(),
-                r.extended.innovations.nis_mean, r.extended.innovations.pr_rms_m, r.extended.innovations.prr_rms_mps,
+                r.extended.innovations.nis_mean, rms(r.extended.innovations), rms_rate(r.extended.innovations),
                 r.extended.innovations.log_likelihood - r.base.innovations.log_likelihood);
     if (r.extended.nav.available)
       std::printf("; position %.2f m, velocity %.3f m/s, heading %.4f deg RMS", r.extended.nav.pos_rms_m,
@@ -242,10 +267,10 @@ int run_diagnose() {
     md << "## Gain (extended model " << ext_name << ")\n\n| | baseline | extended |\n|---|---|---|\n";
     md << "| NIS per measurement | " << fmt(r.base.innovations.nis_mean, "%.3f") << " | "
        << fmt(r.extended.innovations.nis_mean, "%.3f") << " |\n";
-    md << "| pseudorange innovation RMS [m] | " << fmt(r.base.innovations.pr_rms_m, "%.3f") << " | "
-       << fmt(r.extended.innovations.pr_rms_m, "%.3f") << " |\n";
-    md << "| pseudorange-rate innovation RMS [m/s] | " << fmt(r.base.innovations.prr_rms_mps, "%.4f") << " | "
-       << fmt(r.extended.innovations.prr_rms_mps, "%.4f") << " |\n";
+    md << "| " << (pvt ? "position" : "pseudorange") << " innovation RMS [m] | "
+       << fmt(rms(r.base.innovations), "%.3f") << " | " << fmt(rms(r.extended.innovations), "%.3f") << " |\n";
+    md << "| " << (pvt ? "velocity" : "pseudorange-rate") << " innovation RMS [m/s] | "
+       << fmt(rms_rate(r.base.innovations), "%.4f") << " | " << fmt(rms_rate(r.extended.innovations), "%.4f") << " |\n";
     md << "| log-likelihood (common measurements) | " << fmt(r.base.innovations.log_likelihood, "%.1f") << " | "
        << fmt(r.extended.innovations.log_likelihood, "%.1f") << " |\n";
     if (r.base.nav.available) {

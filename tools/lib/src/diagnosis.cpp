@@ -164,12 +164,25 @@ DiagnosisConfig default_diagnosis_config() {
   return c;
 }
 
+void apply_filter_config(DiagnosisConfig& cfg, const sim::FilterConfig& f) {
+  cfg.app = f.app;
+  cfg.gnss_source = f.gnss_source;
+  for (std::size_t e = 0; e < fsw::kEffectCount; ++e)
+    if (f.diagnosis_prior[e]) cfg.prior[e] = *f.diagnosis_prior[e];
+  if (f.outage_length_s) cfg.outage_length_s = *f.outage_length_s;
+  if (f.outage_period_s) cfg.outage_period_s = *f.outage_period_s;
+  if (f.outage_first_s) cfg.outage_first_s = *f.outage_first_s;
+  if (f.gain_skip_s) cfg.gain_skip_s = *f.gain_skip_s;
+}
+
 // ---------------------------------------------------------------------------------------------
 bool load_recorded_data(const std::string& path, RecordedData& out, std::string& error, std::string& report) {
   out = RecordedData{};
   out.description = path;
   hal::LcmReplayReader rd;
-  if (rd.open(path, hal::LcmReplayConfig{}) != hal::LcmLogStatus::kOk) {
+  hal::LcmReplayConfig rc;
+  rc.gnss_pvt_channel = hal::kLcmChannelGnssPvt;
+  if (rd.open(path, rc) != hal::LcmLogStatus::kOk) {
     error = "cannot read " + path + ": " + rd.error();
     return false;
   }
@@ -189,7 +202,9 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
         out.order.push_back({RecordedData::Kind::kAlmanac, static_cast<std::uint32_t>(out.almanac.size())});
         out.almanac.push_back(in.almanac);
         break;
-      case hal::LcmReplayInput::Kind::kGnssPvt:  // not read: the reader's PVT channel is off here
+      case hal::LcmReplayInput::Kind::kGnssPvt:
+        out.order.push_back({RecordedData::Kind::kPvt, static_cast<std::uint32_t>(out.pvt.size())});
+        out.pvt.push_back(hal::to_fsw(in.pvt));
         break;
     }
   }
@@ -236,11 +251,12 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
   }
   const hal::LcmReplayStats& s = rd.stats();
   std::ostringstream r;
-  r << out.imu.size() << " IMU samples, " << out.gnss.size() << " GNSS epochs, " << out.almanac.size()
+  r << out.imu.size() << " IMU samples, " << out.gnss.size() << " GNSS epochs, " << out.pvt.size()
+    << " GNSS solutions, " << out.almanac.size()
     << " almanac entries, " << out.truth.size() << " truth samples; rejected: " << s.rejected() << " inputs, "
     << rd.log_stats().total_rejections() << " log events, " << truth_rejected << " truth samples";
   report = r.str();
-  if (out.imu.empty() || out.gnss.empty()) {
+  if (out.imu.empty() || (out.gnss.empty() && out.pvt.empty())) {
     error = path + ": no IMU or no GNSS data (" + report + ")";
     return false;
   }
@@ -307,7 +323,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
   for (int a = 0; a < na; ++a)
     run.prior_sigma[static_cast<std::size_t>(a)] = cfg.prior[static_cast<std::size_t>(cands[active[a]].effect)];
 
-  double pr_ss = 0.0, prr_ss = 0.0, nis = 0.0;
+  double pr_ss = 0.0, prr_ss = 0.0, pos_ss = 0.0, vel_ss = 0.0, nis = 0.0;
   int nav_frames = 0;
   double nav_pos_ss = 0.0, nav_vel_ss = 0.0, nav_tilt_ss = 0.0, nav_head_ss = 0.0;
   fsw::FrameOutput out;
@@ -334,11 +350,19 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     switch (ev.kind) {
       case RecordedData::Kind::kAlmanac: app->on_almanac(data.almanac[ev.index]); continue;
       case RecordedData::Kind::kGnss:
-        if (outage_window(data.gnss[ev.index].t_s) >= 0) {
+        if (cfg.gnss_source == sim::GnssSource::kRaw && outage_window(data.gnss[ev.index].t_s) >= 0) {
           ++run.outages.epochs_withheld;
           continue;
         }
-        app->on_gnss(data.gnss[ev.index]);
+        if (cfg.gnss_source == sim::GnssSource::kRaw) app->on_gnss(data.gnss[ev.index]);
+        continue;
+      case RecordedData::Kind::kPvt:
+        if (cfg.gnss_source != sim::GnssSource::kPvt) continue;
+        if (outage_window(data.pvt[ev.index].t_s) >= 0) {
+          ++run.outages.epochs_withheld;
+          continue;
+        }
+        app->on_gnss_pvt(data.pvt[ev.index]);
         continue;
       case RecordedData::Kind::kImu: break;
     }
@@ -386,8 +410,20 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     if (!out.ekf_ran || !out.ekf_updated) continue;
     const fsw::EkfUpdateReport& rep = out.report;
     const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * 200.0));
-    double epr = 0.0, eprr = 0.0;
-    int npr = 0, nprr = 0;
+    double epr = 0.0, eprr = 0.0, epos = 0.0, evel = 0.0;
+    int npr = 0, nprr = 0, npos = 0, nvel = 0;
+    if (rep.pvt) {
+      for (int i = 0; i < 6; ++i) {
+        const fsw::PvtInnovation& o = rep.pvt_obs[static_cast<std::size_t>(i)];
+        if (o.outcome == fsw::InnovationOutcome::kGated) ++run.innovations.rejected;
+        if (o.outcome != fsw::InnovationOutcome::kUsed) continue;
+        // Keys above the raw observations' (k < kMaxGnssChannels = 16).
+        run.scalars.push_back({(frame << 6) | (static_cast<std::uint64_t>(16 + i) << 1), o.innovation, o.variance});
+        nis += o.innovation * o.innovation / o.variance;
+        (i < 3 ? epos : evel) += o.innovation * o.innovation;
+        ++(i < 3 ? npos : nvel);
+      }
+    }
     for (int k = 0; k < rep.n_obs; ++k) {
       const fsw::ObservationInnovation& o = rep.obs[static_cast<std::size_t>(k)];
       const std::uint64_t key = (frame << 6) | (static_cast<std::uint64_t>(k) << 1);
@@ -410,12 +446,18 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     }
     pr_ss += epr;
     prr_ss += eprr;
+    pos_ss += epos;
+    vel_ss += evel;
     run.innovations.pr_used += npr;
     run.innovations.prr_used += nprr;
+    run.innovations.pos_used += npos;
+    run.innovations.vel_used += nvel;
     ++run.innovations.epochs;
     run.t_s.push_back(out.nav.t_s);
     run.pr_rms_m.push_back(npr > 0 ? std::sqrt(epr / npr) : 0.0);
     run.prr_rms_mps.push_back(nprr > 0 ? std::sqrt(eprr / nprr) : 0.0);
+    run.pos_rms_m.push_back(npos > 0 ? std::sqrt(epos / npos) : 0.0);
+    run.vel_rms_mps.push_back(nvel > 0 ? std::sqrt(evel / nvel) : 0.0);
     double head = NAN;
     if (!data.truth.empty()) {
       TruthPoint t;
@@ -438,10 +480,13 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     run.outages.horizontal_rms_m = std::sqrt(out_h_ss / run.outages.windows);
     run.outages.velocity_rms_mps = std::sqrt(out_v_ss / run.outages.windows);
   }
-  const int nused = run.innovations.pr_used + run.innovations.prr_used;
+  const int nused =
+      run.innovations.pr_used + run.innovations.prr_used + run.innovations.pos_used + run.innovations.vel_used;
   run.innovations.nis_mean = nused > 0 ? nis / nused : 0.0;
   run.innovations.pr_rms_m = run.innovations.pr_used > 0 ? std::sqrt(pr_ss / run.innovations.pr_used) : 0.0;
   run.innovations.prr_rms_mps = run.innovations.prr_used > 0 ? std::sqrt(prr_ss / run.innovations.prr_used) : 0.0;
+  run.innovations.pos_rms_m = run.innovations.pos_used > 0 ? std::sqrt(pos_ss / run.innovations.pos_used) : 0.0;
+  run.innovations.vel_rms_mps = run.innovations.vel_used > 0 ? std::sqrt(vel_ss / run.innovations.vel_used) : 0.0;
   run.innovations.log_likelihood = 0.0;
   for (const ModelRun::Scalar& s : run.scalars)
     run.innovations.log_likelihood -= 0.5 * (std::log(2.0 * fsw::kPi * s.S) + s.nu * s.nu / s.S);

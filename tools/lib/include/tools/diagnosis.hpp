@@ -39,6 +39,7 @@
 #include "fsw/flight_app.hpp"
 #include "fsw/gps_orbit.hpp"
 #include "fsw/strapdown.hpp"
+#include "sim/filter_config.hpp"
 #include "sim/scenario.hpp"
 
 namespace tools {
@@ -55,22 +56,23 @@ struct TruthPoint {
 /// A recording in memory, in arrival order: the inputs of the flight software and, separately,
 /// truth (used only to score navigation).
 struct RecordedData {
-  enum class Kind : std::uint8_t { kAlmanac, kImu, kGnss };
+  enum class Kind : std::uint8_t { kAlmanac, kImu, kGnss, kPvt };
   struct Event {
     Kind kind;
-    std::uint32_t index;  ///< into almanac, imu or gnss
+    std::uint32_t index;  ///< into almanac, imu, gnss or pvt
   };
   std::vector<fsw::GpsAlmanac> almanac;
   std::vector<fsw::ImuSample> imu;
   std::vector<fsw::GnssRawEpoch> gnss;
+  std::vector<fsw::GnssPvtMeasurement> pvt;  ///< GNSS position/velocity solutions (GNSS_PVT)
   std::vector<Event> order;
   std::vector<TruthPoint> truth;  ///< time-ordered; empty without truth
   std::string description;
 };
 
-/// Reads an LCM log (IMU, GNSS_RAW, GPS_ALMANAC through hal::LcmReplayReader; TRUTH). Returns
-/// false with a message when the log cannot be read or has no IMU or GNSS data; rejections are
-/// summarised in `report`.
+/// Reads an LCM log (IMU, GNSS_RAW, GNSS_PVT, GPS_ALMANAC through hal::LcmReplayReader; TRUTH).
+/// Returns false with a message when the log cannot be read or has no IMU or GNSS data; rejections
+/// are summarised in `report`.
 bool load_recorded_data(const std::string& path, RecordedData& out, std::string& error, std::string& report);
 
 /// Flies a scenario through the simulator (tools::SensorStream) into memory, with truth at
@@ -90,6 +92,8 @@ std::string candidate_name(const Candidate& c);
 
 struct DiagnosisConfig {
   fsw::FlightAppConfig app{};  ///< the baseline model's configuration (the extension sigmas are set per run)
+  /// Which GNSS input the filter takes: raw pseudoranges/rates or position/velocity solutions.
+  sim::GnssSource gnss_source = sim::GnssSource::kRaw;
   /// Prior 1-sigma of each effect in catalogue units (index fsw::Effect).
   std::array<double, fsw::kEffectCount> prior{};
   double alpha = 0.05;               ///< family-wise false-alarm rate of one diagnosis
@@ -114,13 +118,20 @@ bool set_diagnosis_baseline(DiagnosisConfig& cfg, const std::string& name);
 /// priors that cover the realistic range of each effect.
 DiagnosisConfig default_diagnosis_config();
 
+/// A data set's filter configuration (sim::FilterConfig, config/README.md): the filter, its GNSS
+/// input, and the priors and outage pattern the file sets.
+void apply_filter_config(DiagnosisConfig& cfg, const sim::FilterConfig& f);
+
 /// Innovation statistics of one run.
 struct InnovationStats {
   int epochs = 0;
   int pr_used = 0, prr_used = 0, rejected = 0;
+  int pos_used = 0, vel_used = 0;  ///< loosely coupled scalars (per axis)
   double nis_mean = 0.0;      ///< mean NIS per scalar measurement (1 for a consistent filter)
   double pr_rms_m = 0.0;      ///< innovation RMS per measurement type
   double prr_rms_mps = 0.0;
+  double pos_rms_m = 0.0;     ///< loosely coupled: position and velocity innovation RMS per axis
+  double vel_rms_mps = 0.0;
   double log_likelihood = 0.0;  ///< sum over the measurements counted in `common`
   int common = 0;              ///< measurements used by both models compared
 };
@@ -155,7 +166,7 @@ struct ModelRun {
   NavErrorStats nav;
   OutageStats outages;  ///< only in runs with outages
   // Per-epoch traces for the report.
-  std::vector<double> t_s, pr_rms_m, prr_rms_mps, heading_err_deg;
+  std::vector<double> t_s, pr_rms_m, prr_rms_mps, pos_rms_m, vel_rms_mps, heading_err_deg;
   std::vector<std::vector<double>> est_trace, sigma_trace;  ///< [epoch][active]
   // Scalar innovations (key: epoch, observation, type) for the likelihood comparison.
   struct Scalar {
