@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The measured car drive (../shared/data/gnss-imu-drive) through the loosely coupled filter with
+# its filter configuration (config/datasets/gnss-imu-drive.toml): import, replay with and without
+# 15 s GNSS outages, and (release builds) the diagnosis. Skipped (77) without the data set.
+# Usage: drive_dataset.sh SDINS DATA_DIR CONFIG OUT_DIR SANITIZED(-1: no sanitizer)
+set -euo pipefail
+sdins=$1 data=$2/gnss-imu-drive config=$3 out=$4 sanitized=$5
+[ -f "$data/gnss_1934_sf.pos" ] || { echo "SKIP: $data not present"; exit 77; }
+rm -rf "$out" && mkdir -p "$out"
+"$sdins" import rtklib "$data" --log "$out/drive.lcmlog" > "$out/import.txt"
+"$sdins" replay "$out/drive.lcmlog" --filter-config "$config" --json "$out/replay.json" > "$out/replay.txt"
+"$sdins" replay "$out/drive.lcmlog" --filter-config "$config" --outages 15 60 60 --json "$out/outages.json" \
+  > "$out/outages.txt"
+cat "$out/replay.txt" "$out/outages.txt"
+py=/usr/bin/python3
+$py - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+r = json.load(open(out + "/replay.json"))
+o = json.load(open(out + "/outages.json"))
+for j in (r, o):
+    assert j["initialised"], j
+    assert j["gnss_source"] == "pvt"
+    e = j["executive"]
+    assert e["pos_used"] > 0.9 * (e["pos_used"] + e["pos_rejected"]), e
+    assert e["vel_used"] > 0.9 * (e["vel_used"] + e["vel_rejected"]), e
+    assert j["inputs"]["gnss_pvt_accepted"] == 2197, j["inputs"]
+# Without outages the solutions are never lost for long: few re-acquisitions.
+assert r["executive"]["filter_resets"] <= 10, r["executive"]
+assert o["inputs"]["gnss_withheld"] > 400, o["inputs"]
+print("replay ok")
+PY
+if [ "$sanitized" != "-1" ]; then echo "sanitizer build: the diagnosis of the drive runs in release builds only"; exit 0; fi
+"$sdins" diagnose --log "$out/drive.lcmlog" --filter-config "$config" --json "$out/diag.json" --report "$out/report" \
+  | tail -8
+$py - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+d = json.load(open(out + "/diag.json"))
+assert d["gnss_source"] == "pvt"
+f = d["findings"]
+assert f, "no finding"
+# The timing between the IMU log and the GNSS solutions is the strongest finding on this drive.
+assert f[0]["effect"] == "imu_gnss_time_offset", f[0]
+assert 0.03 < f[0]["estimate"] < 0.15 and f[0]["sigma"] < 0.01, f[0]
+g = d["gain"]["innovations"]
+assert g["after"]["log_likelihood"] > g["before"]["log_likelihood"], g
+print("diagnosis ok:", f[0]["effect"], f[0]["estimate"], "+-", f[0]["sigma"])
+PY
