@@ -42,7 +42,7 @@ int run_replay() {
   hal::LcmReplayReader reader;
   const hal::LcmLogStatus os = reader.open(opt.in, rc);
   if (os != hal::LcmLogStatus::kOk) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
-  const hal::FswNodeConfig cfg = opt.run.node_config();
+  const hal::FswNodeConfig cfg = opt.run.node_config(filter);
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);

@@ -70,7 +70,9 @@ struct FswRunOptions {
   /// with the file's error.
   sim::FilterConfig filter() const;
   /// The flight-software node's configuration (filter()); throws on a bad model or configuration.
-  hal::FswNodeConfig node_config() const;
+  hal::FswNodeConfig node_config() const { return node_config(filter()); }
+  /// The same with a filter configuration already read (one parse per run).
+  hal::FswNodeConfig node_config(const sim::FilterConfig& f) const;
 };
 void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& default_lcm_url);
 

@@ -35,10 +35,10 @@ sim::FilterConfig FswRunOptions::filter() const {
   return f;
 }
 
-hal::FswNodeConfig FswRunOptions::node_config() const {
+hal::FswNodeConfig FswRunOptions::node_config(const sim::FilterConfig& f) const {
   hal::FswNodeConfig cfg;
   if (!hal::parse_fsw_model(model, cfg.model)) throw std::runtime_error("--model: 15 or 24");
-  cfg.app = filter().app;
+  cfg.app = f.app;
   cfg.telemetry.lcm_url = lcm_url;
   cfg.telemetry.log_path = log;
   cfg.nav_decimation = nav_decimation;
