@@ -333,6 +333,15 @@ void to_msg(double t_s, const fsw::ExecutiveHealth& h, const fsw::GnssConversion
   out.conv_unhealthy = conv.unhealthy;
   out.conv_invalid = conv.invalid;
   out.conv_duplicate_prn = conv.duplicate_prn;
+  out.pvt_received = h.pvt_received;
+  out.pvt_stale = h.pvt_stale;
+  out.pvt_replaced = h.pvt_replaced;
+  out.pvt_invalid = h.pvt_invalid;
+  out.pvt_unused = h.pvt_unused;
+  out.pos_used = h.pos_used;
+  out.vel_used = h.vel_used;
+  out.pos_rejected = h.pos_rejected;
+  out.vel_rejected = h.vel_rejected;
 
   const fsw::EkfUpdateReport& r = frame.report;
   out.ekf_updated = frame.ekf_updated ? 1 : 0;
@@ -344,6 +353,23 @@ void to_msg(double t_s, const fsw::ExecutiveHealth& h, const fsw::GnssConversion
   out.epoch_prr_rejected = r.prr_rejected;
   out.epoch_obs_invalid = r.obs_invalid;
   out.epoch_obs_no_channel = r.obs_no_channel;
+  out.pvt_update = r.pvt ? 1 : 0;
+  out.epoch_pos_used = r.pos_used;
+  out.epoch_vel_used = r.vel_used;
+  out.epoch_pos_rejected = r.pos_rejected;
+  out.epoch_vel_rejected = r.vel_rejected;
+  if (r.pvt) {
+    for (int k = 0; k < 6; ++k) {
+      const fsw::PvtInnovation& o = r.pvt_obs[static_cast<std::size_t>(k)];
+      out.pvt_outcome[k] = outcome_code(o.outcome);
+      if ((o.outcome == fsw::InnovationOutcome::kUsed || o.outcome == fsw::InnovationOutcome::kGated) &&
+          o.variance > 0.0) {
+        out.pvt_innovation[k] = o.innovation;
+        out.pvt_innovation_sigma[k] = std::sqrt(o.variance);
+        out.pvt_normalised[k] = o.innovation / out.pvt_innovation_sigma[k];
+      }
+    }
+  }
   const int n = r.n_obs < 0 ? 0 : (r.n_obs > fsw::kMaxGnssChannels ? fsw::kMaxGnssChannels : r.n_obs);
   out.n_obs = n;
   for (int k = 0; k < n; ++k) {

@@ -230,6 +230,15 @@ struct LcmFields<sdins::filter_health_t> {
     r.add("conv_unhealthy", m.conv_unhealthy);
     r.add("conv_invalid", m.conv_invalid);
     r.add("conv_duplicate_prn", m.conv_duplicate_prn);
+    r.add("pvt_received", m.pvt_received);
+    r.add("pvt_stale", m.pvt_stale);
+    r.add("pvt_replaced", m.pvt_replaced);
+    r.add("pvt_invalid", m.pvt_invalid);
+    r.add("pvt_unused", m.pvt_unused);
+    r.add("pos_used", m.pos_used);
+    r.add("vel_used", m.vel_used);
+    r.add("pos_rejected", m.pos_rejected);
+    r.add("vel_rejected", m.vel_rejected);
     r.add("ekf_updated", m.ekf_updated);
     r.add("clock_initialised", m.clock_initialised);
     r.add("gate_chi2", m.gate_chi2);
@@ -250,6 +259,17 @@ struct LcmFields<sdins::filter_health_t> {
     r.add_array("prr_innovation_mps", m.prr_innovation_mps, 16, m.n_obs);
     r.add_array("prr_innovation_sigma_mps", m.prr_innovation_sigma_mps, 16, m.n_obs);
     r.add_array("prr_normalised", m.prr_normalised, 16, m.n_obs);
+    // The loosely coupled update's six scalars (pos E, N, U, vel E, N, U), empty without one.
+    r.add("pvt_update", m.pvt_update);
+    r.add("epoch_pos_used", m.epoch_pos_used);
+    r.add("epoch_vel_used", m.epoch_vel_used);
+    r.add("epoch_pos_rejected", m.epoch_pos_rejected);
+    r.add("epoch_vel_rejected", m.epoch_vel_rejected);
+    const int n_pvt = m.pvt_update ? 6 : 0;
+    r.add_array("pvt_outcome", m.pvt_outcome, 6, n_pvt);
+    r.add_array("pvt_innovation", m.pvt_innovation, 6, n_pvt);
+    r.add_array("pvt_innovation_sigma", m.pvt_innovation_sigma, 6, n_pvt);
+    r.add_array("pvt_normalised", m.pvt_normalised, 6, n_pvt);
   }
 };
 

@@ -418,6 +418,78 @@ TEST(LcmConvert, HealthCarriesCountersAndPerObservationInnovations) {
   EXPECT_EQ(m.prn[3], 0);
 }
 
+TEST(LcmConvert, HealthCarriesTheLooselyCoupledUpdate) {
+  fsw::ExecutiveHealth h;
+  h.pvt_received = 40;
+  h.pvt_stale = 2;
+  h.pvt_unused = 1;
+  h.pos_used = 111;
+  h.vel_rejected = 4;
+  fsw::FrameOutput frame;
+  frame.ekf_updated = true;
+  auto& r = frame.report;
+  r.pvt = true;
+  r.pos_used = 3;
+  r.vel_used = 1;
+  r.vel_rejected = 1;
+  r.pvt_obs[0] = {fsw::InnovationOutcome::kUsed, 0.3, 0.09};
+  r.pvt_obs[1] = {fsw::InnovationOutcome::kUsed, -0.2, 0.04};
+  r.pvt_obs[2] = {fsw::InnovationOutcome::kUsed, 0.0, 0.25};
+  r.pvt_obs[3] = {fsw::InnovationOutcome::kGated, 1.5, 0.01};
+  r.pvt_obs[4] = {fsw::InnovationOutcome::kUsed, 0.05, 0.0025};
+  r.pvt_obs[5] = {fsw::InnovationOutcome::kNotProcessed, 0.0, 0.0};
+  sdins::filter_health_t m{};
+  hal::to_msg(12.5, h, fsw::GnssConversionStats{}, frame, 9.0, m);
+  EXPECT_EQ(m.pvt_received, 40);
+  EXPECT_EQ(m.pvt_stale, 2);
+  EXPECT_EQ(m.pvt_unused, 1);
+  EXPECT_EQ(m.pos_used, 111);
+  EXPECT_EQ(m.vel_rejected, 4);
+  EXPECT_EQ(m.pvt_update, 1);
+  EXPECT_EQ(m.epoch_pos_used, 3);
+  EXPECT_EQ(m.epoch_vel_used, 1);
+  EXPECT_EQ(m.epoch_vel_rejected, 1);
+  EXPECT_EQ(m.n_obs, 0);  // no pseudoranges in a PVT update
+  EXPECT_EQ(m.pvt_outcome[0], sdins::filter_health_t::OUTCOME_USED);
+  EXPECT_EQ(m.pvt_outcome[3], sdins::filter_health_t::OUTCOME_GATED);
+  EXPECT_EQ(m.pvt_outcome[5], sdins::filter_health_t::OUTCOME_NOT_PROCESSED);
+  EXPECT_DOUBLE_EQ(m.pvt_innovation_sigma[0], 0.3);
+  EXPECT_DOUBLE_EQ(m.pvt_normalised[0], 1.0);
+  EXPECT_DOUBLE_EQ(m.pvt_normalised[1], -1.0);
+  EXPECT_DOUBLE_EQ(m.pvt_normalised[3], 15.0);  // 15^2 > 9: gated
+  EXPECT_EQ(m.pvt_innovation[5], 0.0);
+  EXPECT_EQ(m.pvt_innovation_sigma[5], 0.0);
+
+  // A raw-epoch update leaves the PVT part empty.
+  fsw::FrameOutput raw;
+  raw.ekf_updated = true;
+  raw.report.n_obs = 1;
+  raw.report.obs[0] = {5, fsw::InnovationOutcome::kUsed, fsw::InnovationOutcome::kUsed, -3.0, 16.0, 0.1, 0.04};
+  hal::to_msg(13.0, h, fsw::GnssConversionStats{}, raw, 9.0, m);
+  EXPECT_EQ(m.pvt_update, 0);
+  EXPECT_EQ(m.pvt_outcome[0], sdins::filter_health_t::OUTCOME_NOT_PROCESSED);
+  EXPECT_EQ(m.pvt_innovation[0], 0.0);
+  EXPECT_EQ(m.n_obs, 1);
+
+  // The CSV export has the six scalars as columns, filled for a PVT update, empty otherwise.
+  const hal::LcmTypeInfo* t = hal::find_lcm_type(sdins::filter_health_t::getHash());
+  ASSERT_NE(t, nullptr);
+  const auto cell = [&](const sdins::filter_health_t& msg, const std::string& name) {
+    const std::vector<std::uint8_t> b = encode(msg);
+    hal::LcmRow row;
+    EXPECT_EQ(t->row(b.data(), b.size(), row), hal::LcmInputStatus::kOk);
+    const auto& names = row.names();
+    const auto i = static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+    EXPECT_LT(i, names.size()) << name;
+    return i < names.size() ? row.cells()[i] : std::string("<missing>");
+  };
+  EXPECT_EQ(cell(m, "pvt_normalised[0]"), "");
+  EXPECT_EQ(cell(m, "pos_used"), "111");
+  hal::to_msg(12.5, h, fsw::GnssConversionStats{}, frame, 9.0, m);
+  EXPECT_EQ(cell(m, "pvt_normalised[3]"), "15");
+  EXPECT_EQ(cell(m, "pvt_outcome[3]"), "2");
+}
+
 TEST(LcmConvert, EveryTypeHasAUniqueFingerprintAndEveryChannelAType) {
   const auto& types = hal::lcm_types();
   ASSERT_EQ(types.size(), 8u);  // 7 + gnss_pvt_t
