@@ -146,6 +146,48 @@ TEST(Diagnosis, NamesBothOfTwoHiddenEffects) {
   expect_gain(r);
 }
 
+// Coasting consistency, with and without a reference. A model that contains every error of the
+// data knows its coasting error: the NEES of the horizontal error at the end of each 15 s outage
+// is near its 2 degrees of freedom and the NIS of the first update after the outage, which needs
+// no reference, near 1. An unmodelled gyro scale factor makes both far larger for the baseline,
+// and the extended model brings them back.
+TEST(Diagnosis, CoastingConsistencyIsMeasuredWithAndWithoutAReference) {
+  if (kSanitized) GTEST_SKIP() << "statistical test: release stage";
+  const tools::DiagnosisConfig cfg = tools::default_diagnosis_config();
+  tools::RecordedData null_data = tools::record_scenario(baseline_scenario(420.0, 77), 77);
+  const tools::DiagnosisResult n = tools::diagnose(null_data, cfg);
+  const tools::OutageStats& o = n.base.outages;
+  std::printf("null: %d windows, NEES %.2f, re-acquisition NIS %.2f over %d, coasting %.1f m (own sigma %.1f m)\n",
+              o.windows, o.horizontal_nees_mean, o.reacquisition_nis_mean, o.reacquisitions, o.horizontal_rms_m,
+              o.predicted_horizontal_rms_m);
+  ASSERT_GE(o.windows, 4);
+  EXPECT_EQ(o.reacquisitions, o.windows);
+  EXPECT_GT(o.horizontal_nees_mean, 0.2);
+  EXPECT_LT(o.horizontal_nees_mean, 6.0);
+  EXPECT_GT(o.reacquisition_nis_mean, 0.3);
+  EXPECT_LT(o.reacquisition_nis_mean, 3.0);
+
+  // Without the reference: the same outages, the re-acquisition NIS only.
+  null_data.truth.clear();
+  const tools::DiagnosisResult nr = tools::diagnose(null_data, cfg);
+  EXPECT_EQ(nr.base.outages.windows, 0);
+  EXPECT_EQ(nr.base.outages.reacquisitions, o.reacquisitions);
+  EXPECT_DOUBLE_EQ(nr.base.outages.reacquisition_nis_mean, o.reacquisition_nis_mean);
+
+  sim::Scenario sc = baseline_scenario(420.0, 78);
+  ASSERT_EQ(sim::apply_effect_assignment(sc.effects, "gyro_scale_factor.z=1000"), "");
+  const tools::DiagnosisResult h = tools::diagnose(tools::record_scenario(sc, 78), cfg);
+  const tools::OutageStats &b = h.base.outages, &e = h.extended.outages;
+  std::printf("gyro scale factor z 1000 ppm: NEES %.1f -> %.1f, re-acquisition NIS %.1f -> %.1f, coasting %.1f -> %.1f m\n",
+              b.horizontal_nees_mean, e.horizontal_nees_mean, b.reacquisition_nis_mean, e.reacquisition_nis_mean,
+              b.horizontal_rms_m, e.horizontal_rms_m);
+  ASSERT_FALSE(h.findings.empty());
+  EXPECT_GT(b.horizontal_nees_mean, 10.0);
+  EXPECT_GT(b.reacquisition_nis_mean, 2.0);  // 8 m pseudorange errors dilute the per-pseudorange NIS
+  EXPECT_LT(e.horizontal_nees_mean, 0.5 * b.horizontal_nees_mean);
+  EXPECT_LT(e.reacquisition_nis_mean, 0.5 * b.reacquisition_nis_mean);
+}
+
 // Only what the baseline models (biases, noise): over 20 seeds the rate of diagnoses with any
 // finding must not exceed the stated family-wise false-alarm rate.
 TEST(Diagnosis, NullCaseFalseAlarmRateWithinTheStatedRate) {

@@ -175,13 +175,19 @@ int run_diagnose() {
                           {"after", nav_json(r.extended.nav)}};
   else
     gain["navigation"] = nullptr;
-  if (r.base.outages.windows > 0) {
+  if (r.base.outages.windows > 0 || r.base.outages.reacquisitions > 0) {
     auto oj = [](const tools::OutageStats& o) {
-      return nlohmann::json{{"windows", o.windows},
-                            {"epochs_withheld", o.epochs_withheld},
-                            {"horizontal_rms_m", o.horizontal_rms_m},
-                            {"horizontal_max_m", o.horizontal_max_m},
-                            {"velocity_rms_mps", o.velocity_rms_mps}};
+      nlohmann::json oj_{{"windows", o.windows},
+                       {"epochs_withheld", o.epochs_withheld},
+                       {"reacquisitions", o.reacquisitions},
+                       {"reacquisition_nis_mean", o.reacquisitions > 0 ? nlohmann::json(o.reacquisition_nis_mean) : nullptr}};
+      const bool ref = o.windows > 0;  // the reference-based scores
+      oj_["horizontal_rms_m"] = ref ? nlohmann::json(o.horizontal_rms_m) : nullptr;
+      oj_["horizontal_max_m"] = ref ? nlohmann::json(o.horizontal_max_m) : nullptr;
+      oj_["velocity_rms_mps"] = ref ? nlohmann::json(o.velocity_rms_mps) : nullptr;
+      oj_["predicted_horizontal_rms_m"] = ref ? nlohmann::json(o.predicted_horizontal_rms_m) : nullptr;
+      oj_["horizontal_nees_mean"] = ref ? nlohmann::json(o.horizontal_nees_mean) : nullptr;
+      return oj_;
     };
     gain["outages"] = {{"length_s", cfg.outage_length_s},
                        {"period_s", cfg.outage_period_s},
@@ -231,6 +237,16 @@ int run_diagnose() {
                 r.base.outages.windows, cfg.outage_length_s, r.base.outages.horizontal_rms_m,
                 r.base.outages.horizontal_max_m, r.extended.outages.horizontal_rms_m,
                 r.extended.outages.horizontal_max_m);
+  if (r.base.outages.windows > 0)
+    std::printf("  the filters' own coasting sigma: %.2f m RMS baseline, %.2f m extended; horizontal NEES %.1f and "
+                "%.1f (2 if the model explains the coasting error)\n",
+                r.base.outages.predicted_horizontal_rms_m, r.extended.outages.predicted_horizontal_rms_m,
+                r.base.outages.horizontal_nees_mean, r.extended.outages.horizontal_nees_mean);
+  if (r.base.outages.reacquisitions > 0)
+    std::printf("re-acquisition after %d GNSS outages of %.0f s (no reference needed): NIS per %s %.1f baseline, %.1f "
+                "extended (1 if the model explains its coasting error)\n",
+                r.base.outages.reacquisitions, cfg.outage_length_s, pvt ? "position scalar" : "pseudorange",
+                r.base.outages.reacquisition_nis_mean, r.extended.outages.reacquisition_nis_mean);
 
   if (!opt.report.empty()) {
     std::filesystem::create_directories(opt.report);
@@ -285,7 +301,15 @@ int run_diagnose() {
          << fmt(r.extended.outages.horizontal_rms_m, "%.2f") << " |\n";
       md << "| ... max [m] | " << fmt(r.base.outages.horizontal_max_m, "%.2f") << " | "
          << fmt(r.extended.outages.horizontal_max_m, "%.2f") << " |\n";
+      md << "| ... the filter's own 1-sigma there, RMS [m] | " << fmt(r.base.outages.predicted_horizontal_rms_m, "%.2f")
+         << " | " << fmt(r.extended.outages.predicted_horizontal_rms_m, "%.2f") << " |\n";
+      md << "| ... horizontal NEES, mean (2 if consistent) | " << fmt(r.base.outages.horizontal_nees_mean, "%.1f")
+         << " | " << fmt(r.extended.outages.horizontal_nees_mean, "%.1f") << " |\n";
     }
+    if (r.base.outages.reacquisitions > 0)
+      md << "| NIS per scalar of the first update after each of " << r.base.outages.reacquisitions
+         << " outages (1 if consistent; no reference needed) | " << fmt(r.base.outages.reacquisition_nis_mean, "%.1f")
+         << " | " << fmt(r.extended.outages.reacquisition_nis_mean, "%.1f") << " |\n";
     md << "\n";
     if (rc == 0) {
       md << "![innovations](innovations.png)\n\n";

@@ -324,7 +324,8 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     run.prior_sigma[static_cast<std::size_t>(a)] = cfg.prior[static_cast<std::size_t>(cands[active[a]].effect)];
 
   double pr_ss = 0.0, prr_ss = 0.0, pos_ss = 0.0, vel_ss = 0.0, nis = 0.0;
-  int nav_frames = 0;
+  constexpr double kScoreInterval_s = 0.1;
+  double next_score_t_s = -1e300;
   double nav_pos_ss = 0.0, nav_vel_ss = 0.0, nav_tilt_ss = 0.0, nav_head_ss = 0.0;
   fsw::FrameOutput out;
   // GNSS outages (with_outages): window k covers [t0 + k period, t0 + k period + length), GNSS time.
@@ -335,14 +336,18 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     const long k = static_cast<long>(std::floor((t - t0) / cfg.outage_period_s));
     return t - t0 - static_cast<double>(k) * cfg.outage_period_s < cfg.outage_length_s ? k : -1;
   };
+  bool in_outage = false, await_reacquisition = false;
+  double reacq_nis_sum = 0.0;
   long window_open = -1;
-  double window_err_h = 0.0, window_err_v = 0.0;
-  double out_h_ss = 0.0, out_v_ss = 0.0;
+  double window_err_h = 0.0, window_err_v = 0.0, window_var_h = 0.0, window_nees_h = 0.0;
+  double out_h_ss = 0.0, out_v_ss = 0.0, out_var_h_sum = 0.0, out_nees_sum = 0.0;
   const auto close_window = [&]() {
     if (window_open < 0) return;
     ++run.outages.windows;
     out_h_ss += window_err_h * window_err_h;
     out_v_ss += window_err_v * window_err_v;
+    out_var_h_sum += window_var_h;
+    out_nees_sum += window_nees_h;
     run.outages.horizontal_max_m = std::max(run.outages.horizontal_max_m, window_err_h);
     window_open = -1;
   };
@@ -350,18 +355,25 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     switch (ev.kind) {
       case RecordedData::Kind::kAlmanac: app->on_almanac(data.almanac[ev.index]); continue;
       case RecordedData::Kind::kGnss:
-        if (cfg.gnss_source == sim::GnssSource::kRaw && outage_window(data.gnss[ev.index].t_s) >= 0) {
+        if (cfg.gnss_source != sim::GnssSource::kRaw) continue;
+        if (outage_window(data.gnss[ev.index].t_s) >= 0) {
           ++run.outages.epochs_withheld;
+          in_outage = true;
           continue;
         }
-        if (cfg.gnss_source == sim::GnssSource::kRaw) app->on_gnss(data.gnss[ev.index]);
+        if (in_outage) await_reacquisition = true;
+        in_outage = false;
+        app->on_gnss(data.gnss[ev.index]);
         continue;
       case RecordedData::Kind::kPvt:
         if (cfg.gnss_source != sim::GnssSource::kPvt) continue;
         if (outage_window(data.pvt[ev.index].t_s) >= 0) {
           ++run.outages.epochs_withheld;
+          in_outage = true;
           continue;
         }
+        if (in_outage) await_reacquisition = true;
+        in_outage = false;
         app->on_gnss_pvt(data.pvt[ev.index]);
         continue;
       case RecordedData::Kind::kImu: break;
@@ -374,11 +386,11 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
       run.init_t_s = app->health().init_t_s;
     }
     const auto& ekf = app->executive().ekf();
-    ++nav_frames;
-    // Navigation error against truth, 10 Hz, from init + gain_skip_s; the solution's time tag is on
-    // the IMU clock: the model's own offset estimate puts it on GNSS time.
-    if (with_outages && !data.truth.empty() && nav_frames % 20 == 0) {
-      // The error at the last 10 Hz sample inside a window: after (nearly) the whole outage.
+    // Navigation error against truth; the solution's time tag is on the IMU clock: the model's own
+    // offset estimate puts it on GNSS time.
+    if (with_outages && !data.truth.empty()) {
+      // Every navigation frame: the error at the last frame inside a window is the error after the
+      // whole outage, whatever the navigation rate.
       const double tg = out.nav.t_s - ekf.time_offset_s();
       const long w = outage_window(tg);
       if (w != window_open) close_window();
@@ -388,9 +400,16 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
         const fsw::Vec3 dp = fsw::enu_difference_m(out.nav.llh, t.llh);
         window_err_h = dp.head<2>().norm();
         window_err_v = (out.nav.vel_enu_mps - t.vel_enu_mps).norm();
+        const Eigen::Matrix2d P_h = ekf.P().template block<2, 2>(fsw::LayoutDiag::offset(fsw::Block::kPosition), fsw::LayoutDiag::offset(fsw::Block::kPosition));
+        window_var_h = P_h.trace();
+        window_nees_h = dp.head<2>().dot(P_h.ldlt().solve(dp.head<2>()));
       }
     }
-    if (!with_outages && !data.truth.empty() && nav_frames % 20 == 0 && out.nav.t_s >= run.init_t_s + cfg.gain_skip_s) {
+    // The RMS over the run: 10 Hz in time (the first frame at or after each multiple of 0.1 s), from
+    // init + gain_skip_s, so that runs at different navigation rates are scored alike.
+    if (!with_outages && !data.truth.empty() && out.nav.t_s >= run.init_t_s + cfg.gain_skip_s &&
+        out.nav.t_s >= next_score_t_s) {
+      next_score_t_s = (std::floor(out.nav.t_s / kScoreInterval_s + 1e-9) + 1.0) * kScoreInterval_s;
       TruthPoint t;
       if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t)) {
         const fsw::Vec3 dp = fsw::enu_difference_m(out.nav.llh, t.llh);
@@ -409,6 +428,28 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     }
     if (!out.ekf_ran || !out.ekf_updated) continue;
     const fsw::EkfUpdateReport& rep = out.report;
+    if (await_reacquisition) {
+      // The first update after an outage: its position scalars / pseudoranges, used or gated.
+      double z2 = 0.0;
+      int n = 0;
+      const auto add = [&](fsw::InnovationOutcome o, double nu, double S) {
+        if ((o == fsw::InnovationOutcome::kUsed || o == fsw::InnovationOutcome::kGated) && S > 0.0) {
+          z2 += nu * nu / S;
+          ++n;
+        }
+      };
+      if (rep.pvt)
+        for (std::size_t i = 0; i < 3; ++i) add(rep.pvt_obs[i].outcome, rep.pvt_obs[i].innovation, rep.pvt_obs[i].variance);
+      for (int k = 0; k < rep.n_obs; ++k) {
+        const fsw::ObservationInnovation& o = rep.obs[static_cast<std::size_t>(k)];
+        add(o.pr_outcome, o.pr_innovation_m, o.pr_variance_m2);
+      }
+      if (n > 0) {
+        reacq_nis_sum += z2 / n;
+        ++run.outages.reacquisitions;
+        await_reacquisition = false;
+      }
+    }
     const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * 200.0));
     double epr = 0.0, eprr = 0.0, epos = 0.0, evel = 0.0;
     int npr = 0, nprr = 0, npos = 0, nvel = 0;
@@ -479,7 +520,10 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
   if (run.outages.windows > 0) {
     run.outages.horizontal_rms_m = std::sqrt(out_h_ss / run.outages.windows);
     run.outages.velocity_rms_mps = std::sqrt(out_v_ss / run.outages.windows);
+    run.outages.predicted_horizontal_rms_m = std::sqrt(out_var_h_sum / run.outages.windows);
+    run.outages.horizontal_nees_mean = out_nees_sum / run.outages.windows;
   }
+  if (run.outages.reacquisitions > 0) run.outages.reacquisition_nis_mean = reacq_nis_sum / run.outages.reacquisitions;
   const int nused =
       run.innovations.pr_used + run.innovations.prr_used + run.innovations.pos_used + run.innovations.vel_used;
   run.innovations.nis_mean = nused > 0 ? nis / nused : 0.0;
@@ -691,7 +735,7 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
   res.base = run_diagnosis_model(data, cfg, base);
   if (selected.empty()) res.extended = res.base;
   compare_likelihood(res.base, res.extended);
-  if (!data.truth.empty() && cfg.outage_length_s > 0.0) {
+  if (cfg.outage_length_s > 0.0) {  // with a reference: the coasting error; always: the re-acquisition NIS
     say("GNSS outages: " + std::to_string(cfg.outage_length_s) + " s every " + std::to_string(cfg.outage_period_s) +
         " s, baseline and extended model coasting");
     std::vector<ModelRun> o = run_models(data, cfg, {base, res.extended.active}, true);

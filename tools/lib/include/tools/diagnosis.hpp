@@ -152,6 +152,18 @@ struct OutageStats {
   int epochs_withheld = 0;
   double horizontal_rms_m = 0.0, horizontal_max_m = 0.0;
   double velocity_rms_mps = 0.0;
+  /// The filter's own horizontal position 1-sigma at the end of each window (sqrt(P_EE + P_NN)),
+  /// RMS over the windows, and the mean 2-dof NEES of the horizontal error there (2 for a filter
+  /// that knows its coasting error; far above 2: the coasting error has a cause outside the model).
+  double predicted_horizontal_rms_m = 0.0;
+  double horizontal_nees_mean = 0.0;
+  /// Without a reference: the first measurement update after each outage compares the coasted
+  /// solution with GNSS. Its NIS per position scalar (loosely coupled) or per pseudorange (tightly
+  /// coupled), used or gated, averaged over the outages: 1 when the model explains its coasting
+  /// error, far above 1 when a cause outside the model dominates (the same verdict as the NEES,
+  /// from the data alone).
+  int reacquisitions = 0;
+  double reacquisition_nis_mean = 0.0;
 };
 
 /// One run of the diagnosis model with a set of active candidates.
