@@ -205,14 +205,19 @@ int run_diagnose() {
   }
 
   const bool pvt = cfg.gnss_source == sim::GnssSource::kPvt;
+  const auto heading_text = [](const tools::NavErrorStats& n) {
+    char b[64] = "";
+    if (n.attitude_samples > 0) std::snprintf(b, sizeof b, ", heading %.4f deg", n.heading_rms_deg);
+    return std::string(b);
+  };
   const auto rms = [pvt](const tools::InnovationStats& i) { return pvt ? i.pos_rms_m : i.pr_rms_m; };
   const auto rms_rate = [pvt](const tools::InnovationStats& i) { return pvt ? i.vel_rms_mps : i.prr_rms_mps; };
   std::printf("baseline %s: NIS %.3f, %s innovation RMS %.3f m / %.4f m/s", opt.baseline.c_str(),
               r.base.innovations.nis_mean, pvt ? "position/velocity" : "pseudorange/rate", rms(r.base.innovations),
               rms_rate(r.base.innovations));
   if (r.base.nav.available)
-    std::printf("; position %.2f m, velocity %.3f m/s, heading %.4f deg RMS", r.base.nav.pos_rms_m,
-                r.base.nav.vel_rms_mps, r.base.nav.heading_rms_deg);
+    std::printf("; position %.2f m, velocity %.3f m/s%s RMS", r.base.nav.pos_rms_m, r.base.nav.vel_rms_mps,
+                heading_text(r.base.nav).c_str());
   std::printf("\n");
   if (r.findings.empty()) std::printf("no finding (threshold z^2 %.2f over %d components)\n", r.threshold_z2, r.tested);
   for (const tools::Finding& f : r.findings) {
@@ -227,8 +232,8 @@ int run_diagnose() {
                 r.extended.innovations.nis_mean, rms(r.extended.innovations), rms_rate(r.extended.innovations),
                 r.extended.innovations.log_likelihood - r.base.innovations.log_likelihood);
     if (r.extended.nav.available)
-      std::printf("; position %.2f m, velocity %.3f m/s, heading %.4f deg RMS", r.extended.nav.pos_rms_m,
-                  r.extended.nav.vel_rms_mps, r.extended.nav.heading_rms_deg);
+      std::printf("; position %.2f m, velocity %.3f m/s%s RMS", r.extended.nav.pos_rms_m, r.extended.nav.vel_rms_mps,
+                  heading_text(r.extended.nav).c_str());
     std::printf("\n");
   }
   if (r.base.outages.windows > 0)
@@ -292,8 +297,10 @@ int run_diagnose() {
     if (r.base.nav.available) {
       md << "| position RMS [m] | " << fmt(r.base.nav.pos_rms_m, "%.2f") << " | " << fmt(r.extended.nav.pos_rms_m, "%.2f") << " |\n";
       md << "| velocity RMS [m/s] | " << fmt(r.base.nav.vel_rms_mps, "%.3f") << " | " << fmt(r.extended.nav.vel_rms_mps, "%.3f") << " |\n";
-      md << "| tilt RMS [deg] | " << fmt(r.base.nav.tilt_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.tilt_rms_deg, "%.4f") << " |\n";
-      md << "| heading RMS [deg] | " << fmt(r.base.nav.heading_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.heading_rms_deg, "%.4f") << " |\n";
+      if (r.base.nav.attitude_samples > 0) {  // a reference without attitude scores position and velocity only
+        md << "| tilt RMS [deg] | " << fmt(r.base.nav.tilt_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.tilt_rms_deg, "%.4f") << " |\n";
+        md << "| heading RMS [deg] | " << fmt(r.base.nav.heading_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.heading_rms_deg, "%.4f") << " |\n";
+      }
     }
     if (r.base.outages.windows > 0) {
       md << "| horizontal error after " << fmt(cfg.outage_length_s, "%.0f") << " s GNSS outages, RMS of "

@@ -387,7 +387,16 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     }
     const auto& ekf = app->executive().ekf();
     // Navigation error against truth; the solution's time tag is on the IMU clock: the model's own
-    // offset estimate puts it on GNSS time.
+    // offset estimate puts it on GNSS time. A reference without attitude is a GNSS solution (what
+    // `sdins import` writes from an RTK .pos): it is of the antenna, so the model's antenna (its
+    // IMU point moved by its own lever-arm estimate) is scored against it; a simulator's truth
+    // (with attitude) is of the IMU point.
+    const auto scored_error_enu_m = [&](const TruthPoint& t) {
+      const fsw::Vec3 llh =
+          t.has_attitude ? out.nav.llh
+                         : fsw::Vec3(out.nav.llh + fsw::llh_delta_from_enu(out.nav.llh, out.nav.C_b_n() * ekf.lever_arm_b_m()));
+      return fsw::Vec3(fsw::enu_difference_m(llh, t.llh));
+    };
     if (with_outages && !data.truth.empty()) {
       // Every navigation frame: the error at the last frame inside a window is the error after the
       // whole outage, whatever the navigation rate.
@@ -397,7 +406,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
       TruthPoint t;
       if (w >= 0 && truth_at(data.truth, tg, t)) {
         window_open = w;
-        const fsw::Vec3 dp = fsw::enu_difference_m(out.nav.llh, t.llh);
+        const fsw::Vec3 dp = scored_error_enu_m(t);
         window_err_h = dp.head<2>().norm();
         window_err_v = (out.nav.vel_enu_mps - t.vel_enu_mps).norm();
         const Eigen::Matrix2d P_h = ekf.P().template block<2, 2>(fsw::LayoutDiag::offset(fsw::Block::kPosition), fsw::LayoutDiag::offset(fsw::Block::kPosition));
@@ -412,7 +421,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
       next_score_t_s = (std::floor(out.nav.t_s / kScoreInterval_s + 1e-9) + 1.0) * kScoreInterval_s;
       TruthPoint t;
       if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t)) {
-        const fsw::Vec3 dp = fsw::enu_difference_m(out.nav.llh, t.llh);
+        const fsw::Vec3 dp = scored_error_enu_m(t);
         const fsw::Vec3 dv = out.nav.vel_enu_mps - t.vel_enu_mps;
         nav_pos_ss += dp.squaredNorm();
         nav_vel_ss += dv.squaredNorm();
