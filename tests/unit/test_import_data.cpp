@@ -32,8 +32,10 @@ struct Imported {
   std::vector<hal::LcmReplayInput> inputs;  ///< every input in time order (GNSS_PVT included)
 };
 
-Imported import_and_read(const std::string& format, const std::string& dir, const std::string& name) {
+Imported import_and_read(const std::string& format, const std::string& dir, const std::string& name,
+                         double imu_clock_ratio = 0.0) {
   tools::ImportOptions opt;
+  opt.imu_clock_ratio = imu_clock_ratio;
   opt.format = format;
   opt.path = kData + "/" + dir;
   opt.log_path = lcm_test::scratch(name + ".lcmlog");
@@ -152,3 +154,32 @@ TEST(ImportData, WalkRawFixNearTheRtkSolutionAndImuOnTheSourcesTimeScale) {
   for (std::size_t k = 0; k < imu_t.size(); ++k) worst = std::max(worst, std::abs(imu_t[k] - sf_tow[k + 1]));
   EXPECT_LT(worst, 1e-6);  // the _sf times are printed to 0.1 us and held in a double near 1.76e9
 }
+
+namespace {
+
+// The drive's IMU time scale: by default the tag file's (its start time and last record: 1.000257
+// GPS s per IMU-clock s, as the data set's source maps it); --imu-clock-ratio replaces the rate and
+// keeps the first sample at the start time. With 1 (the IMU's own millisecond tick) the diagnosis'
+// drifting IMU-GNSS time offset of the default import disappears (README worked example).
+TEST(ImportData, DriveImuClockRatioReplacesTheTagFilesRate) {
+  if (!fs::exists(kData + "/gnss-imu-drive")) GTEST_SKIP() << "no data set " << kData << "/gnss-imu-drive";
+  const Imported tag = import_and_read("rtklib", "gnss-imu-drive", "drive_tag");
+  const Imported own = import_and_read("rtklib", "gnss-imu-drive", "drive_own", 1.0);
+  EXPECT_NEAR(tag.summary["imu"]["seconds_per_imu_second"].get<double>(), 1.000257, 1e-6);
+  EXPECT_EQ(own.summary["imu"]["seconds_per_imu_second"].get<double>(), 1.0);
+  std::vector<double> a, b;
+  for (const auto& in : tag.inputs)
+    if (in.kind == Kind::kImu) a.push_back(in.t_s);
+  for (const auto& in : own.inputs)
+    if (in.kind == Kind::kImu) b.push_back(in.t_s);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 50000u);
+  const double ticks_s = (own.summary["imu"]["tick_ms_last"].get<double>() - own.summary["imu"]["tick_ms_first"].get<double>()) / 1e3;
+  // Sample k ends at line k: the first sample ends one line after the start time.
+  const double t0 = b.front() - (b[1] - b[0]);
+  EXPECT_NEAR(b.back() - t0, ticks_s, 1e-3);
+  EXPECT_NEAR(a.front(), b.front(), 1e-4);              // same start
+  EXPECT_NEAR(a.back() - b.back(), ticks_s * 257e-6, 2e-3);  // 0.14 s apart after 549 s
+}
+
+}  // namespace

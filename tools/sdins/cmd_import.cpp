@@ -40,7 +40,10 @@ void register_import(CLI::App& app) {
                   "largest position + clock error [m] of an almanac fitted to the broadcast ephemeris that is written");
   sub->add_flag("--clip-gnss-to-imu", opt.imp.clip_gnss_to_imu,
                 "keep GNSS epochs and solutions only within the IMU's time span (+-1 s)");
-  sub->add_option("--convbin", opt.imp.convbin, "RTKLIB's convbin program");
+  sub->add_option("--imu-clock-ratio", opt.imp.imu_clock_ratio,
+                  "rtklib IMU logs: GPS seconds per IMU-clock second (default: from the .tag file's start and last "
+                  "record); the first sample stays at the tag's start time")
+      ->check(CLI::Range(0.99, 1.01));
   sub->add_flag("--keep-temp", opt.imp.keep_temp, "keep convbin's RINEX files (the directory is in the summary)");
 }
 

@@ -456,6 +456,7 @@ nlohmann::json import_rtklib(const ImportOptions& opt) {
     imu_samples = read_gnss_imu_csv(f, imu_lines);
     tag = read_time_tag(imu_csv.front().string() + ".tag");
     map = tick_to_gps(tag, imu_samples);
+    if (opt.imu_clock_ratio > 0.0) map.seconds_per_tick = opt.imu_clock_ratio * 1e-3;
   }
 
   // Raw GNSS through convbin.
@@ -598,7 +599,9 @@ nlohmann::json import_rtklib(const ImportOptions& opt) {
     ij["tick_ms_first"] = imu_samples.front().tick_ms;
     ij["tick_ms_last"] = imu_samples.back().tick_ms;
     ij["seconds_per_imu_second"] = map.seconds_per_tick * 1e3;
-    ij["timing"] = "first accepted sample at the tag's start time, last at start + last tag tick, linear in the IMU tick";
+    ij["timing"] = opt.imu_clock_ratio > 0.0
+                       ? "first accepted sample at the tag's start time, linear in the IMU tick at --imu-clock-ratio"
+                       : "first accepted sample at the tag's start time, last at start + last tag tick, linear in the IMU tick";
     ij["increments"] = "trapezoid of consecutive samples over (t[k-1], t[k]]: n accepted lines give n - 1 samples";
     sum["imu"] = ij;
   } else {

@@ -270,6 +270,11 @@ struct ImportOptions {
   bool clip_gnss_to_imu = false;   ///< keep GNSS epochs / solutions only within the IMU span (+-1 s)
   std::string convbin = "convbin"; ///< RTKLIB's convbin (for a .ubx next to the solution)
   bool keep_temp = false;          ///< keep convbin's RINEX files (their directory is in the summary)
+  /// GNSS_IMU logs: GPS seconds per IMU-clock second. 0: from the tag file (its start time and
+  /// last record, as the data sets' source does); otherwise the first sample stays at the tag's
+  /// start time and the ticks are scaled by this (an IMU clock rate measured elsewhere, e.g. by
+  /// the diagnosis' drifting time offset).
+  double imu_clock_ratio = 0.0;
 };
 
 /// Runs one import: reads the recording, writes the log, returns the summary (the JSON of
