@@ -99,7 +99,7 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   if (cfg.propagation_substep_frames < 1 || !(cfg.pseudorange_sigma_m > 0.0) ||
       !(cfg.pseudorange_rate_sigma_mps > 0.0) || !(cfg.gate_chi2 > 0.0) || !cfg.att_sigma_rad.allFinite() ||
       !cfg.lever_arm_b_m.allFinite() || !(cfg.gyro_g_sens_sigma_radps_per_mps2 >= 0.0) ||
-      !(cfg.time_offset_sigma_s >= 0.0) || !(cfg.lever_arm_sigma_m >= 0.0) || !(cfg.tropo_scale_sigma >= 0.0) ||
+      !(cfg.time_offset_sigma_s >= 0.0) || !(cfg.time_drift_sigma >= 0.0) || !(cfg.lever_arm_sigma_m >= 0.0) || !(cfg.tropo_scale_sigma >= 0.0) ||
       !(cfg.iono_scale_sigma >= 0.0) || !(cfg.pvt_pos_sigma_floor_m >= 0.0) || !std::isfinite(cfg.pvt_pos_sigma_floor_m) ||
       !(cfg.pvt_vel_sigma_floor_mps >= 0.0) || !std::isfinite(cfg.pvt_vel_sigma_floor_mps) ||
       !(cfg.pvt_sigma_scale > 0.0) || !std::isfinite(cfg.pvt_sigma_scale) || cfg.nis_window < 1 || cfg.nis_window > kMaxNisWindow ||
@@ -124,6 +124,7 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   fill(Block::kGyroScale, cfg.gyro_scale_sigma);
   fill(Block::kGyroGSens, cfg.gyro_g_sens_sigma_radps_per_mps2);
   fill(Block::kTimeOffset, cfg.time_offset_sigma_s);
+  fill(Block::kTimeDrift, cfg.time_drift_sigma);
   fill(Block::kLeverArm, cfg.lever_arm_sigma_m);
   fill(Block::kTropoScale, cfg.tropo_scale_sigma);
   fill(Block::kIonoScale, cfg.iono_scale_sigma);
@@ -155,6 +156,8 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   clock_drift_mps_ = 0.0;
   clock_initialised_ = false;
   time_offset_hat_s_ = 0.0;
+  time_drift_hat_ = 0.0;
+  drift_t_ref_s_ = std::numeric_limits<double>::quiet_NaN();
   lever_arm_hat_b_m_ = cfg.lever_arm_b_m;
   tropo_scale_hat_ = 0.0;
   iono_scale_hat_ = 0.0;
@@ -403,11 +406,14 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   // The frame's kinematic acceleration (specific force plus gravity; Coriolis left out), for the
   // time-offset terms.
   const Vec3 a_n = last_f_n_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
-  // INS time tag of the epoch: its GNSS time plus the estimated IMU-GNSS offset.
-  const double dt_ins = epoch.t_s + time_offset_hat_s_ - nav.t_s;
+  // INS time tag of the epoch: its GNSS time plus the estimated IMU-GNSS offset at that time.
+  if (!std::isfinite(drift_t_ref_s_)) drift_t_ref_s_ = epoch.t_s;
+  const double offset_s = time_offset_at(epoch.t_s);
+  const double drift_lever_s = epoch.t_s - drift_t_ref_s_;  // d offset / d drift
+  const double dt_ins = epoch.t_s + offset_s - nav.t_s;
   Vec3 v_ant_n = nav.vel_enu_mps + C * w_rel_b.cross(lever_arm_hat_b_m_);
   const Vec3 r_ant = ecef_from_llh(nav.llh) + Cne * (l_n + v_ant_n * dt_ins);
-  if constexpr (Layout::has(Block::kTimeOffset)) v_ant_n += a_n * time_offset_hat_s_;
+  if constexpr (Layout::has(Block::kTimeOffset) || Layout::has(Block::kTimeDrift)) v_ant_n += a_n * offset_s;
   const Vec3 v_ant = Cne * v_ant_n;
   const double dt = epoch.t_s - nav.t_s;  // the clock runs on GNSS time
   const double clk_b = clock_bias_m_ + clock_drift_mps_ * dt;
@@ -485,6 +491,8 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
     h.template segment<3>(6) = -e_n.transpose() * skew(l_n);
     h(oc) = 1.0;
     if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = -e_n.dot(nav.vel_enu_mps);
+    if constexpr (Layout::has(Block::kTimeDrift))
+      h(Layout::offset(Block::kTimeDrift)) = -e_n.dot(nav.vel_enu_mps) * drift_lever_s;
     if constexpr (Layout::has(Block::kLeverArm))
       h.template segment<3>(Layout::offset(Block::kLeverArm)) = -e_n.transpose() * C;
     if constexpr (Layout::has(Block::kTropoScale)) h(Layout::offset(Block::kTropoScale)) = delay_tropo[k];
@@ -510,6 +518,7 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
     h.template segment<3>(3) = -e_n.transpose();
     h(oc + 1) = 1.0;
     if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = -e_n.dot(a_n);
+    if constexpr (Layout::has(Block::kTimeDrift)) h(Layout::offset(Block::kTimeDrift)) = -e_n.dot(a_n) * drift_lever_s;
     if constexpr (Layout::has(Block::kLeverArm))
       h.template segment<3>(Layout::offset(Block::kLeverArm)) = -e_n.transpose() * C * skew(w_rel_b);
     if constexpr (Layout::has(Block::kRangeRateError)) {
@@ -561,8 +570,10 @@ Status Ekf<Layout>::update_pvt(const GnssPvtMeasurement& m, const NavState& nav,
     const double lat = nav.llh.x();
     // The frame's kinematic acceleration, exactly as update() forms it for the time-offset terms.
     const Vec3 a_n = last_f_n_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
+    if (!std::isfinite(drift_t_ref_s_)) drift_t_ref_s_ = m.t_s;
+    const double drift_lever_s = m.t_s - drift_t_ref_s_;  // d offset / d drift
     const PvtModel mdl =
-        pvt_measurement_model(m, nav, omega_ib_b_radps, lever_arm_hat_b_m_, time_offset_hat_s_, a_n);
+        pvt_measurement_model(m, nav, omega_ib_b_radps, lever_arm_hat_b_m_, time_offset_at(m.t_s), a_n);
     const double scale2 = cfg_.pvt_sigma_scale * cfg_.pvt_sigma_scale;
     // Re-acquisition after a PVT runaway reset: this update is not gated (the reset opened the
     // position and velocity variances, so the solution is taken nearly as it is).
@@ -580,6 +591,7 @@ Status Ekf<Layout>::update_pvt(const GnssPvtMeasurement& m, const NavState& nav,
       if constexpr (Layout::has(Block::kLeverArm))
         h.template segment<3>(Layout::offset(Block::kLeverArm)) = mdl.H.template block<1, 3>(i, 9);
       if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = mdl.H(i, 12);
+      if constexpr (Layout::has(Block::kTimeDrift)) h(Layout::offset(Block::kTimeDrift)) = mdl.H(i, 12) * drift_lever_s;
       const double y = is_pos ? mdl.pos_innovation_m(a) : mdl.vel_innovation_mps(a);
       PvtInnovation& inn = report.pvt_obs[static_cast<std::size_t>(i)];
       if (scalar_update(h, y, scale2 * sig * sig, inn.innovation, inn.variance)) {
@@ -785,6 +797,7 @@ Status Ekf<Layout>::feedback(Strapdown& ins, ImuCompensation& comp) {
   if constexpr (Layout::has(Block::kGyroGSens))
     comp.gyro_g_sens_radps_per_mps2 += x_.template segment<3>(Layout::offset(Block::kGyroGSens));
   if constexpr (Layout::has(Block::kTimeOffset)) time_offset_hat_s_ -= x_(Layout::offset(Block::kTimeOffset));
+  if constexpr (Layout::has(Block::kTimeDrift)) time_drift_hat_ -= x_(Layout::offset(Block::kTimeDrift));
   if constexpr (Layout::has(Block::kLeverArm)) lever_arm_hat_b_m_ -= x_.template segment<3>(Layout::offset(Block::kLeverArm));
   if constexpr (Layout::has(Block::kTropoScale)) tropo_scale_hat_ -= x_(Layout::offset(Block::kTropoScale));
   if constexpr (Layout::has(Block::kIonoScale)) iono_scale_hat_ -= x_(Layout::offset(Block::kIonoScale));

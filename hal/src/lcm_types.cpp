@@ -62,6 +62,7 @@ const BlockComponents kBlockComponents[fsw::kBlockCount] = {
     {{"x_m", "y_m", "z_m"}},
     {{"scale"}},
     {{"scale"}},
+    {{"s_per_s"}},
 };
 
 }  // namespace
@@ -176,7 +177,8 @@ struct LcmFields<sdins::ekf_state_t> {
     add_time(m.utime, m.t_s, r);
     r.add("n_states", m.n_states);
     r.add("consider_mask", m.consider_mask);
-    const int n = m.n_states < 0 ? 0 : (m.n_states > 64 ? 64 : m.n_states);
+    constexpr int kMaxSigma = static_cast<int>(sizeof(m.sigma) / sizeof(m.sigma[0]));
+    const int n = m.n_states < 0 ? 0 : (m.n_states > kMaxSigma ? kMaxSigma : m.n_states);
     std::vector<std::string> names(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) names[static_cast<std::size_t>(i)] = "sigma[" + std::to_string(i) + "]";
     for (int b = 0; b < fsw::kBlockCount; ++b) {

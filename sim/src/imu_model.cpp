@@ -28,6 +28,7 @@ void add_effects(ImuErrors& e, const EffectSet& fx) {
     e.gyro_g_sensitivity_radps_per_mps2(i) += fx.si(Effect::kGyroGSensitivity, k);
   }
   e.time_offset_s += fx.si(Effect::kImuGnssTimeOffset, 0);
+  e.clock_drift += fx.si(Effect::kImuClockDrift, 0);
 }
 
 }  // namespace
@@ -87,8 +88,8 @@ fsw::ImuSample ImuModel::measure(const TruthSample& truth) {
   const Mat3 Kg = Mat3::Identity() + Mat3(e_.gyro_scale_factor.asDiagonal()) + e_.gyro_misalignment_rad;
   const Mat3 Ka = Mat3::Identity() + Mat3(e_.accel_scale_factor.asDiagonal()) + e_.accel_misalignment_rad;
   fsw::ImuSample s;
-  s.t_s = truth.t_s + e_.time_offset_s;
-  s.dt_s = dt;
+  s.t_s = truth.t_s * (1.0 + e_.clock_drift) + e_.time_offset_s;
+  s.dt_s = dt * (1.0 + e_.clock_drift);
   s.dtheta_rad = Kg * truth.dtheta_rad + e_.gyro_g_sensitivity_radps_per_mps2.cwiseProduct(truth.dv_mps) +
                  (e_.gyro_bias_radps + drift_g_) * dt;
   s.dv_mps = Ka * truth.dv_mps + (e_.accel_bias_mps2 + drift_a_) * dt;

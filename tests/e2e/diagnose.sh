@@ -40,7 +40,7 @@ o = g["outages"]
 assert o["length_s"] == 15 and o["before"]["windows"] >= 3 and o["before"]["windows"] == o["after"]["windows"], o
 assert o["before"]["epochs_withheld"] >= 15 * o["before"]["windows"] - 2 and o["after"]["horizontal_rms_m"] > 0, o
 assert j["method"]["alpha"] == 0.05 and j["method"]["tested_components"] > 5, j["method"]
-assert len(j["screening"]) == 24 and all(u in [s["candidate"] for s in j["screening"]] for u in j["unobservable"])
+assert len(j["screening"]) == 25 and all(u in [s["candidate"] for s in j["screening"]] for u in j["unobservable"])
 for p in ("report.md", "innovations.png", "heading.png", "estimates.png", "baseline.csv", "extended.csv"):
     assert os.path.getsize(f"{out}/report/{p}") > 0, p
 md = open(f"{out}/report/report.md").read()

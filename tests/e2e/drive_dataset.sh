@@ -40,9 +40,13 @@ d = json.load(open(out + "/diag.json"))
 assert d["gnss_source"] == "pvt"
 f = d["findings"]
 assert f, "no finding"
-# The timing between the IMU log and the GNSS solutions is the strongest finding on this drive.
-assert f[0]["effect"] == "imu_gnss_time_offset", f[0]
-assert 0.03 < f[0]["estimate"] < 0.15 and f[0]["sigma"] < 0.01, f[0]
+# The timing between the IMU log and the GNSS solutions is the strongest finding on this drive:
+# the tag file's time scale runs the IMU clock ~240 ppm fast (README worked example).
+assert f[0]["effect"] == "imu_clock_drift", f[0]
+assert 80 < f[0]["estimate"] < 400 and f[0]["sigma"] < 40, f[0]
+o = d["gain"]["outages"]
+assert o["after"]["horizontal_rms_m"] < 0.85 * o["before"]["horizontal_rms_m"], o
+assert o["before"]["reacquisitions"] >= 6 and o["after"]["reacquisition_nis_mean"] < 1.5, o
 g = d["gain"]["innovations"]
 assert g["after"]["log_likelihood"] > g["before"]["log_likelihood"], g
 print("diagnosis ok:", f[0]["effect"], f[0]["estimate"], "+-", f[0]["sigma"])

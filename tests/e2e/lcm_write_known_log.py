@@ -89,7 +89,7 @@ for k in range(20):
     if k == 9:
         events.append(("GARBAGE", None, 0))  # marker: 50 bytes of junk here
 
-layout15 = [0, 3, 6, 9, 12, -1, -1, -1, -1, 15, -1, -1] + [-1] * 5
+layout15 = [0, 3, 6, 9, 12, -1, -1, -1, -1, 15, -1, -1] + [-1] * 6
 for t in (0.05, 0.1):
     s = ekf_state_t()
     s.t_s = t
@@ -116,7 +116,7 @@ for k in range(3):
     add("FOREIGN", bytes([0x42] * (10 + k)), 0.001 * k)
 
 # Two EKF models on one channel: cannot be one CSV.
-for n_states, offsets in ((17, layout15), (26, [0, 3, 6, 9, 12, 15, 18, -1, -1, 24, -1, -1] + [-1] * 5)):
+for n_states, offsets in ((17, layout15), (26, [0, 3, 6, 9, 12, 15, 18, -1, -1, 24, -1, -1] + [-1] * 6)):
     s = ekf_state_t()
     s.n_states = n_states
     s.block_offset = offsets

@@ -27,6 +27,7 @@ enum class Effect : std::uint8_t {
   kAntennaLeverArm,
   kTroposphericDelay,
   kIonosphericDelay,
+  kImuClockDrift,
   kCount
 };
 
@@ -53,6 +54,9 @@ inline constexpr EffectInfo kEffectCatalogue[kEffectCount] = {
     {Effect::kAntennaLeverArm, "antenna_lever_arm", "m", 3, {"x", "y", "z", "", "", ""}, 1.0},
     {Effect::kTroposphericDelay, "tropospheric_delay", "scale", 1, {"", "", "", "", "", ""}, 1.0},
     {Effect::kIonosphericDelay, "ionospheric_delay", "scale", 1, {"", "", "", "", "", ""}, 1.0},
+    // The IMU clock's rate error against GNSS time: the IMU-GNSS time offset grows by this much
+    // per second (IMU time tags and intervals stretched by 1 + drift).
+    {Effect::kImuClockDrift, "imu_clock_drift", "ppm", 1, {"", "", "", "", "", ""}, 1e-6},
 };
 
 inline constexpr const EffectInfo& effect_info(Effect e) { return kEffectCatalogue[static_cast<std::size_t>(e)]; }

@@ -68,6 +68,8 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
+#include <limits>
 #include <cstdint>
 
 #include "fsw/error_state.hpp"
@@ -93,6 +95,7 @@ struct EkfConfig {
   // Extension blocks (LayoutDiag); zero switches a block off.
   double gyro_g_sens_sigma_radps_per_mps2 = 0.0;
   double time_offset_sigma_s = 0.0;
+  double time_drift_sigma = 0.0;  ///< s/s
   double lever_arm_sigma_m = 0.0;
   double tropo_scale_sigma = 0.0;
   double iono_scale_sigma = 0.0;
@@ -273,6 +276,13 @@ class Ekf {
   /// Extension estimates (LayoutDiag): IMU-GNSS time offset, lever arm (starts at the configured
   /// one), tropospheric and ionospheric delay scales.
   double time_offset_s() const { return time_offset_hat_s_; }
+  /// The estimated IMU-GNSS time offset's rate (s/s; 0 without kTimeDrift) and the offset it gives
+  /// at GNSS time t_s (the one the measurement models use).
+  double time_drift() const { return time_drift_hat_; }
+  double time_offset_at(double t_s) const {
+    return std::isfinite(drift_t_ref_s_) ? time_offset_hat_s_ + time_drift_hat_ * (t_s - drift_t_ref_s_)
+                                         : time_offset_hat_s_;
+  }
   const Vec3& lever_arm_b_m() const { return lever_arm_hat_b_m_; }
   double tropo_scale() const { return tropo_scale_hat_; }
   double iono_scale() const { return iono_scale_hat_; }
@@ -332,6 +342,8 @@ class Ekf {
   double clock_drift_mps_ = 0.0;
   bool clock_initialised_ = false;
   double time_offset_hat_s_ = 0.0;
+  double time_drift_hat_ = 0.0;
+  double drift_t_ref_s_ = std::numeric_limits<double>::quiet_NaN();  ///< set by the first update
   Vec3 lever_arm_hat_b_m_ = Vec3::Zero();
   double tropo_scale_hat_ = 0.0;
   double iono_scale_hat_ = 0.0;

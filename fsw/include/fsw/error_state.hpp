@@ -25,6 +25,9 @@
 //   kLeverArm       IMU reference point -> antenna, body axes m, estimate minus truth
 //   kTropoScale     scale of the tropospheric delay model (saastamoinen_delay_m), estimate minus truth
 //   kIonoScale      scale of the ionospheric delay model (klobuchar_delay_m), estimate minus truth
+//   kTimeDrift      rate of the IMU-GNSS time offset (the IMU clock's rate error against GNSS
+//                   time) s/s, estimate minus truth: offset(t) = offset + drift (t - t_ref), t_ref
+//                   the GNSS time of the first measurement update
 // The residual sensor errors are what remains after the IMU compensation that the filter feeds
 // back: measured = (I + SF + M) true + b, compensated = measured - b_hat - (SF_hat + M_hat) measured,
 // so compensated ~ true + delta b + (delta SF + delta M) true.
@@ -68,6 +71,7 @@ enum class Block : std::uint8_t {
   kLeverArm,
   kTropoScale,
   kIonoScale,
+  kTimeDrift,
   kCount
 };
 
@@ -78,14 +82,14 @@ inline constexpr int kBlockCount = static_cast<int>(Block::kCount);
 
 /// Size of each block, indexed by Block.
 inline constexpr int kBlockSize[kBlockCount] = {3, 3, 3, 3, 3, 3, 6, 3, 3, 2, kGnssErrorChannels, kGnssErrorChannels,
-                                                3, 1, 3, 1, 1};
+                                                3, 1, 3, 1, 1, 1};
 
 /// Short block names for reports and CSV headers.
 inline constexpr const char* kBlockName[kBlockCount] = {"pos",       "vel",       "att",       "accel_bias",
                                                          "gyro_bias", "accel_mis", "gyro_mis",  "accel_sf",
                                                          "gyro_sf",   "clock",     "range_err", "range_rate_err",
                                                          "gyro_g_sens", "time_offset", "lever_arm", "tropo_scale",
-                                                         "iono_scale"};
+                                                         "iono_scale", "time_drift"};
 
 constexpr int block_size(Block b) { return kBlockSize[static_cast<int>(b)]; }
 
@@ -154,15 +158,15 @@ using Layout15Conv =
 /// Gauss-Markov GPS errors, plus one block for every error of the effect catalogue
 /// (effect_catalogue.hpp). The diagnosis switches blocks on and off at run time through their
 /// initial sigma (EkfConfig): a block started with zero variance and no process noise stays
-/// exactly zero and uncorrelated, so the model with every extension off is the baseline. 65 states.
+/// exactly zero and uncorrelated, so the model with every extension off is the baseline. 66 states.
 using LayoutDiag =
     ErrorStateLayout<Block::kPosition, Block::kVelocity, Block::kAttitude, Block::kAccelBias, Block::kGyroBias,
                      Block::kAccelMisalign, Block::kGyroMisalign, Block::kAccelScale, Block::kGyroScale,
-                     Block::kGyroGSens, Block::kTimeOffset, Block::kLeverArm, Block::kTropoScale, Block::kIonoScale,
-                     Block::kClock, Block::kRangeError, Block::kRangeRateError>;
+                     Block::kGyroGSens, Block::kTimeOffset, Block::kTimeDrift, Block::kLeverArm, Block::kTropoScale,
+                     Block::kIonoScale, Block::kClock, Block::kRangeError, Block::kRangeRateError>;
 
 static_assert(Layout15::kSize == 17, "15-state model plus two clock states");
-static_assert(LayoutDiag::kSize == 65);
+static_assert(LayoutDiag::kSize == 66);
 static_assert(Layout24::kSize == 26, "24-state model plus two clock states");
 static_assert(LayoutFull::kSize == 56);
 static_assert(Layout15Full::is_consider(Block::kGyroMisalign) && !Layout24Full::is_consider(Block::kGyroMisalign));

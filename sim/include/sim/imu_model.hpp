@@ -34,6 +34,7 @@ struct ImuErrors {
   double accel_bias_instability_mps2 = 0.0;
   double bias_instability_tau_s = 3600.0;
   double time_offset_s = 0.0;                  ///< IMU time tag minus GNSS (true) time
+  double clock_drift = 0.0;                    ///< IMU clock rate error: tags at t (1 + drift) + offset
 };
 
 /// Draws the per-run errors for a scenario: the error set's 1-sigma values from the seed, then

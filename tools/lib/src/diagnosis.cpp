@@ -33,6 +33,7 @@ Block block_of(Effect e) {
     case Effect::kAntennaLeverArm: return Block::kLeverArm;
     case Effect::kTroposphericDelay: return Block::kTropoScale;
     case Effect::kIonosphericDelay: return Block::kIonoScale;
+    case Effect::kImuClockDrift: return Block::kTimeDrift;
     case Effect::kCount: break;
   }
   return Block::kCount;
@@ -61,6 +62,7 @@ double estimate_si(const App& app, const Candidate& c) {
     case Effect::kAntennaLeverArm: return ekf.lever_arm_b_m()(k) - ekf.config().lever_arm_b_m(k);
     case Effect::kTroposphericDelay: return ekf.tropo_scale();
     case Effect::kIonosphericDelay: return ekf.iono_scale();
+    case Effect::kImuClockDrift: return ekf.time_drift();
     case Effect::kCount: break;
   }
   return 0.0;
@@ -161,6 +163,7 @@ DiagnosisConfig default_diagnosis_config() {
   set(Effect::kAntennaLeverArm, 2.0);       // m
   set(Effect::kTroposphericDelay, 1.0);     // scale
   set(Effect::kIonosphericDelay, 1.0);      // scale
+  set(Effect::kImuClockDrift, 100.0);       // ppm
   return c;
 }
 
@@ -312,6 +315,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
   e.lever_arm_sigma_m = prior_si(cfg, Effect::kAntennaLeverArm);
   e.tropo_scale_sigma = prior_si(cfg, Effect::kTroposphericDelay);
   e.iono_scale_sigma = prior_si(cfg, Effect::kIonosphericDelay);
+  e.time_drift_sigma = prior_si(cfg, Effect::kImuClockDrift);
   e.frozen_states = 0;
   for (std::size_t i = 0; i < cands.size(); ++i)
     if (std::find(active.begin(), active.end(), static_cast<int>(i)) == active.end())
@@ -400,7 +404,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
     if (with_outages && !data.truth.empty()) {
       // Every navigation frame: the error at the last frame inside a window is the error after the
       // whole outage, whatever the navigation rate.
-      const double tg = out.nav.t_s - ekf.time_offset_s();
+      const double tg = out.nav.t_s - ekf.time_offset_at(out.nav.t_s);
       const long w = outage_window(tg);
       if (w != window_open) close_window();
       TruthPoint t;
@@ -420,7 +424,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
         out.nav.t_s >= next_score_t_s) {
       next_score_t_s = (std::floor(out.nav.t_s / kScoreInterval_s + 1e-9) + 1.0) * kScoreInterval_s;
       TruthPoint t;
-      if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t)) {
+      if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_at(out.nav.t_s), t)) {
         const fsw::Vec3 dp = scored_error_enu_m(t);
         const fsw::Vec3 dv = out.nav.vel_enu_mps - t.vel_enu_mps;
         nav_pos_ss += dp.squaredNorm();
