@@ -1,5 +1,8 @@
 #include "fsw/alignment.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace fsw {
 
 void CoarseAlignment::reset() {
@@ -16,6 +19,12 @@ Status CoarseAlignment::add(const ImuSample& s) {
   dv_sum_ += s.dv_mps;
   dt_sum_ += s.dt_s;
   return Status::kOk;
+}
+
+void CoarseAlignment::merge(const CoarseAlignment& other) {
+  dtheta_sum_ += other.dtheta_sum_;
+  dv_sum_ += other.dv_sum_;
+  dt_sum_ += other.dt_sum_;
 }
 
 Status CoarseAlignment::solve(double lat_rad, Mat3& C_b_n) const {
@@ -38,6 +47,169 @@ Status CoarseAlignment::solve(double lat_rad, Mat3& C_b_n) const {
   C_b_n.row(0) = east_b.transpose();
   C_b_n.row(1) = north_b.transpose();
   C_b_n.row(2) = up_b.transpose();
+  return Status::kOk;
+}
+
+Status davenport_q(const Mat3& B, Mat3& C_b_n, double& lambda_max) {
+  if (!B.allFinite()) return Status::kNotConverged;
+  using Mat4 = Eigen::Matrix<double, 4, 4>;
+  // K = [[S - sigma I, Z], [Z^T, sigma]] (Shuster's convention: its eigenvector (q1, q2, q3, q4)
+  // gives the attitude matrix A = (q4^2 - |q|^2) I + 2 q q^T - 2 q4 [q x], which is Eigen's
+  // Hamilton quaternion (w = q4, v = -q) as a rotation matrix).
+  const Mat3 S = B + B.transpose();
+  const double sigma = B.trace();
+  const Vec3 Z(B(1, 2) - B(2, 1), B(2, 0) - B(0, 2), B(0, 1) - B(1, 0));
+  Mat4 A;
+  A.topLeftCorner<3, 3>() = S - sigma * Mat3::Identity();
+  A.topRightCorner<3, 1>() = Z;
+  A.bottomLeftCorner<1, 3>() = Z.transpose();
+  A(3, 3) = sigma;
+  Mat4 V = Mat4::Identity();
+  const double scale = A.squaredNorm();
+  if (!(scale > 0.0)) return Status::kNotConverged;
+  bool converged = false;
+  for (int sweep = 0; sweep < VelocityMatchAlignment::kMaxSweeps; ++sweep) {
+    double off = 0.0;
+    for (int p = 0; p < 4; ++p)
+      for (int q = p + 1; q < 4; ++q) off += A(p, q) * A(p, q);
+    if (off <= 1e-30 * scale) {
+      converged = true;
+      break;
+    }
+    for (int p = 0; p < 4; ++p) {
+      for (int q = p + 1; q < 4; ++q) {
+        const double apq = A(p, q);
+        if (apq == 0.0) continue;
+        // Rotation in the (p, q) plane that zeroes A(p, q) (Numerical Recipes' jacobi).
+        const double theta = (A(q, q) - A(p, p)) / (2.0 * apq);
+        const double t = (theta >= 0.0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+        const double c = 1.0 / std::sqrt(t * t + 1.0);
+        const double s = t * c;
+        for (int k = 0; k < 4; ++k) {
+          const double akp = A(k, p), akq = A(k, q);
+          A(k, p) = c * akp - s * akq;
+          A(k, q) = s * akp + c * akq;
+        }
+        for (int k = 0; k < 4; ++k) {
+          const double apk = A(p, k), aqk = A(q, k);
+          A(p, k) = c * apk - s * aqk;
+          A(q, k) = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 4; ++k) {
+          const double vkp = V(k, p), vkq = V(k, q);
+          V(k, p) = c * vkp - s * vkq;
+          V(k, q) = s * vkp + c * vkq;
+        }
+      }
+    }
+  }
+  if (!converged) return Status::kNotConverged;
+  int best = 0;
+  for (int k = 1; k < 4; ++k)
+    if (A(k, k) > A(best, best)) best = k;
+  lambda_max = A(best, best);
+  Quat q(V(3, best), -V(0, best), -V(1, best), -V(2, best));
+  q.normalize();
+  C_b_n = q.toRotationMatrix();
+  return Status::kOk;
+}
+
+void VelocityMatchAlignment::reset() {
+  sum_w_ = 0.0;
+  sum_w_alpha_.setZero();
+  sum_w_beta_.setZero();
+  sum_w_beta_alpha_.setZero();
+  sum_w_beta_beta_.setZero();
+  sum_w_alpha2_ = 0.0;
+  info_.setZero();
+  n_ = 0;
+  chi2_ = 0.0;
+  offset_.setZero();
+}
+
+Status VelocityMatchAlignment::add(const Vec3& alpha_b0_mps, const Vec3& beta_n_mps, double weight, const Mat3& G) {
+  if (!alpha_b0_mps.allFinite() || !beta_n_mps.allFinite() || !G.allFinite() || !std::isfinite(weight) ||
+      !(weight > 0.0))
+    return Status::kBadInput;
+  Eigen::Matrix<double, 3, 9> H;
+  H.leftCols<3>() = skew(alpha_b0_mps);
+  H.middleCols<3>(3) = G;
+  H.rightCols<3>() = Mat3::Identity();
+  info_.noalias() += weight * H.transpose().lazyProduct(H);  // coefficient-wise: no GEMM temporaries
+  sum_w_ += weight;
+  sum_w_alpha_ += weight * alpha_b0_mps;
+  sum_w_beta_ += weight * beta_n_mps;
+  sum_w_beta_alpha_ += weight * beta_n_mps * alpha_b0_mps.transpose();
+  sum_w_beta_beta_ += weight * beta_n_mps * beta_n_mps.transpose();
+  sum_w_alpha2_ += weight * alpha_b0_mps.squaredNorm();
+  ++n_;
+  return Status::kOk;
+}
+
+namespace {
+
+/// In-place Cholesky solve of the 6x6 SPD system D X = R (3 right-hand sides). false when D is not
+/// positive definite.
+bool cholesky_solve6(Eigen::Matrix<double, 6, 6> D, Eigen::Matrix<double, 6, 3>& X) {
+  for (int j = 0; j < 6; ++j) {
+    double d = D(j, j);
+    for (int k = 0; k < j; ++k) d -= D(j, k) * D(j, k);
+    if (!(d > 0.0)) return false;
+    D(j, j) = std::sqrt(d);
+    for (int i = j + 1; i < 6; ++i) {
+      double v = D(i, j);
+      for (int k = 0; k < j; ++k) v -= D(i, k) * D(j, k);
+      D(i, j) = v / D(j, j);
+    }
+  }
+  for (int c = 0; c < 3; ++c) {
+    for (int i = 0; i < 6; ++i) {  // L y = r
+      double v = X(i, c);
+      for (int k = 0; k < i; ++k) v -= D(i, k) * X(k, c);
+      X(i, c) = v / D(i, i);
+    }
+    for (int i = 5; i >= 0; --i) {  // L^T x = y
+      double v = X(i, c);
+      for (int k = i + 1; k < 6; ++k) v -= D(k, i) * X(k, c);
+      X(i, c) = v / D(i, i);
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+Status VelocityMatchAlignment::solve(Mat3& C_b0_n, Vec3& att_sigma_enu_rad, double gyro_bias_sigma_radps) const {
+  if (n_ < 3 || !(sum_w_ > 0.0)) return Status::kNotConverged;
+  // Centred sums: sum w (beta - beta_m)(alpha - alpha_m)^T = sum w beta alpha^T - W beta_m alpha_m^T.
+  const Vec3 alpha_m = sum_w_alpha_ / sum_w_;
+  const Vec3 beta_m = sum_w_beta_ / sum_w_;
+  const Mat3 B = sum_w_beta_alpha_ - sum_w_ * beta_m * alpha_m.transpose();
+  const Mat3 bb = sum_w_beta_beta_ - sum_w_ * beta_m * beta_m.transpose();
+  const double beta2 = bb.trace();
+  const double alpha2 = sum_w_alpha2_ - sum_w_ * alpha_m.squaredNorm();
+  double lambda = 0.0;
+  if (davenport_q(B, C_b0_n, lambda) != Status::kOk) return Status::kNotConverged;
+  // sum w |c_beta - C c_alpha|^2 = sum w |c_beta|^2 + sum w |c_alpha|^2 - 2 tr(C B^T).
+  chi2_ = std::max(0.0, beta2 + alpha2 - 2.0 * lambda);
+  offset_ = C_b0_n * alpha_m - beta_m;
+  // Marginal information about phi_b0: A - Bm D^-1 Bm^T, the (eps, d) block D with the bias prior.
+  Eigen::Matrix<double, 6, 6> D = info_.bottomRightCorner<6, 6>();
+  const double s_eps = std::max(gyro_bias_sigma_radps, 1e-9);
+  for (int i = 0; i < 3; ++i) D(i, i) += 1.0 / (s_eps * s_eps);
+  const Eigen::Matrix<double, 3, 6> Bm = info_.topRightCorner<3, 6>();
+  Eigen::Matrix<double, 6, 3> X = Bm.transpose();
+  if (!cholesky_solve6(D, X)) return Status::kNotConverged;
+  Mat3 info = info_.topLeftCorner<3, 3>() - Bm.lazyProduct(X);
+  info = 0.5 * (info + info.transpose());
+  const double tr = info.trace();
+  const double det = info.determinant();
+  // Relative conditioning: det / (trace / 3)^3 is 1 for an isotropic J and 0 for a singular one.
+  if (!(tr > 0.0) || !(det > 1e-12 * tr * tr * tr)) return Status::kNotConverged;
+  const Mat3 cov_n = C_b0_n * info.inverse() * C_b0_n.transpose();
+  const double dof = 3.0 * n_ - 6.0;
+  const double factor = std::max(1.0, chi2_ / dof);
+  att_sigma_enu_rad = (cov_n.diagonal() * factor).cwiseMax(0.0).cwiseSqrt();
   return Status::kOk;
 }
 
