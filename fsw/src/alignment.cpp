@@ -119,28 +119,40 @@ void VelocityMatchAlignment::reset() {
   sum_w_alpha_.setZero();
   sum_w_beta_.setZero();
   sum_w_beta_alpha_.setZero();
-  sum_w_beta_beta_.setZero();
   sum_w_alpha2_ = 0.0;
   info_.setZero();
+  h_alpha_.setZero();
+  h_beta_.setZero();
+  sum_w_alpha_beta_.setZero();
+  sum_w_beta2_ = 0.0;
   n_ = 0;
   chi2_ = 0.0;
   offset_.setZero();
+  gyro_bias_.setZero();
+  accel_bias_.setZero();
 }
 
-Status VelocityMatchAlignment::add(const Vec3& alpha_b0_mps, const Vec3& beta_n_mps, double weight, const Mat3& G) {
-  if (!alpha_b0_mps.allFinite() || !beta_n_mps.allFinite() || !G.allFinite() || !std::isfinite(weight) ||
-      !(weight > 0.0))
+Status VelocityMatchAlignment::add(const Vec3& alpha_b0_mps, const Vec3& beta_n_mps, double weight, const Mat3& G,
+                                   const Mat3& Theta) {
+  if (!alpha_b0_mps.allFinite() || !beta_n_mps.allFinite() || !G.allFinite() || !Theta.allFinite() ||
+      !std::isfinite(weight) || !(weight > 0.0))
     return Status::kBadInput;
-  Eigen::Matrix<double, 3, 9> H;
+  Eigen::Matrix<double, 3, 12> H;
   H.leftCols<3>() = skew(alpha_b0_mps);
   H.middleCols<3>(3) = G;
+  H.middleCols<3>(6) = Theta;
   H.rightCols<3>() = Mat3::Identity();
-  info_.noalias() += weight * H.transpose().lazyProduct(H);  // coefficient-wise: no GEMM temporaries
+  const Eigen::Matrix<double, 12, 3> Ht = H.transpose();
+  info_.noalias() += weight * Ht.lazyProduct(H);  // coefficient-wise: no GEMM temporaries
+  h_alpha_.noalias() += weight * Ht.lazyProduct(alpha_b0_mps);
+  for (int j = 0; j < 3; ++j)
+    for (int m = 0; m < 3; ++m) h_beta_.col(3 * j + m) += (weight * beta_n_mps(m)) * Ht.col(j);
+  sum_w_alpha_beta_.noalias() += weight * alpha_b0_mps.lazyProduct(beta_n_mps.transpose());
+  sum_w_beta2_ += weight * beta_n_mps.squaredNorm();
   sum_w_ += weight;
   sum_w_alpha_ += weight * alpha_b0_mps;
   sum_w_beta_ += weight * beta_n_mps;
   sum_w_beta_alpha_ += weight * beta_n_mps * alpha_b0_mps.transpose();
-  sum_w_beta_beta_ += weight * beta_n_mps * beta_n_mps.transpose();
   sum_w_alpha2_ += weight * alpha_b0_mps.squaredNorm();
   ++n_;
   return Status::kOk;
@@ -148,30 +160,33 @@ Status VelocityMatchAlignment::add(const Vec3& alpha_b0_mps, const Vec3& beta_n_
 
 namespace {
 
-/// In-place Cholesky solve of the 6x6 SPD system D X = R (3 right-hand sides). false when D is not
-/// positive definite.
-bool cholesky_solve6(Eigen::Matrix<double, 6, 6> D, Eigen::Matrix<double, 6, 3>& X) {
-  for (int j = 0; j < 6; ++j) {
-    double d = D(j, j);
-    for (int k = 0; k < j; ++k) d -= D(j, k) * D(j, k);
-    if (!(d > 0.0)) return false;
-    D(j, j) = std::sqrt(d);
-    for (int i = j + 1; i < 6; ++i) {
-      double v = D(i, j);
-      for (int k = 0; k < j; ++k) v -= D(i, k) * D(j, k);
-      D(i, j) = v / D(j, j);
+/// Cholesky solve of the SPD system A X = R (X holds R on entry). false when A is not positive
+/// definite or (relatively) singular.
+template <int N, int R>
+bool cholesky_solve(Eigen::Matrix<double, N, N> A, Eigen::Matrix<double, N, R>& X) {
+  for (int j = 0; j < N; ++j) {
+    const double diag = A(j, j);
+    double d = diag;
+    for (int k = 0; k < j; ++k) d -= A(j, k) * A(j, k);
+    // A pivot that lost all but 1e-12 of its diagonal: a direction without information.
+    if (!(diag > 0.0) || !(d > 1e-12 * diag)) return false;
+    A(j, j) = std::sqrt(d);
+    for (int i = j + 1; i < N; ++i) {
+      double v = A(i, j);
+      for (int k = 0; k < j; ++k) v -= A(i, k) * A(j, k);
+      A(i, j) = v / A(j, j);
     }
   }
-  for (int c = 0; c < 3; ++c) {
-    for (int i = 0; i < 6; ++i) {  // L y = r
+  for (int c = 0; c < R; ++c) {
+    for (int i = 0; i < N; ++i) {  // L y = r
       double v = X(i, c);
-      for (int k = 0; k < i; ++k) v -= D(i, k) * X(k, c);
-      X(i, c) = v / D(i, i);
+      for (int k = 0; k < i; ++k) v -= A(i, k) * X(k, c);
+      X(i, c) = v / A(i, i);
     }
-    for (int i = 5; i >= 0; --i) {  // L^T x = y
+    for (int i = N - 1; i >= 0; --i) {  // L^T x = y
       double v = X(i, c);
-      for (int k = i + 1; k < 6; ++k) v -= D(k, i) * X(k, c);
-      X(i, c) = v / D(i, i);
+      for (int k = i + 1; k < N; ++k) v -= A(k, i) * X(k, c);
+      X(i, c) = v / A(i, i);
     }
   }
   return true;
@@ -179,37 +194,67 @@ bool cholesky_solve6(Eigen::Matrix<double, 6, 6> D, Eigen::Matrix<double, 6, 3>&
 
 }  // namespace
 
-Status VelocityMatchAlignment::solve(Mat3& C_b0_n, Vec3& att_sigma_enu_rad, double gyro_bias_sigma_radps) const {
+Status VelocityMatchAlignment::solve(Mat3& C_b0_n, Vec3& att_sigma_enu_rad, double gyro_bias_sigma_radps,
+                                     double accel_bias_sigma_mps2) const {
   if (n_ < 3 || !(sum_w_ > 0.0)) return Status::kNotConverged;
-  // Centred sums: sum w (beta - beta_m)(alpha - alpha_m)^T = sum w beta alpha^T - W beta_m alpha_m^T.
+  // Start: Wahba's problem on the pairs centred on their weighted means (biases zero), i.e.
+  // sum w (beta - beta_m)(alpha - alpha_m)^T = sum w beta alpha^T - W beta_m alpha_m^T.
   const Vec3 alpha_m = sum_w_alpha_ / sum_w_;
   const Vec3 beta_m = sum_w_beta_ / sum_w_;
   const Mat3 B = sum_w_beta_alpha_ - sum_w_ * beta_m * alpha_m.transpose();
-  const Mat3 bb = sum_w_beta_beta_ - sum_w_ * beta_m * beta_m.transpose();
-  const double beta2 = bb.trace();
-  const double alpha2 = sum_w_alpha2_ - sum_w_ * alpha_m.squaredNorm();
   double lambda = 0.0;
-  if (davenport_q(B, C_b0_n, lambda) != Status::kOk) return Status::kNotConverged;
-  // sum w |c_beta - C c_alpha|^2 = sum w |c_beta|^2 + sum w |c_alpha|^2 - 2 tr(C B^T).
-  chi2_ = std::max(0.0, beta2 + alpha2 - 2.0 * lambda);
-  offset_ = C_b0_n * alpha_m - beta_m;
-  // Marginal information about phi_b0: A - Bm D^-1 Bm^T, the (eps, d) block D with the bias prior.
-  Eigen::Matrix<double, 6, 6> D = info_.bottomRightCorner<6, 6>();
+  Mat3 C;
+  if (davenport_q(B, C, lambda) != Status::kOk) return Status::kNotConverged;
+  // Gauss-Newton with the biases and the offset (header). A zero bias sigma: the bias is known (a
+  // prior of 1e-9 in its unit).
+  Mat12 A = info_;
   const double s_eps = std::max(gyro_bias_sigma_radps, 1e-9);
-  for (int i = 0; i < 3; ++i) D(i, i) += 1.0 / (s_eps * s_eps);
-  const Eigen::Matrix<double, 3, 6> Bm = info_.topRightCorner<3, 6>();
-  Eigen::Matrix<double, 6, 3> X = Bm.transpose();
-  if (!cholesky_solve6(D, X)) return Status::kNotConverged;
-  Mat3 info = info_.topLeftCorner<3, 3>() - Bm.lazyProduct(X);
-  info = 0.5 * (info + info.transpose());
-  const double tr = info.trace();
-  const double det = info.determinant();
-  // Relative conditioning: det / (trace / 3)^3 is 1 for an isotropic J and 0 for a singular one.
-  if (!(tr > 0.0) || !(det > 1e-12 * tr * tr * tr)) return Status::kNotConverged;
-  const Mat3 cov_n = C_b0_n * info.inverse() * C_b0_n.transpose();
-  const double dof = 3.0 * n_ - 6.0;
-  const double factor = std::max(1.0, chi2_ / dof);
+  const double s_acc = std::max(accel_bias_sigma_mps2, 1e-9);
+  for (int i = 0; i < 3; ++i) {
+    A(3 + i, 3 + i) += 1.0 / (s_eps * s_eps);
+    A(6 + i, 6 + i) += 1.0 / (s_acc * s_acc);
+  }
+  using Vec12 = Eigen::Matrix<double, 12, 1>;
+  Vec12 x = Vec12::Zero();
+  Vec12 g = Vec12::Zero();
+  for (int it = 0; it < kMaxIterations; ++it) {
+    // g = sum w H^T z = sum w H^T C^T beta - sum w H^T alpha; (C^T beta)_j = sum_m C(m, j) beta_m.
+    g = -h_alpha_;
+    for (int jj = 0; jj < 3; ++jj)
+      for (int m = 0; m < 3; ++m) g += C(m, jj) * h_beta_.col(3 * jj + m);
+    x = -g;
+    if (!cholesky_solve<12, 1>(A, x)) return Status::kNotConverged;
+    const Vec3 phi = x.head<3>();
+    if (!phi.allFinite()) return Status::kNotConverged;
+    C = C * quat_from_rotvec(phi).toRotationMatrix();
+    if (phi.norm() < 1e-10) break;
+  }
+  // At the final C (phi ~ 0): biases, offset, and the fit's chi^2:
+  // sum w |z + H x|^2 = sum w |z|^2 + 2 x^T g + x^T N x, sum w |z|^2 = sum w (|beta|^2 + |alpha|^2)
+  // - 2 tr(C sum w alpha beta^T).
+  g = -h_alpha_;
+  for (int jj = 0; jj < 3; ++jj)
+    for (int m = 0; m < 3; ++m) g += C(m, jj) * h_beta_.col(3 * jj + m);
+  x = -g;
+  if (!cholesky_solve<12, 1>(A, x)) return Status::kNotConverged;
+  const double z2 = sum_w_beta2_ + sum_w_alpha2_ - 2.0 * (C * sum_w_alpha_beta_).trace();
+  chi2_ = std::max(0.0, z2 + 2.0 * x.dot(g) + x.dot(info_.lazyProduct(x)));
+  gyro_bias_ = x.segment<3>(3);
+  accel_bias_ = x.segment<3>(6);
+  offset_ = C * x.tail<3>();
+  // Covariance of phi: the phi block of A^-1 (three right-hand sides).
+  Eigen::Matrix<double, 12, 3> E = Eigen::Matrix<double, 12, 3>::Zero();
+  E.topRows<3>() = Mat3::Identity();
+  if (!cholesky_solve<12, 3>(A, E)) return Status::kNotConverged;
+  Mat3 cov_b = E.topRows<3>();
+  cov_b = 0.5 * (cov_b + cov_b.transpose());
+  const double tr = cov_b.trace();
+  if (!(tr > 0.0) || !std::isfinite(tr)) return Status::kNotConverged;
+  const Mat3 cov_n = C * cov_b * C.transpose();
+  const double dof = 3.0 * n_ - 12.0;
+  const double factor = dof > 0.0 ? std::max(1.0, chi2_ / dof) : 1.0;
   att_sigma_enu_rad = (cov_n.diagonal() * factor).cwiseMax(0.0).cwiseSqrt();
+  C_b0_n = C;
   return Status::kOk;
 }
 

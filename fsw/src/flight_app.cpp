@@ -300,14 +300,13 @@ Status FlightApp<Layout>::init_velocity_matching(const InitFix& f) {
   const Vec3 beta = f.vel_enu_mps - vm_v0_ - vm_g_n_ * dt;
   // White error budget of the pair (file header): the fix's velocity noise and the IMU's white
   // noise (velocity random walk; the angle random walk tilts b0 and leaks gravity into alpha). The
-  // gyro bias enters the solver as a nuisance parameter through G; an accelerometer bias b adds
-  // C b dt, the same as a tilt of b / g: it becomes the roll/pitch error and is left out.
+  // gyro and accelerometer biases enter the solver as nuisance parameters through G and Theta.
   const double g = vm_g_n_.norm();
   const double arw = cfg_.exec.ekf.arw_rad_per_rts;
   const double s_tilt = g * arw * dt * std::sqrt(dt / 3.0);
   const double var = f.vel_sigma_mps * f.vel_sigma_mps + cfg_.exec.ekf.vrw_mps_per_rts * cfg_.exec.ekf.vrw_mps_per_rts * dt +
                      s_tilt * s_tilt;
-  if (!(var > 0.0) || vm_.add(alpha_k - vm_alpha0_, beta, 1.0 / var, vm_G_) != Status::kOk) {
+  if (!(var > 0.0) || vm_.add(alpha_k - vm_alpha0_, beta, 1.0 / var, vm_G_, vm_theta_) != Status::kOk) {
     ++health_.init_align_failed;
     return Status::kOk;
   }
@@ -317,27 +316,33 @@ Status FlightApp<Layout>::init_velocity_matching(const InitFix& f) {
   }
   Mat3 C_b0_n;
   Vec3 sigma;
-  if (vm_.solve(C_b0_n, sigma, vm_gyro_sigma_radps_) != Status::kOk ||
+  if (vm_.solve(C_b0_n, sigma, vm_gyro_sigma_radps_, cfg_.exec.ekf.accel_bias_sigma_mps2) != Status::kOk ||
       !(sigma.z() <= cfg_.vm_max_heading_sigma_rad)) {
     ++health_.init_aligning;
     return Status::kOk;
   }
   // Propagate to the newest IMU sample.
   const double t_new = vm_hist_t_[static_cast<std::size_t>((vm_hist_head_ - 1 + kVmHistory) % kVmHistory)];
-  const Mat3 C = C_b0_n * vm_q_b_b0_.toRotationMatrix();
+  // The window's bias estimates correct the integration up to the newest sample: its attitude
+  // drifted by Theta eps (C_true = (I - [Theta eps x]) C_hat), its alpha by G eps + Theta b_a.
+  const Vec3& eps = vm_.gyro_bias_radps();
+  const Vec3& b_a = vm_.accel_bias_mps2();
+  const Mat3 C = C_b0_n * quat_from_rotvec(-(vm_theta_ * eps)).toRotationMatrix() * vm_q_b_b0_.toRotationMatrix();
   NavState nav;
   nav.t_s = t_new;
   // The fitted velocity (every epoch of the window through the fitted offset), at the newest sample.
-  nav.vel_enu_mps = vm_v0_ - vm_.offset_mps() + C_b0_n * (vm_alpha_ - vm_alpha0_) + vm_g_n_ * (t_new - vm_t0_s_);
+  const Vec3 alpha_new = vm_alpha_ - vm_alpha0_ - vm_G_ * eps - vm_theta_ * b_a;
+  nav.vel_enu_mps = vm_v0_ - vm_.offset_mps() + C_b0_n * alpha_new + vm_g_n_ * (t_new - vm_t0_s_);
   Vec3 d_enu = f.vel_enu_mps * (t_new - f.t_s);
   if (f.antenna) d_enu -= C * cfg_.exec.ekf.lever_arm_b_m;
   nav.llh = f.llh + llh_delta_from_enu(f.llh, d_enu);
   nav.q_b_n = Quat(C);
   nav.q_b_n.normalize();
-  Vec3 att_sigma = cfg_.init_att_sigma_rad;
-  att_sigma.z() = sigma.z();
-  const Status st = start(nav, att_sigma, dt);
-  if (st == Status::kOk) health_.vm_gyro_bias_radps = vm_bias_radps_;
+  const Status st = start(nav, sigma, dt);
+  if (st == Status::kOk) {
+    health_.vm_gyro_bias_radps = vm_bias_radps_ + eps;
+    health_.vm_accel_bias_mps2 = b_a;
+  }
   return st;
 }
 

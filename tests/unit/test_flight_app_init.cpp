@@ -389,11 +389,15 @@ VmResult fly_vm(const sim::Motion& motion, const fsw::FlightAppConfig& cfg, cons
 }
 
 void print(const char* what, const VmResult& r) {
-  std::printf("%s: init %d at %.3f s (window %.2f s), att error %.3f %.3f %.3f deg, heading sigma %.3f deg, "
-              "vel %.3f m/s, pos %.3f m; aligning %u, restarts %u\n",
+  std::printf("%s: init %d at %.3f s (window %.2f s), att error %.3f %.3f %.3f deg, sigma %.3f %.3f %.3f deg, "
+              "vel %.3f m/s, pos %.3f m; aligning %u, restarts %u; bias estimates gyro %.4f %.4f %.4f deg/s, "
+              "accel %.4f %.4f %.4f m/s^2\n",
               what, r.h.initialised, r.h.init_t_s, r.h.init_align_s, r.phi_rad.x() * kRadToDeg,
-              r.phi_rad.y() * kRadToDeg, r.phi_rad.z() * kRadToDeg, r.h.init_att_sigma_rad.z() * kRadToDeg,
-              r.vel_err_mps, r.pos_err_m, r.h.init_aligning, r.h.init_align_restarts);
+              r.phi_rad.y() * kRadToDeg, r.phi_rad.z() * kRadToDeg, r.h.init_att_sigma_rad.x() * kRadToDeg,
+              r.h.init_att_sigma_rad.y() * kRadToDeg, r.h.init_att_sigma_rad.z() * kRadToDeg, r.vel_err_mps, r.pos_err_m,
+              r.h.init_aligning, r.h.init_align_restarts, r.h.vm_gyro_bias_radps.x() * kRadToDeg,
+              r.h.vm_gyro_bias_radps.y() * kRadToDeg, r.h.vm_gyro_bias_radps.z() * kRadToDeg, r.h.vm_accel_bias_mps2.x(),
+              r.h.vm_accel_bias_mps2.y(), r.h.vm_accel_bias_mps2.z());
 }
 
 sim::ImuErrors mems_noise() {
@@ -403,16 +407,19 @@ sim::ImuErrors mems_noise() {
   return e;
 }
 
-// Mounted 73 deg and -120 deg in yaw (and tilted) to the direction of travel: the attitude comes
-// out within 1 deg of truth whatever the mounting, from the speed change and the first turn.
+// Mounted 73 deg and -120 deg in yaw (and tilted) to the direction of travel: the heading comes
+// out within 1 deg of truth whatever the mounting, from the speed change and the first turn, and
+// every axis within 3 of the sigmas the window reports.
 TEST(FlightAppInitVelocityMatching, AnyMountingYawGivesTheAttitude) {
   for (const Vec3& mount : {Vec3(Vec3(3.0, -2.0, 73.0) * kDegToRad), Vec3(Vec3(-5.0, 4.0, -120.0) * kDegToRad)}) {
     const VmResult r = fly_vm(walk(mount), vm_config(10.0 * kDph), mems_noise(), 20.0, 0.03);
     print(mount.z() > 0 ? "vm, mount 73 deg" : "vm, mount -120 deg", r);
     ASSERT_TRUE(r.h.initialised);
     EXPECT_LT(std::abs(r.phi_rad.z()) * kRadToDeg, 1.0);
-    EXPECT_LT(r.phi_rad.head<2>().norm() * kRadToDeg, 0.2);
-    EXPECT_LT(std::abs(r.phi_rad.z()), 3.0 * r.h.init_att_sigma_rad.z());
+    // Roll and pitch: the window (one partial turn) barely separates a tilt from an accelerometer
+    // bias, so the 10 mg prior leaves ~0.5 deg of tilt sigma, and the estimate moves within it.
+    EXPECT_LT(r.phi_rad.head<2>().norm() * kRadToDeg, 0.6);
+    for (int i = 0; i < 3; ++i) EXPECT_LT(std::abs(r.phi_rad(i)), 3.0 * r.h.init_att_sigma_rad(i)) << i;
     EXPECT_LT(r.vel_err_mps, 0.1);
     EXPECT_LT(r.pos_err_m, 0.2);
     EXPECT_EQ(r.h.init_mode, fsw::InitMode::kVelocityMatching);

@@ -57,33 +57,45 @@ class CoarseAlignment {
 /// at most kMaxSweeps sweeps, no allocation; Eigen's dense eigen solvers go through its general
 /// products). Each pair then carries only its own epoch's error.
 ///
-/// Attitude uncertainty from the geometry, first order, with the gyro bias as a nuisance. A gyro
-/// bias error eps (rad/s, body) turns the integrated b frame by dtheta(t) = Theta(t) eps,
-/// Theta = integral C_b^b0 dt, and adds G(t) eps to alpha, G = -integral [f_b0 x] Theta dt (the
-/// caller integrates G with alpha). With C = C_hat (I + [phi_b0 x]) the residual, rotated into b0,
-/// is C_hat^T (beta_k + d) - alpha_k = -[alpha_k x] phi_b0 - G_k eps - delta_d_b0 + e_k, so with
-/// H_k = [[alpha_k x], G_k, I] the information about (phi_b0, eps, d) is
-/// N = sum_k w_k H_k^T H_k + diag(0, 1 / sigma_eps^2, 0). The attitude covariance is the Schur
-/// complement of the (eps, d) block, rotated into n: cov(phi_n) = C_hat cov(phi_b0) C_hat^T, scaled
-/// by the a-posteriori variance factor chi^2 / (3n - 6) when that exceeds 1. Gravity (the vertical
-/// part of beta, growing with t_k - t_0) carries roll and pitch; only the horizontal velocity
-/// change carries heading (with eps = 0: J_UU = sum_k w_k |beta_k,horizontal - its mean|^2). A
-/// window on a straight line at constant velocity has no horizontal velocity change and an
-/// undetermined heading. A horizontal gyro bias mostly looks like a tilt of b0 (gravity leaks in
-/// as g eps t^2 / 2) and is largely absorbed by it; the vertical one turns the velocity changes.
+/// The IMU biases, estimated with the attitude. A gyro bias error eps (rad/s, body) turns the
+/// integrated b frame by dtheta(t) = Theta(t) eps, Theta = integral C_b^b0 dt, and adds G(t) eps
+/// to alpha, G = -integral [f_b0 x] Theta dt; an accelerometer bias error b_a (m/s^2, body) adds
+/// Theta(t) b_a (the caller integrates Theta and G with alpha). With C = C_hat (I + [phi x]) (phi in
+/// b0) the residual, rotated into b0, is linear in the unknowns x = (phi, eps, b_a, d_b0):
+///     z_k = C_hat^T beta_k - alpha_k = -H_k x + e_k,   H_k = [[alpha_k x], G_k, Theta_k, I].
+/// The q-method's C_hat (biases zero) starts a Gauss-Newton iteration (at most kMaxIterations) on
+///     sum_k w_k |z_k + H_k x|^2 + x^T P0^-1 x,   P0^-1 = diag(0, 1 / sigma_eps^2, 1 / sigma_a^2, 0),
+/// a 12x12 system whose matrix does not depend on C_hat (accumulated once per pair; the right-hand
+/// side is a contraction of accumulated sums with C_hat), solved by Cholesky. The attitude
+/// covariance is the phi block of its inverse, rotated into n: cov(phi_n) = C cov(phi) C^T, scaled
+/// by the a-posteriori variance factor chi^2 / (3n - 12) of the fit when that exceeds 1. Gravity
+/// (the vertical part of beta, growing with t_k - t_0) carries roll and pitch; only the horizontal
+/// velocity change carries heading (without biases: J_UU = sum_k w_k |beta_k,horizontal - its
+/// mean|^2). A window on a straight line at constant velocity has no horizontal velocity change and
+/// an undetermined heading. Without rotation an accelerometer bias is exactly a tilt (b / g, the
+/// levelling error: the prior decides) and a horizontal gyro bias mostly one (gravity leaks in as
+/// g eps t^2 / 2); turns separate them, and the vertical gyro bias turns the velocity changes.
 class VelocityMatchAlignment {
  public:
   static constexpr int kMaxSweeps = 16;
+  static constexpr int kMaxIterations = 4;
+  using Mat12 = Eigen::Matrix<double, 12, 12>;
   void reset();
-  /// One pair: alpha_b0 (b0 frame) and beta_n (ENU) [m/s], weight w > 0 [1/(m/s)^2], and G, the
-  /// sensitivity of alpha to a gyro bias error [m/s per rad/s] (zero: no gyro error modelled).
-  Status add(const Vec3& alpha_b0_mps, const Vec3& beta_n_mps, double weight, const Mat3& G = Mat3::Zero());
-  /// C_b0^n and the 1-sigma attitude uncertainty phi_E, phi_N, phi_U [rad] for a gyro bias error
-  /// of gyro_bias_sigma_radps per axis. kNotConverged with fewer than 3 pairs or a singular
-  /// information matrix (no horizontal velocity change).
-  Status solve(Mat3& C_b0_n, Vec3& att_sigma_enu_rad, double gyro_bias_sigma_radps = 0.0) const;
+  /// One pair: alpha_b0 (b0 frame) and beta_n (ENU) [m/s], weight w > 0 [1/(m/s)^2], and the
+  /// sensitivities of alpha to a gyro bias error, G [m/s per rad/s], and to an accelerometer bias
+  /// error, Theta [s] (zero: that error not modelled).
+  Status add(const Vec3& alpha_b0_mps, const Vec3& beta_n_mps, double weight, const Mat3& G = Mat3::Zero(),
+             const Mat3& Theta = Mat3::Zero());
+  /// C_b0^n and the 1-sigma attitude uncertainty phi_E, phi_N, phi_U [rad] for bias errors of
+  /// gyro_bias_sigma_radps and accel_bias_sigma_mps2 per axis. kNotConverged with fewer than 3
+  /// pairs or a singular information matrix (no horizontal velocity change).
+  Status solve(Mat3& C_b0_n, Vec3& att_sigma_enu_rad, double gyro_bias_sigma_radps = 0.0,
+               double accel_bias_sigma_mps2 = 0.0) const;
   /// The offset d of the last solve: the fitted correction of beta (of v_n(t_0)) [m/s].
   const Vec3& offset_mps() const { return offset_; }
+  /// The bias errors of the last solve (body): what the caller's increments still contain.
+  const Vec3& gyro_bias_radps() const { return gyro_bias_; }
+  const Vec3& accel_bias_mps2() const { return accel_bias_; }
   int count() const { return n_; }
   /// Weighted sum of squared residuals of the last solve (chi^2) [-].
   double chi2() const { return chi2_; }
@@ -94,12 +106,17 @@ class VelocityMatchAlignment {
   Vec3 sum_w_alpha_ = Vec3::Zero();
   Vec3 sum_w_beta_ = Vec3::Zero();
   Mat3 sum_w_beta_alpha_ = Mat3::Zero();  ///< sum w beta alpha^T
-  Mat3 sum_w_beta_beta_ = Mat3::Zero();   ///< sum w beta beta^T
   double sum_w_alpha2_ = 0.0;
-  Eigen::Matrix<double, 9, 9> info_ = Eigen::Matrix<double, 9, 9>::Zero();  ///< sum w H^T H
+  Mat12 info_ = Mat12::Zero();                                  ///< sum w H^T H
+  Eigen::Matrix<double, 12, 1> h_alpha_ = Eigen::Matrix<double, 12, 1>::Zero();  ///< sum w H^T alpha
+  Eigen::Matrix<double, 12, 9> h_beta_ = Eigen::Matrix<double, 12, 9>::Zero();   ///< column 3j+m: sum w H^T e_j beta_m
+  Mat3 sum_w_alpha_beta_ = Mat3::Zero();  ///< sum w alpha beta^T
+  double sum_w_beta2_ = 0.0;
   int n_ = 0;
   mutable double chi2_ = 0.0;
   mutable Vec3 offset_ = Vec3::Zero();
+  mutable Vec3 gyro_bias_ = Vec3::Zero();
+  mutable Vec3 accel_bias_ = Vec3::Zero();
 };
 
 /// Davenport q-method: the rotation C (b -> n) that maximises tr(C B^T) for an attitude profile

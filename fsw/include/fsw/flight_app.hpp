@@ -59,19 +59,20 @@
 //     sigma_k^2 = s_v(t_k)^2 + vrw^2 dt + (g arw dt^1.5 / sqrt 3)^2,
 // s_v the fix's velocity sigma (a solution's largest axis; a raw fix: pseudorange_rate_sigma x
 // PDOP), vrw and arw the IMU's white noise (exec.ekf; the angle random walk tilts b0 and leaks
-// gravity into alpha), and the sensitivity G of alpha to a gyro bias, integrated with alpha: the
-// solver treats the gyro bias as a nuisance with the configured sigma exec.ekf.gyro_bias_sigma
-// (after a rest estimate, below, what remains of it: sqrt(arw^2 / T_rest + Omega^2)). An
-// accelerometer bias adds C b dt to alpha, indistinguishable from a tilt of b / g: it becomes the
-// roll/pitch error, as in levelling, and does not enter the heading. t_0 is the pair (0, 0) with
+// gravity into alpha), and the sensitivities of alpha to a gyro bias (G) and an accelerometer
+// bias (Theta = integral C_b^b0 dt), integrated with alpha: the solver carries both biases as
+// nuisance parameters with the configured sigmas exec.ekf.gyro_bias_sigma / accel_bias_sigma
+// (the gyro's after a rest estimate, below: what remains of it, sqrt(arw^2 / T_rest + Omega^2)).
+// Without turns an accelerometer bias is indistinguishable from a tilt (b / g, the levelling
+// error); with turns the window separates them in part. t_0 is the pair (0, 0) with
 // weight 1 / s_v(t_0)^2, and the solver fits the common offset that the error of v(t_0) puts
 // into every pair (fsw::VelocityMatchAlignment). The
 // window is "good enough" when it is at least vm_min_s long and the 1-sigma heading uncertainty
 // from its geometry (fsw::VelocityMatchAlignment: the horizontal velocity change since t_0 must
 // be large against those sigmas) is <= vm_max_heading_sigma_rad; then C_b0^n is propagated to the
-// last IMU sample (C_b^n = C_b0^n C_b^b0), the velocity to that sample through alpha, the
-// position by the fix's velocity, and the EKF starts with the geometry's heading sigma (roll and
-// pitch: init_att_sigma_rad). The window restarts at the current epoch when it is older than
+// last IMU sample (C_b^n = C_b0^n C_b^b0), the fitted velocity to that sample through alpha, the
+// position by the fix's velocity, and the EKF starts with the geometry's attitude sigmas. The
+// window restarts at the current epoch when it is older than
 // vm_max_s without a determined heading (init_align_restarts; a straight constant-velocity
 // segment never determines it), and at every epoch at rest (ground speed <=
 // static_max_speed_mps) while the heading is not yet determined: rest adds no heading
@@ -162,7 +163,8 @@ struct FlightAppHealth {
   double init_align_s = 0.0;             ///< length of the alignment window that initialised [s]
   Vec3 init_att_sigma_rad = Vec3::Zero();  ///< phi_E, phi_N, phi_U sigma the EKF started with
   Vec3 init_euler_rad = Vec3::Zero();      ///< initial roll, pitch, heading (euler_from_C_b_n)
-  Vec3 vm_gyro_bias_radps = Vec3::Zero();  ///< kVelocityMatching: rate subtracted (rest estimate)
+  Vec3 vm_gyro_bias_radps = Vec3::Zero();  ///< kVelocityMatching: gyro bias (rest estimate + window's)
+  Vec3 vm_accel_bias_mps2 = Vec3::Zero();  ///< kVelocityMatching: the window's accelerometer bias estimate
 };
 
 template <class Layout>

@@ -50,7 +50,8 @@ json app_json(const fsw::FlightAppHealth& a) {
           {"init_att_sigma_deg", {a.init_att_sigma_rad.x() * fsw::kRadToDeg, a.init_att_sigma_rad.y() * fsw::kRadToDeg,
                                   a.init_att_sigma_rad.z() * fsw::kRadToDeg}},
           {"init_vm_gyro_bias_dps", {a.vm_gyro_bias_radps.x() * fsw::kRadToDeg, a.vm_gyro_bias_radps.y() * fsw::kRadToDeg,
-                                     a.vm_gyro_bias_radps.z() * fsw::kRadToDeg}}};
+                                     a.vm_gyro_bias_radps.z() * fsw::kRadToDeg}},
+          {"init_vm_accel_bias_mps2", {a.vm_accel_bias_mps2.x(), a.vm_accel_bias_mps2.y(), a.vm_accel_bias_mps2.z()}}};
 }
 
 json executive_json(const fsw::ExecutiveHealth& e) {
