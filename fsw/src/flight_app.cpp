@@ -286,12 +286,13 @@ Status FlightApp<Layout>::init_velocity_matching(const InitFix& f) {
     ++health_.init_not_level;  // no IMU history at this time (yet)
     return Status::kOk;
   }
-  if (!vm_window_open_ || ground_speed <= cfg_.static_max_speed_mps) {
+  const bool at_rest = ground_speed <= cfg_.static_max_speed_mps;
+  const double dt = f.t_s - vm_t0_s_;
+  if (!vm_window_open_ || (at_rest && dt < cfg_.vm_min_s)) {
     vm_open_window(f);  // the first window, or rest: start (again) here
     ++health_.init_aligning;
     return Status::kOk;
   }
-  const double dt = f.t_s - vm_t0_s_;
   if (dt > cfg_.vm_max_s || !(dt > 0.0)) {
     vm_open_window(f);
     ++health_.init_align_restarts;
@@ -304,8 +305,8 @@ Status FlightApp<Layout>::init_velocity_matching(const InitFix& f) {
   const double g = vm_g_n_.norm();
   const double arw = cfg_.exec.ekf.arw_rad_per_rts;
   const double s_tilt = g * arw * dt * std::sqrt(dt / 3.0);
-  const double var = f.vel_sigma_mps * f.vel_sigma_mps + cfg_.exec.ekf.vrw_mps_per_rts * cfg_.exec.ekf.vrw_mps_per_rts * dt +
-                     s_tilt * s_tilt;
+  const double vrw = cfg_.exec.ekf.vrw_mps_per_rts;
+  const double var = f.vel_sigma_mps * f.vel_sigma_mps + vrw * vrw * dt + s_tilt * s_tilt;
   if (!(var > 0.0) || vm_.add(alpha_k - vm_alpha0_, beta, 1.0 / var, vm_G_, vm_theta_) != Status::kOk) {
     ++health_.init_align_failed;
     return Status::kOk;
@@ -318,6 +319,9 @@ Status FlightApp<Layout>::init_velocity_matching(const InitFix& f) {
   Vec3 sigma;
   if (vm_.solve(C_b0_n, sigma, vm_gyro_sigma_radps_, cfg_.exec.ekf.accel_bias_sigma_mps2) != Status::kOk ||
       !(sigma.z() <= cfg_.vm_max_heading_sigma_rad)) {
+    // Not determined yet. At rest the window starts again here: rest adds no heading information,
+    // only gyro error.
+    if (at_rest) vm_open_window(f);
     ++health_.init_aligning;
     return Status::kOk;
   }

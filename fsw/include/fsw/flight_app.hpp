@@ -75,8 +75,9 @@
 // window restarts at the current epoch when it is older than
 // vm_max_s without a determined heading (init_align_restarts; a straight constant-velocity
 // segment never determines it), and at every epoch at rest (ground speed <=
-// static_max_speed_mps) while the heading is not yet determined: rest adds no heading
-// information, only gyro error, so the window starts at the last rest before motion. The rest
+// static_max_speed_mps) that does not complete it (after the pair is added: a short stop at the
+// end of a good window still initialises): rest adds no heading information, only gyro error, so
+// the window starts at the last rest before motion. The rest
 // before motion also serves as a gyro bias estimate: with vm_rest_gyro_bias, the mean angular
 // rate of the stationary window (built as in kStatic, at least vm_rest_min_s long) is subtracted
 // from the gyro increments of the following velocity-matching window (it contains the Earth rate:
