@@ -64,27 +64,27 @@
 // nuisance parameters with the configured sigmas exec.ekf.gyro_bias_sigma / accel_bias_sigma
 // (the gyro's after a rest estimate, below: what remains of it, sqrt(arw^2 / T_rest + Omega^2)).
 // Without turns an accelerometer bias is indistinguishable from a tilt (b / g, the levelling
-// error); with turns the window separates them in part. t_0 is the pair (0, 0) with
-// weight 1 / s_v(t_0)^2, and the solver fits the common offset that the error of v(t_0) puts
-// into every pair (fsw::VelocityMatchAlignment). The
-// window is "good enough" when it is at least vm_min_s long and the 1-sigma heading uncertainty
-// from its geometry (fsw::VelocityMatchAlignment: the horizontal velocity change since t_0 must
-// be large against those sigmas) is <= vm_max_heading_sigma_rad; then C_b0^n is propagated to the
-// last IMU sample (C_b^n = C_b0^n C_b^b0), the fitted velocity to that sample through alpha, the
-// position by the fix's velocity, and the EKF starts with the geometry's attitude sigmas. The
-// window restarts at the current epoch when it is older than
-// vm_max_s without a determined heading (init_align_restarts; a straight constant-velocity
-// segment never determines it), and at every epoch at rest (ground speed <=
-// static_max_speed_mps) that does not complete it (after the pair is added: a short stop at the
-// end of a good window still initialises): rest adds no heading information, only gyro error, so
-// the window starts at the last rest before motion. The rest
+// error); with turns the window separates them in part. t_0 is the pair (0, 0) with weight
+// 1 / s_v(t_0)^2, and the solver fits the common offset that the error of v(t_0) puts into every
+// pair (fsw::VelocityMatchAlignment). The window is "good enough" when it is at least vm_min_s
+// long and the 1-sigma heading uncertainty from its geometry (the horizontal velocity change since
+// t_0 must be large against those sigmas and biases) is <= vm_max_heading_sigma_rad; then C_b0^n,
+// corrected by the window's bias estimates, is propagated to the last IMU sample
+// (C_b^n = C_b0^n C_b^b0), the fitted velocity to that sample through alpha, the position by the
+// fix's velocity, and the EKF starts with the geometry's attitude sigmas. The window restarts at
+// the current epoch when it is older than vm_max_s without a determined heading
+// (init_align_restarts; a straight constant-velocity segment never determines it), and at every
+// epoch at rest (ground speed <= static_max_speed_mps) that does not complete it (after the pair
+// is added: a short stop at the end of a good window still initialises): rest adds no heading
+// information, only gyro error, so the window starts at the last rest before motion. The rest
 // before motion also serves as a gyro bias estimate: with vm_rest_gyro_bias, the mean angular
 // rate of the stationary window (built as in kStatic, at least vm_rest_min_s long) is subtracted
 // from the gyro increments of the following velocity-matching window (it contains the Earth rate:
 // the remainder is the rate relative to the Earth-fixed frame, which is what the neglected
-// Earth-rate model wants). The EKF is not told this estimate; it starts from zero bias as before.
-// Each restart re-bases the integration on the newest sample (alpha and the history are rotated
-// into the re-based b0), so the numbers stay small.
+// Earth-rate model wants). The EKF is not told this estimate nor the window's bias estimates
+// (FlightAppHealth reports them); it starts from zero bias as before. Each restart re-bases the
+// integration on the newest sample (alpha and the history are rotated into the re-based b0), so
+// the numbers stay small.
 #pragma once
 
 #include <array>
