@@ -26,6 +26,7 @@ struct Units {
   std::optional<double> vrw_mps_per_rthr, arw_deg_per_rthr, accel_bias_sigma_mg, gyro_bias_sigma_degph;
   std::optional<double> accel_scale_ppm, gyro_scale_ppm, accel_mis_arcsec, gyro_mis_arcsec;
   std::optional<double> heading_offset_deg, roll_pitch_sigma_deg, heading_sigma_deg;
+  std::optional<double> static_max_rate_dev_dps, vm_max_heading_sigma_deg;
 };
 
 class Parser : public toml_schema::Reader {
@@ -90,6 +91,18 @@ class Parser : public toml_schema::Reader {
                {"vel_sigma_mps", number(a.init_vel_sigma_mps, positive())},
                {"roll_pitch_sigma_deg", opt(u.roll_pitch_sigma_deg, left_open(0.0, 90.0))},
                {"heading_sigma_deg", opt(u.heading_sigma_deg, left_open(0.0, 180.0))},
+               {"mode", choice(a.init_mode, {{"track", fsw::InitMode::kTrack},
+                                             {"static", fsw::InitMode::kStatic},
+                                             {"velocity_matching", fsw::InitMode::kVelocityMatching}})},
+               {"alignment_s", number(a.alignment_s, left_open(0.0, 3600.0))},
+               {"static_max_speed_mps", number(a.static_max_speed_mps, closed(0.0, 10.0))},
+               {"static_max_rate_dev_dps", opt(u.static_max_rate_dev_dps, left_open(0.0, 100.0))},
+               {"static_max_accel_dev_mps2", number(a.static_max_accel_dev_mps2, left_open(0.0, 100.0))},
+               {"vm_min_s", number(a.vm_min_s, closed(0.0, 600.0))},
+               {"vm_max_s", number(a.vm_max_s, left_open(0.0, 600.0))},
+               {"vm_max_heading_sigma_deg", opt(u.vm_max_heading_sigma_deg, left_open(0.0, 180.0))},
+               {"vm_rest_gyro_bias", boolean(a.vm_rest_gyro_bias)},
+               {"vm_rest_min_s", number(a.vm_rest_min_s, closed(0.0, 600.0))},
            });
          }},
         {"mounting", [&](const toml::node& n, const std::string& p) {
@@ -175,6 +188,12 @@ FilterConfigParseResult parse_filter_config_text(const std::string& toml_text, c
     a.init_att_sigma_rad.y() = *u.roll_pitch_sigma_deg * fsw::kDegToRad;
   }
   if (u.heading_sigma_deg) a.init_att_sigma_rad.z() = *u.heading_sigma_deg * fsw::kDegToRad;
+  if (u.static_max_rate_dev_dps) a.static_max_rate_dev_radps = *u.static_max_rate_dev_dps * fsw::kDegToRad;
+  if (u.vm_max_heading_sigma_deg) a.vm_max_heading_sigma_rad = *u.vm_max_heading_sigma_deg * fsw::kDegToRad;
+  if (!(a.vm_max_s > a.vm_min_s)) {
+    return {false, source_name + ": 'init.vm_max_s' (" + toml_schema::format_number(a.vm_max_s) +
+                       ") must be greater than 'init.vm_min_s' (" + toml_schema::format_number(a.vm_min_s) + ")"};
+  }
   cfg = std::move(c);
   return {true, ""};
 }

@@ -314,6 +314,40 @@ TEST(NoAlloc, FlightAppOnGnssPvtDoesNotAllocate) {
   EXPECT_EQ(g_allocs.load(), 0) << "FlightApp::on_gnss_pvt path allocated " << g_allocs.load() << " times";
 }
 
+// The alignment modes before initialisation: IMU samples into the stationary window and the
+// velocity-matching integration, solutions through the rest test, the Wahba solve and the
+// initialisation (velocity matching: at the first turn; static: the aircraft never rests).
+void fly_app_init_mode_without_allocating(fsw::InitMode mode) {
+  const FlightInputs& in = flight_inputs();
+  static fsw::FlightApp<fsw::Layout24Full> app;
+  fsw::FlightAppConfig cfg;
+  cfg.exec.frames_per_ekf = 50;
+  cfg.init_mode = mode;
+  ASSERT_EQ(app.init(cfg), fsw::Status::kOk);
+  {
+    Armed a;
+    fsw::FrameOutput out;
+    std::size_t next = 0;
+    for (const fsw::ImuSample& s : in.imu) {
+      while (next < in.pvt.size() && in.pvt[next].t_s <= s.t_s - 0.02) app.on_gnss_pvt(in.pvt[next++]);
+      app.on_imu(s, out);
+    }
+  }
+  if (mode == fsw::InitMode::kVelocityMatching) {
+    EXPECT_TRUE(app.initialised());
+    EXPECT_GE(app.health().init_align_restarts, 1u);
+  } else {
+    EXPECT_FALSE(app.initialised());
+    EXPECT_GE(app.health().init_moving, 400u);
+  }
+  EXPECT_EQ(g_allocs.load(), 0) << fsw::to_string(mode) << " initialisation allocated";
+}
+
+TEST(NoAlloc, FlightAppVelocityMatchingDoesNotAllocate) {
+  fly_app_init_mode_without_allocating(fsw::InitMode::kVelocityMatching);
+}
+TEST(NoAlloc, FlightAppStaticAlignmentDoesNotAllocate) { fly_app_init_mode_without_allocating(fsw::InitMode::kStatic); }
+
 TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate15) { fly_executive_without_allocating<fsw::Layout15>(); }
 TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate24) { fly_executive_without_allocating<fsw::Layout24>(); }
 TEST(NoAlloc, ExecutiveWithEkfDoesNotAllocate15Full) { fly_executive_without_allocating<fsw::Layout15Full>(); }

@@ -67,6 +67,36 @@ TEST(FilterConfig, KeysNotSetKeepTheBase) {
   EXPECT_EQ(f.app.exec.frames_per_ekf, 200);
 }
 
+TEST(FilterConfig, InitModeKeysSetTheirFieldsInSiUnits) {
+  sim::FilterConfig f = defaults();
+  EXPECT_EQ(f.app.init_mode, fsw::InitMode::kTrack);  // the default
+  const char* text =
+      "[init]\nmode = \"velocity_matching\"\nalignment_s = 45.0\nstatic_max_speed_mps = 0.1\n"
+      "static_max_rate_dev_dps = 0.05\nstatic_max_accel_dev_mps2 = 0.2\nvm_min_s = 1.5\nvm_max_s = 12.0\n"
+      "vm_max_heading_sigma_deg = 4.0\nvm_rest_gyro_bias = false\nvm_rest_min_s = 2.0\n";
+  const sim::FilterConfigParseResult r = sim::parse_filter_config_text(text, "t.toml", f);
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(f.app.init_mode, fsw::InitMode::kVelocityMatching);
+  EXPECT_DOUBLE_EQ(f.app.alignment_s, 45.0);
+  EXPECT_DOUBLE_EQ(f.app.static_max_speed_mps, 0.1);
+  EXPECT_NEAR(f.app.static_max_rate_dev_radps, 0.05 * fsw::kDegToRad, 1e-15);
+  EXPECT_DOUBLE_EQ(f.app.static_max_accel_dev_mps2, 0.2);
+  EXPECT_DOUBLE_EQ(f.app.vm_min_s, 1.5);
+  EXPECT_DOUBLE_EQ(f.app.vm_max_s, 12.0);
+  EXPECT_NEAR(f.app.vm_max_heading_sigma_rad, 4.0 * fsw::kDegToRad, 1e-15);
+  EXPECT_FALSE(f.app.vm_rest_gyro_bias);
+  EXPECT_DOUBLE_EQ(f.app.vm_rest_min_s, 2.0);
+  fsw::FlightApp<fsw::Layout15Full> app;
+  EXPECT_EQ(app.init(f.app), fsw::Status::kOk);
+  for (const auto& [name, mode] : {std::pair<const char*, fsw::InitMode>{"track", fsw::InitMode::kTrack},
+                                   {"static", fsw::InitMode::kStatic}}) {
+    sim::FilterConfig g = defaults();
+    ASSERT_TRUE(sim::parse_filter_config_text(std::string("[init]\nmode = \"") + name + "\"\n", "t.toml", g).ok);
+    EXPECT_EQ(g.app.init_mode, mode);
+    EXPECT_STREQ(fsw::to_string(mode), name);
+  }
+}
+
 TEST(FilterConfig, BrokenFilesNameTheKeyAndPositionAndChangeNothing) {
   struct Case {
     const char* text;
@@ -81,6 +111,13 @@ TEST(FilterConfig, BrokenFilesNameTheKeyAndPositionAndChangeNothing) {
       {"[diagnosis.prior]\nwheel_slip = 1.0\n", "unknown effect 'diagnosis.prior.wheel_slip'"},
       {"[init]\nlevelling_samples = 2000\n", "'init.levelling_samples' must be an integer in [1, 1024]"},
       {"imu = 3\n", "'imu' must be a table"},
+      {"[init]\nmode = \"gyrocompass\"\n",
+       "t.toml:2:8: 'init.mode' must be \"track\", \"static\" or \"velocity_matching\" (got \"gyrocompass\")"},
+      {"[init]\nmode = 2\n", "t.toml:2:8: 'init.mode' must be"},
+      {"[init]\nalignment_s = 0.0\n", "t.toml:2:15: 'init.alignment_s' must be"},
+      {"[init]\nstatic_max_rate_dev_dps = -0.1\n", "'init.static_max_rate_dev_dps' must be"},
+      {"[init]\nvm_rest_gyro_bias = 1\n", "'init.vm_rest_gyro_bias' must be true or false"},
+      {"[init]\nvm_min_s = 5.0\nvm_max_s = 4.0\n", "'init.vm_max_s' (4) must be greater than 'init.vm_min_s' (5)"},
       {"[imu\n", "t.toml:1:"},
   };
   for (const Case& c : cases) {

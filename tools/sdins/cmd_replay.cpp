@@ -83,8 +83,8 @@ int run_replay() {
               "log: %llu events, %llu rejections\n",
               opt.in.c_str(), static_cast<unsigned long long>(st.delivered),
               static_cast<unsigned long long>(st.imu.accepted()), static_cast<unsigned long long>(st.gnss.accepted()),
-              static_cast<unsigned long long>(st.gnss_pvt.accepted()), static_cast<unsigned long long>(raw_not_used),
-              static_cast<unsigned long long>(st.almanac.accepted()), static_cast<unsigned long long>(st.rejected()),
+              static_cast<unsigned long long>(st.gnss_pvt.accepted()), static_cast<unsigned long long>(st.almanac.accepted()),
+              static_cast<unsigned long long>(raw_not_used), static_cast<unsigned long long>(st.rejected()),
               static_cast<unsigned long long>(st.other_events), static_cast<unsigned long long>(ls.events),
               static_cast<unsigned long long>(ls.total_rejections()));
   if (opt.outages.size() == 3)

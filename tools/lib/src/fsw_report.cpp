@@ -40,7 +40,18 @@ json app_json(const fsw::FlightAppHealth& a) {
           {"gnss_invalid", a.conversion.invalid}, {"gnss_duplicate_prn", a.conversion.duplicate_prn},
           {"init_satellites", a.init_fix.n_used}, {"init_pdop", a.init_fix.pdop},
           {"pvt_received", a.pvt_received},       {"pvt_rejected", a.pvt_rejected},
-          {"pvt_before_init", a.pvt_before_init}};
+          {"pvt_before_init", a.pvt_before_init},
+          {"init_moving", a.init_moving},         {"init_aligning", a.init_aligning},
+          {"init_align_restarts", a.init_align_restarts}, {"init_align_failed", a.init_align_failed},
+          {"init_mode", fsw::to_string(a.init_mode)}, {"init_align_s", a.init_align_s},
+          {"init_roll_deg", a.init_euler_rad.x() * fsw::kRadToDeg},
+          {"init_pitch_deg", a.init_euler_rad.y() * fsw::kRadToDeg},
+          {"init_heading_deg", a.init_euler_rad.z() * fsw::kRadToDeg},
+          {"init_att_sigma_deg", {a.init_att_sigma_rad.x() * fsw::kRadToDeg, a.init_att_sigma_rad.y() * fsw::kRadToDeg,
+                                  a.init_att_sigma_rad.z() * fsw::kRadToDeg}},
+          {"init_vm_gyro_bias_dps", {a.vm_gyro_bias_radps.x() * fsw::kRadToDeg, a.vm_gyro_bias_radps.y() * fsw::kRadToDeg,
+                                     a.vm_gyro_bias_radps.z() * fsw::kRadToDeg}},
+          {"init_vm_accel_bias_mps2", {a.vm_accel_bias_mps2.x(), a.vm_accel_bias_mps2.y(), a.vm_accel_bias_mps2.z()}}};
 }
 
 json executive_json(const fsw::ExecutiveHealth& e) {
@@ -113,7 +124,15 @@ void print_fsw_summary(const hal::FswNode& node) {
                 "digest %s\n",
                 a.init_t_s, a.init_fix.n_used, a.init_fix.pdop, static_cast<unsigned long long>(s.nav_frames),
                 digest_hex(s.digest).c_str());
+    std::printf("initialisation: %s, roll %.2f pitch %.2f heading %.2f deg (sigma %.2f %.2f %.2f deg), alignment "
+                "window %.2f s\n",
+                fsw::to_string(a.init_mode), a.init_euler_rad.x() * fsw::kRadToDeg, a.init_euler_rad.y() * fsw::kRadToDeg,
+                a.init_euler_rad.z() * fsw::kRadToDeg, a.init_att_sigma_rad.x() * fsw::kRadToDeg,
+                a.init_att_sigma_rad.y() * fsw::kRadToDeg, a.init_att_sigma_rad.z() * fsw::kRadToDeg, a.init_align_s);
   }
+  if (a.init_moving + a.init_aligning + a.init_align_restarts + a.init_align_failed > 0)
+    std::printf("alignment: %u epochs moving (window restarted), %u aligning, %u window restarts, %u failed\n",
+                a.init_moving, a.init_aligning, a.init_align_restarts, a.init_align_failed);
   std::printf("EKF: %u runs, %u updates, %u without GNSS; pr used/gated %u/%u, rate used/gated %u/%u; "
               "overruns %u; fsw errors %u; covariance repairs %u; resets %u\n",
               e.ekf_runs, e.ekf_updates, e.ekf_without_gnss, e.pr_used, e.pr_rejected, e.prr_used, e.prr_rejected,
