@@ -61,6 +61,10 @@ class Parser : public toml_schema::Reader {
                {"pseudorange_sigma_m", number(e.pseudorange_sigma_m, positive())},
                {"pseudorange_rate_sigma_mps", number(e.pseudorange_rate_sigma_mps, positive())},
                {"use_pseudorange_rate", boolean(e.use_pseudorange_rate)},
+               {"range_error_sigma_m", number(e.range_gm_sigma_m, positive())},
+               {"range_error_tau_s", number(e.range_gm_tau_s, positive())},
+               {"range_rate_error_sigma_mps", number(e.range_rate_gm_sigma_mps, positive())},
+               {"range_rate_error_tau_s", number(e.range_rate_gm_tau_s, positive())},
                {"gate_chi2", number(e.gate_chi2, positive())},
            });
          }},

@@ -67,6 +67,24 @@ TEST(FilterConfig, KeysNotSetKeepTheBase) {
   EXPECT_EQ(f.app.exec.frames_per_ekf, 200);
 }
 
+TEST(FilterConfig, ChannelErrorStatesAreConfigurable) {
+  sim::FilterConfig f = defaults();
+  EXPECT_DOUBLE_EQ(f.app.exec.ekf.range_gm_sigma_m, 8.0);  // the simulated receiver's
+  const sim::FilterConfigParseResult r = sim::parse_filter_config_text(
+      "[gnss]\nrange_error_sigma_m = 0.5\nrange_error_tau_s = 30.0\nrange_rate_error_sigma_mps = 0.05\n"
+      "range_rate_error_tau_s = 5.0\n",
+      "t.toml", f);
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_DOUBLE_EQ(f.app.exec.ekf.range_gm_sigma_m, 0.5);
+  EXPECT_DOUBLE_EQ(f.app.exec.ekf.range_gm_tau_s, 30.0);
+  EXPECT_DOUBLE_EQ(f.app.exec.ekf.range_rate_gm_sigma_mps, 0.05);
+  EXPECT_DOUBLE_EQ(f.app.exec.ekf.range_rate_gm_tau_s, 5.0);
+  sim::FilterConfig g = defaults();
+  const sim::FilterConfigParseResult bad = sim::parse_filter_config_text("[gnss]\nrange_error_tau_s = 0.0\n", "t.toml", g);
+  EXPECT_FALSE(bad.ok);
+  EXPECT_NE(bad.error.find("gnss.range_error_tau_s"), std::string::npos) << bad.error;
+}
+
 TEST(FilterConfig, InitModeKeysSetTheirFieldsInSiUnits) {
   sim::FilterConfig f = defaults();
   EXPECT_EQ(f.app.init_mode, fsw::InitMode::kTrack);  // the default

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# The two other measured data sets through the flight software with their filter configurations
+# (config/datasets/psins-tc.toml: raw GPS, stationary alignment; gnss-imu-walk.toml: RTK
+# solutions, velocity-matching alignment of an IMU at an unknown mounting yaw): import, replay,
+# and (release builds) the diagnosis. Skipped (77) without the data sets or RTKLIB's convbin.
+# Usage: datasets_psins_walk.sh SDINS DATA_DIR CONFIG_DIR OUT_DIR SANITIZED(-1: no sanitizer)
+set -euo pipefail
+sdins=$1 data=$2 config=$3 out=$4 sanitized=$5
+[ -f "$data/psins-tc/imu_200hz.csv" ] && [ -f "$data/gnss-imu-walk/gnss_1730_sf.pos" ] ||
+  { echo "SKIP: psins-tc or gnss-imu-walk not present under $data"; exit 77; }
+command -v convbin > /dev/null || { echo "SKIP: RTKLIB's convbin (Debian package rtklib) is not installed"; exit 77; }
+rm -rf "$out" && mkdir -p "$out"
+"$sdins" import psins "$data/psins-tc" --clip-gnss-to-imu --log "$out/psins.lcmlog" > "$out/psins_import.txt"
+"$sdins" import rtklib "$data/gnss-imu-walk" --log "$out/walk.lcmlog" > "$out/walk_import.txt"
+"$sdins" replay "$out/psins.lcmlog" --filter-config "$config/psins-tc.toml" --json "$out/psins.json" | tee "$out/psins.txt"
+"$sdins" replay "$out/walk.lcmlog" --filter-config "$config/gnss-imu-walk.toml" --json "$out/walk.json" | tee "$out/walk.txt"
+py=/usr/bin/python3
+$py - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+p = json.load(open(out + "/psins.json"))
+w = json.load(open(out + "/walk.json"))
+# psins-tc: at rest for ~55 s, the gyros sense the Earth rate: static alignment, then the raw GPS.
+assert p["initialised"] and p["gnss_source"] == "raw", p["app"]
+assert p["app"]["init_mode"] == "static" and p["app"]["init_align_s"] >= 30.0, p["app"]
+assert 40.0 < p["init_t_s"] - 185492.5 < 56.0, p["init_t_s"]  # before the vehicle moves
+e = p["executive"]
+assert e["pr_used"] > 500 and e["pr_rejected"] <= 0.02 * e["pr_used"] and e["filter_resets"] == 0, e
+# The walk: an IMU at an unknown yaw; velocity matching gives the attitude within seconds of walking.
+assert w["initialised"] and w["gnss_source"] == "pvt", w["app"]
+assert w["app"]["init_mode"] == "velocity_matching" and w["app"]["init_att_sigma_deg"][2] < 5.0, w["app"]
+assert w["init_t_s"] - 408651.7 < 15.0, w["init_t_s"]
+e = w["executive"]
+assert e["pos_used"] > 1300 and e["pos_rejected"] == 0 and e["filter_resets"] == 0, e
+assert e["vel_used"] > 0.98 * (e["vel_used"] + e["vel_rejected"]), e
+print("replays ok: psins heading %.1f deg after %.1f s at rest; walk heading %.1f +- %.1f deg" % (
+    p["app"]["init_heading_deg"], p["app"]["init_align_s"], w["app"]["init_heading_deg"], w["app"]["init_att_sigma_deg"][2]))
+PY
+if [ "$sanitized" != "-1" ]; then echo "sanitizer build: the diagnoses run in release builds only"; exit 0; fi
+"$sdins" diagnose --log "$out/psins.lcmlog" --filter-config "$config/psins-tc.toml" --json "$out/psins_diag.json" | tail -4
+"$sdins" diagnose --log "$out/walk.lcmlog" --filter-config "$config/gnss-imu-walk.toml" --json "$out/walk_diag.json" | tail -4
+$py - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+p = json.load(open(out + "/psins_diag.json"))
+w = json.load(open(out + "/walk_diag.json"))
+names = lambda d: {f["effect"] + ("." + f["component"] if f["component"] else "") for f in d["findings"]}
+# psins-tc (no reference): the unmodelled tropospheric delay of real pseudoranges, at about the
+# standard model's size, and the IMU-GNSS time offset.
+assert {"tropospheric_delay", "imu_gnss_time_offset"} <= names(p), names(p)
+tropo = [f for f in p["findings"] if f["effect"] == "tropospheric_delay"][0]
+assert abs(tropo["estimate"] - 1.0) < 3 * tropo["sigma"], tropo
+assert p["gain"]["innovations"]["log_likelihood_gain"] > 0 and p["gain"]["navigation"] is None
+assert p["gain"]["outages"]["before"]["reacquisitions"] >= 2, p["gain"]["outages"]
+# The walk: the antenna a few centimetres from the IMU (data set README), and a coasting gain.
+assert {"antenna_lever_arm.x", "antenna_lever_arm.y"} <= names(w), names(w)
+for f in w["findings"]:
+    if f["effect"] == "antenna_lever_arm":
+        assert abs(f["estimate"]) < 0.15, f
+assert w["gain"]["innovations"]["log_likelihood_gain"] > 0
+o = w["gain"]["outages"]
+assert o["before"]["windows"] >= 2 and o["after"]["horizontal_rms_m"] < o["before"]["horizontal_rms_m"], o
+print("diagnoses ok:", sorted(names(p)), sorted(names(w)))
+PY
