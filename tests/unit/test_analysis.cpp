@@ -29,7 +29,13 @@ TEST(SingleAxisRotation, UnexcitedMisalignmentLeavesNoError) {
 TEST(BankToTurn, OnlyYzAndZyAccumulateHeadingError) {
   sim::Scenario sc;
   sc.duration_s = 600.0;  // about 7 turns: enough to tell accumulation from oscillation
+#if defined(__SANITIZE_ADDRESS__)
+  // Under the sanitizers (several times slower) one component that accumulates and one that does
+  // not: the same code; the release stage checks all six.
+  for (std::size_t k : {std::size_t{0}, std::size_t{3}}) {
+#else
   for (std::size_t k = 0; k < 6; ++k) {
+#endif
     const auto c = tools::run_bank_turn_case(sc, k, 20.0);
     ASSERT_GE(c.turn_end_t_s.size(), 5u) << c.component;
     const bool expect = c.component == "yz" || c.component == "zy";

@@ -25,6 +25,10 @@ struct Fixture {
 }  // namespace
 
 TEST(MonteCarlo, ShortRunFiltersAreConsistentAndConverge) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "statistical test (12 runs x 400 s): release stage; the Monte Carlo code runs under the "
+                  "sanitizers in MonteCarlo.ResultsDoNotDependOnThreadCount and e2e_montecarlo_threads";
+#endif
   Fixture f(400.0);  // 60 s straight, then the first four turns
   tools::MonteCarloConfig mc;
   mc.runs = 12;
