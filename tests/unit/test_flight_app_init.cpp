@@ -17,6 +17,7 @@
 #include "sim/rng.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
+#include "land_motion_test_util.hpp"
 
 namespace {
 
@@ -251,67 +252,23 @@ TEST(FlightAppInitStatic, RejectsBadConfiguration) {
 // Velocity matching
 // ------------------------------------------------------------------------------------------------
 
-/// A land vehicle (or walker) on flat ground: speed and track are sums of smooth steps; the IMU
-/// is mounted at (roll, pitch, yaw) relative to the vehicle (x along the track). y = (lat, lon, h).
-class MountedMotion final : public sim::Motion {
- public:
-  struct Step {
-    double t0_s, length_s, delta;
-  };
-  MountedMotion(double speed0_mps, double track0_rad, const Vec3& mount_rpy_rad, std::vector<Step> speed,
-                std::vector<Step> track)
-      : v0_(speed0_mps), psi0_(track0_rad), speed_(std::move(speed)), track_(std::move(track)) {
-    C_b_v_ = fsw::C_ned_enu() * fsw::C_b_n_from_euler(mount_rpy_rad.x(), mount_rpy_rad.y(), mount_rpy_rad.z());
-  }
-  State initial_state() const override {
-    State y = State::Zero();
-    y.head<3>() = Vec3(40.1 * kDegToRad, -105.15 * kDegToRad, 1600.0);
-    return y;
-  }
-  State derivative(double t_s, const State& y) const override {
-    State d = State::Zero();
-    double s, ds, psi, dpsi;
-    profile(speed_, v0_, t_s, s, ds);
-    profile(track_, psi0_, t_s, psi, dpsi);
-    d.head<3>() = fsw::llh_rate(y.head<3>(), Vec3(s * std::sin(psi), s * std::cos(psi), 0.0));
-    return d;
-  }
-  sim::Kinematics eval(double t_s, const State& y) const override {
-    sim::Kinematics k;
-    double s, ds, psi, dpsi;
-    profile(speed_, v0_, t_s, s, ds);
-    profile(track_, psi0_, t_s, psi, dpsi);
-    k.llh = y.head<3>();
-    k.vel_enu_mps = Vec3(s * std::sin(psi), s * std::cos(psi), 0.0);
-    k.acc_enu_mps2 = Vec3(ds * std::sin(psi) + s * dpsi * std::cos(psi), ds * std::cos(psi) - s * dpsi * std::sin(psi), 0.0);
-    k.C_b_n = fsw::C_b_n_from_euler(0.0, 0.0, psi) * C_b_v_;
-    k.omega_nb_b_radps = C_b_v_.transpose() * Vec3(0.0, 0.0, dpsi);
-    return k;
-  }
-
- private:
-  static void profile(const std::vector<Step>& steps, double v0, double t, double& v, double& rate) {
-    v = v0;
-    rate = 0.0;
-    for (const Step& st : steps) {
-      const double x = (t - st.t0_s) / st.length_s;
-      v += st.delta * sim::smooth_step(x);
-      rate += st.delta * sim::smooth_step_rate(x) / st.length_s;
-    }
-  }
-  double v0_, psi0_;
-  Mat3 C_b_v_;
-  std::vector<Step> speed_, track_;
-};
+/// A walker or vehicle near Boulder with its IMU at (roll, pitch, yaw) to the track
+/// (land_motion_test_util.hpp).
+using land_motion::LandMotion;
+LandMotion mounted(double speed0_mps, double track0_rad, const Vec3& mount_rpy_rad, std::vector<LandMotion::Step> speed,
+                   std::vector<LandMotion::Step> track) {
+  return LandMotion(Vec3(40.1 * kDegToRad, -105.15 * kDegToRad, 1600.0), speed0_mps, track0_rad, mount_rpy_rad,
+                    std::move(speed), std::move(track));
+}
 
 /// A walk: 1.4 m/s at 200 deg, slowing to 0.6 m/s and back (2-4 s), turns of -70 deg (5-8 s) and
 /// +120 deg (12-16 s). start_at_rest: at rest until 5 s, then accelerating to 1.4 m/s in 1.5 s,
 /// the turns 5 s later.
-MountedMotion walk(const Vec3& mount_rpy, bool start_at_rest = false) {
+LandMotion walk(const Vec3& mount_rpy, bool start_at_rest = false) {
   if (start_at_rest)
-    return MountedMotion(0.0, 200.0 * kDegToRad, mount_rpy, {{5.0, 1.5, 1.4}},
+    return mounted(0.0, 200.0 * kDegToRad, mount_rpy, {{5.0, 1.5, 1.4}},
                          {{10.0, 3.0, -70.0 * kDegToRad}, {17.0, 4.0, 120.0 * kDegToRad}});
-  return MountedMotion(1.4, 200.0 * kDegToRad, mount_rpy, {{2.0, 1.0, -0.8}, {3.0, 1.0, 0.8}},
+  return mounted(1.4, 200.0 * kDegToRad, mount_rpy, {{2.0, 1.0, -0.8}, {3.0, 1.0, 0.8}},
                        {{5.0, 3.0, -70.0 * kDegToRad}, {12.0, 4.0, 120.0 * kDegToRad}});
 }
 
@@ -462,7 +419,7 @@ TEST(FlightAppInitVelocityMatching, GyroBiasErrorIsBoundedAsPredicted) {
 // Straight at constant velocity: no horizontal velocity change, the heading is not determined,
 // nothing initialises; the window restarts every vm_max_s.
 TEST(FlightAppInitVelocityMatching, StraightConstantVelocityDoesNotInitialise) {
-  const MountedMotion straight(1.4, 30.0 * kDegToRad, Vec3(0.0, 0.0, 73.0) * kDegToRad, {}, {});
+  const LandMotion straight = mounted(1.4, 30.0 * kDegToRad, Vec3(0.0, 0.0, 73.0) * kDegToRad, {}, {});
   const VmResult r = fly_vm(straight, vm_config(10.0 * kDph), mems_noise(), 35.0);
   print("vm, straight", r);
   EXPECT_FALSE(r.h.initialised);

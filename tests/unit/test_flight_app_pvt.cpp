@@ -13,6 +13,7 @@
 #include "sim/imu_model.hpp"
 #include "sim/rng.hpp"
 #include "sim/trajectory.hpp"
+#include "land_motion_test_util.hpp"
 #include "tools/free_inertial.hpp"
 
 namespace {
@@ -21,68 +22,14 @@ using fsw::kDegToRad;
 using fsw::kRadToDeg;
 using fsw::Vec3;
 
-/// A car on a flat road: speed and track are sums of smooth (C2) steps; the body has no roll or
-/// pitch and its x axis is `mount_yaw_rad` right of the track (an IMU mounted at a yaw angle).
-/// ODE state y = (lat, lon, h).
-class CarMotion final : public sim::Motion {
- public:
-  struct Step {
-    double t0_s, length_s, delta;
-  };
-  CarMotion(const Vec3& llh0, double speed0_mps, double track0_rad, double mount_yaw_rad, std::vector<Step> speed,
-            std::vector<Step> track)
-      : llh0_(llh0), v0_(speed0_mps), psi0_(track0_rad), mount_(mount_yaw_rad), speed_(std::move(speed)),
-        track_(std::move(track)) {}
-
-  State initial_state() const override {
-    State y = State::Zero();
-    y.head<3>() = llh0_;
-    return y;
-  }
-  State derivative(double t_s, const State& y) const override {
-    State d = State::Zero();
-    d.head<3>() = fsw::llh_rate(y.head<3>(), velocity(t_s));
-    return d;
-  }
-  sim::Kinematics eval(double t_s, const State& y) const override {
-    sim::Kinematics k;
-    double s = 0.0, ds = 0.0, psi = 0.0, dpsi = 0.0;
-    profile(speed_, v0_, t_s, s, ds);
-    profile(track_, psi0_, t_s, psi, dpsi);
-    k.llh = y.head<3>();
-    k.vel_enu_mps = Vec3(s * std::sin(psi), s * std::cos(psi), 0.0);
-    k.acc_enu_mps2 = Vec3(ds * std::sin(psi) + s * dpsi * std::cos(psi), ds * std::cos(psi) - s * dpsi * std::sin(psi), 0.0);
-    k.C_b_n = fsw::C_b_n_from_euler(0.0, 0.0, psi + mount_);
-    k.omega_nb_b_radps = fsw::omega_nb_b_from_euler_rates(0.0, 0.0, 0.0, 0.0, dpsi);
-    return k;
-  }
-
- private:
-  static void profile(const std::vector<Step>& steps, double v0, double t, double& v, double& rate) {
-    v = v0;
-    rate = 0.0;
-    for (const Step& st : steps) {
-      const double x = (t - st.t0_s) / st.length_s;
-      v += st.delta * sim::smooth_step(x);
-      rate += st.delta * sim::smooth_step_rate(x) / st.length_s;
-    }
-  }
-  Vec3 velocity(double t) const {
-    double s = 0.0, ds = 0.0, psi = 0.0, dpsi = 0.0;
-    profile(speed_, v0_, t, s, ds);
-    profile(track_, psi0_, t, psi, dpsi);
-    return Vec3(s * std::sin(psi), s * std::cos(psi), 0.0);
-  }
-  Vec3 llh0_;
-  double v0_, psi0_, mount_;
-  std::vector<Step> speed_, track_;
-};
+/// A car: tests/unit/land_motion_test_util.hpp with the IMU mounted at a yaw angle only.
+using CarMotion = land_motion::LandMotion;
 
 /// The drive: 4 m/s at 30 deg, straight for 12 s, a -90 deg turn (12..22 s) at 4 m/s, speeding up
 /// to 10 m/s (25..30 s), turns of +120 and -60 deg, slowing to 6 m/s, a +90 deg turn inside the
 /// outage window 105..120 s.
 CarMotion drive(double mount_yaw_rad) {
-  return CarMotion(Vec3(35.0 * kDegToRad, 127.0 * kDegToRad, 80.0), 4.0, 30.0 * kDegToRad, mount_yaw_rad,
+  return CarMotion(Vec3(35.0 * kDegToRad, 127.0 * kDegToRad, 80.0), 4.0, 30.0 * kDegToRad, Vec3(0.0, 0.0, mount_yaw_rad),
                    {{25.0, 5.0, 6.0}, {70.0, 6.0, -4.0}},
                    {{12.0, 10.0, -90.0 * kDegToRad},
                     {50.0, 10.0, 120.0 * kDegToRad},
