@@ -2,6 +2,8 @@
 // error reported as "<source>:<line>:<col>: <message naming the dotted key path>". The schema is
 // documented in sim/scenarios/README.md.
 #include "sim/scenario.hpp"
+
+#include "sim/data_dir.hpp"
 #include "sim/text_file.hpp"
 
 #include <algorithm>
@@ -33,7 +35,7 @@ std::vector<Segment> Scenario::default_segments() {
           Segment{.type = SegmentType::kStraight, .duration_s = 30.0}};
 }
 
-std::string default_almanac_path() { return std::string(SDINS_SHARED_DATA_DIR) + "/almanac/yuma-week431.alm"; }
+std::string default_almanac_path() { return data_file("almanac/yuma-week431.alm"); }
 
 std::string almanac_path(const GpsConfig& cfg) { return cfg.almanac.empty() ? default_almanac_path() : cfg.almanac; }
 

@@ -5,9 +5,9 @@
 # and (release builds) the diagnosis. Skipped (77) without the data sets or RTKLIB's convbin.
 # Usage: datasets_psins_walk.sh SDINS DATA_DIR CONFIG_DIR OUT_DIR SANITIZED(-1: no sanitizer)
 set -euo pipefail
-sdins=$1 data=$2 config=$3 out=$4 sanitized=$5
+sdins=$1 data=${SDINS_RECORDINGS_DIR:-$2} config=$3 out=$4 sanitized=$5
 [ -f "$data/psins-tc/imu_200hz.csv" ] && [ -f "$data/gnss-imu-walk/gnss_1730_sf.pos" ] ||
-  { echo "SKIP: psins-tc or gnss-imu-walk not present under $data"; exit 77; }
+  { echo "SKIP: psins-tc or gnss-imu-walk not present under $data (set SDINS_RECORDINGS_DIR, docs/data.md)"; exit 77; }
 command -v convbin > /dev/null || { echo "SKIP: RTKLIB's convbin (Debian package rtklib) is not installed"; exit 77; }
 rm -rf "$out" && mkdir -p "$out"
 "$sdins" import psins "$data/psins-tc" --clip-gnss-to-imu --log "$out/psins.lcmlog" > "$out/psins_import.txt"

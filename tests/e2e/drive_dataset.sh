@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# The measured car drive (../shared/data/gnss-imu-drive) through the loosely coupled filter with
+# The measured car drive ($SDINS_RECORDINGS_DIR/gnss-imu-drive, default ../shared/data) through the loosely coupled filter with
 # its filter configuration (config/datasets/gnss-imu-drive.toml): import, replay with and without
 # 15 s GNSS outages, and (release builds) the diagnosis. Skipped (77) without the data set.
 # Usage: drive_dataset.sh SDINS DATA_DIR CONFIG OUT_DIR SANITIZED(-1: no sanitizer)
 set -euo pipefail
-sdins=$1 data=$2/gnss-imu-drive config=$3 out=$4 sanitized=$5
-[ -f "$data/gnss_1934_sf.pos" ] || { echo "SKIP: $data not present"; exit 77; }
+sdins=$1 data=${SDINS_RECORDINGS_DIR:-$2}/gnss-imu-drive config=$3 out=$4 sanitized=$5
+[ -f "$data/gnss_1934_sf.pos" ] || { echo "SKIP: recording $data not present (set SDINS_RECORDINGS_DIR, docs/data.md)"; exit 77; }
 rm -rf "$out" && mkdir -p "$out"
 "$sdins" import rtklib "$data" --log "$out/drive.lcmlog" > "$out/import.txt"
 "$sdins" replay "$out/drive.lcmlog" --filter-config "$config" --json "$out/replay.json" > "$out/replay.txt"

@@ -10,7 +10,8 @@ info --json` on the log: the channels (GNSS_PVT included), their types and spans
 A damaged copy of the walk's IMU log (NaN, a short line, garbage) must import with those lines
 counted, not crash.
 
-Exit 77 (CTest: skipped) with the reason when DATA_DIR (../shared/data) or convbin is missing.
+Exit 77 (CTest: skipped) with the reason when the recordings ($SDINS_RECORDINGS_DIR, else DATA_DIR:
+../shared/data beside the source tree) or convbin are missing.
 """
 import json
 import os
@@ -19,6 +20,8 @@ import subprocess
 import sys
 
 sdins, data, work = sys.argv[1:4]
+# The one setting for the recordings (docs/data.md): $SDINS_RECORDINGS_DIR, else the default given.
+data = os.environ.get("SDINS_RECORDINGS_DIR") or data
 
 
 def skip(why):
@@ -29,7 +32,7 @@ def skip(why):
 for d in ("gnss-imu-drive", "gnss-imu-walk", "psins-tc"):
     if not os.path.isdir(os.path.join(data, d)):
         skip(f"data set {os.path.join(data, d)} is missing (the shared data directory is read in place, "
-             "see README 'Data'; override with -DSDINS_SHARED_DATA_DIR)")
+             "set SDINS_RECORDINGS_DIR, docs/data.md)")
 if shutil.which("convbin") is None:
     skip("RTKLIB's convbin is not installed (Debian package rtklib, in tools/setup)")
 

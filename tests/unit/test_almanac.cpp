@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sim/almanac.hpp"
+#include "sim/scenario.hpp"
 
 using namespace sim;
 using fsw::kDegToRad;
@@ -17,7 +18,7 @@ using fsw::Vec3;
 
 namespace {
 
-const std::string kAlmanacPath = std::string(SDINS_SHARED_DATA_DIR) + "/almanac/yuma-week431.alm";
+const std::string kAlmanacPath = sim::default_almanac_path();  // the product's copy (data/almanac)
 constexpr int kFullWeek = 1455;
 constexpr double kToa = 589824.0;
 

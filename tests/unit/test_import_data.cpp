@@ -16,6 +16,7 @@
 #include "fsw/gps_orbit.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "lcm_test_util.hpp"
+#include "recordings.hpp"
 #include "tools/importers.hpp"
 
 namespace {
@@ -23,7 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using Kind = hal::LcmReplayInput::Kind;
 
-const std::string kData = SDINS_SHARED_DATA_DIR;
+const std::string kData = test::recordings_dir();
 
 bool have_convbin() { return lcm_test::run("command -v convbin > /dev/null 2>&1") == 0; }
 
@@ -84,7 +85,7 @@ std::vector<Fix> fixes(const std::vector<hal::LcmReplayInput>& inputs) {
 // pseudorange rates give ~0 m/s while the IMU says the vehicle stands still (the Doppler sign is
 // right) and metres per second later.
 TEST(ImportData, PsinsRawEpochsFixWhereAndWhenTheReadmeSays) {
-  if (!fs::exists(kData + "/psins-tc")) GTEST_SKIP() << "no data set " << kData << "/psins-tc";
+  if (!fs::exists(kData + "/psins-tc")) GTEST_SKIP() << "no recording " << kData << "/psins-tc (set SDINS_RECORDINGS_DIR, docs/data.md)";
   const Imported r = import_and_read("psins", "psins-tc", "psins_data");
   const std::vector<Fix> f = fixes(r.inputs);
   const double imu_t0 = r.summary["imu"]["samples"]["t_first_s"].get<double>();
@@ -115,7 +116,7 @@ TEST(ImportData, PsinsRawEpochsFixWhereAndWhenTheReadmeSays) {
 // troposphere model in a single-point fix) of the RTK solution at the same time. The IMU times
 // equal the GPS times the data set's source computed (imu_1730_sf.csv, GPST seconds since 1970).
 TEST(ImportData, WalkRawFixNearTheRtkSolutionAndImuOnTheSourcesTimeScale) {
-  if (!fs::exists(kData + "/gnss-imu-walk")) GTEST_SKIP() << "no data set " << kData << "/gnss-imu-walk";
+  if (!fs::exists(kData + "/gnss-imu-walk")) GTEST_SKIP() << "no recording " << kData << "/gnss-imu-walk (set SDINS_RECORDINGS_DIR, docs/data.md)";
   if (!have_convbin()) GTEST_SKIP() << "RTKLIB's convbin is not installed (Debian package rtklib)";
   const Imported r = import_and_read("rtklib", "gnss-imu-walk", "walk_data");
   const std::vector<Fix> f = fixes(r.inputs);
@@ -162,7 +163,7 @@ namespace {
 // keeps the first sample at the start time. With 1 (the IMU's own millisecond tick) the diagnosis'
 // drifting IMU-GNSS time offset of the default import disappears (README worked example).
 TEST(ImportData, DriveImuClockRatioReplacesTheTagFilesRate) {
-  if (!fs::exists(kData + "/gnss-imu-drive")) GTEST_SKIP() << "no data set " << kData << "/gnss-imu-drive";
+  if (!fs::exists(kData + "/gnss-imu-drive")) GTEST_SKIP() << "no recording " << kData << "/gnss-imu-drive (set SDINS_RECORDINGS_DIR, docs/data.md)";
   const Imported tag = import_and_read("rtklib", "gnss-imu-drive", "drive_tag");
   const Imported own = import_and_read("rtklib", "gnss-imu-drive", "drive_own", 1.0);
   EXPECT_NEAR(tag.summary["imu"]["seconds_per_imu_second"].get<double>(), 1.000257, 1e-6);

@@ -1,6 +1,6 @@
 // External trajectory profiles (sim/profile.hpp): the CSV loader, the not-a-knot spline, and the
 // free-inertial cross-check of the mechanization on an independently generated aircraft profile
-// (Groves' Profile_3, 418 s at 100 Hz, read in place from ../shared/data).
+// (Groves' Profile_3, 418 s at 100 Hz, read in place from the recordings, tests/unit/recordings.hpp).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "recordings.hpp"
 #include "sim/profile.hpp"
 #include "tools/free_inertial.hpp"
 
@@ -253,8 +254,9 @@ ProfileConsistency profile_consistency(const std::vector<sim::ProfileRow>& rows)
 }  // namespace
 
 TEST(Profile, GrovesProfile3PerfectImuFreeInertial) {
-  const std::string path = std::string(SDINS_SHARED_DATA_DIR) + "/aircraft-profile/Profile_3.csv";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "profile data not available: " << path;
+  const std::string path = test::recordings_dir() + "/aircraft-profile/Profile_3.csv";
+  if (!std::filesystem::exists(path))
+    GTEST_SKIP() << "recording not available: " << path << " (set SDINS_RECORDINGS_DIR, docs/data.md)";
   sim::ProfileLoadResult loaded = sim::load_profile(path);
   ASSERT_TRUE(loaded.ok()) << loaded.error;
   ASSERT_EQ(loaded.rows.size(), 41801u);

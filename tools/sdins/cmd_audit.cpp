@@ -29,6 +29,7 @@ struct StackOptions {
   std::string json;
   long budget_bytes = 16 * 1024;
   std::string build_dir;  ///< empty: <source>/build/stack-audit (the preset's)
+  std::string source_dir;  ///< empty: found by project_source_dir()
   bool no_build = false;
   int jobs = 2;
 } stack_opt;
@@ -42,10 +43,42 @@ struct TimingOptions {
 CLI::App* g_stack = nullptr;
 CLI::App* g_timing = nullptr;
 
-std::string shell_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
+/// A directory that holds this project's sources (its CMakePresets.json with the stack-audit preset).
+bool is_project_source(const std::filesystem::path& d) {
+  std::ifstream in(d / "CMakePresets.json");
+  if (!in) return false;
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str().find("\"stack-audit\"") != std::string::npos && std::filesystem::exists(d / "fsw");
+}
+
+/// The source tree the stack audit builds: --source-dir; else the current directory or one of its
+/// parents when it is the project; else the source tree of the build tree sdins runs from (its
+/// CMakeCache.txt, CMAKE_HOME_DIRECTORY). An installed sdins has neither: it needs --source-dir.
+/// No source path is compiled into the binary.
+std::string project_source_dir(const std::string& given) {
+  namespace fs = std::filesystem;
+  if (!given.empty()) {
+    if (!is_project_source(given))
+      throw std::runtime_error("--source-dir " + given + ": not the sdins source tree (no CMakePresets.json with "
+                               "the stack-audit preset and fsw/)");
+    return fs::absolute(given).lexically_normal().string();
+  }
+  std::error_code ec;
+  for (fs::path d = fs::current_path(ec); !ec && !d.empty(); d = d.parent_path()) {
+    if (is_project_source(d)) return d.string();
+    if (d == d.root_path()) break;
+  }
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    std::ifstream cache(exe.parent_path().parent_path() / "CMakeCache.txt");
+    std::string line;
+    const std::string key = "CMAKE_HOME_DIRECTORY:INTERNAL=";
+    while (std::getline(cache, line))
+      if (line.rfind(key, 0) == 0 && is_project_source(line.substr(key.size()))) return line.substr(key.size());
+  }
+  throw std::runtime_error("the stack audit builds fsw/ from the project's sources: run it inside the source tree "
+                           "or give --source-dir DIR");
 }
 
 /// Runs a shell command, returns its standard output; throws when it fails.
@@ -69,11 +102,11 @@ std::string tail_of_file(const std::string& path, std::size_t max_chars) {
   return s.size() > max_chars ? s.substr(s.size() - max_chars) : s;
 }
 
-void build_stack_audit(const std::string& dir, int jobs) {
+void build_stack_audit(const std::string& src, const std::string& dir, int jobs) {
   const std::string log = dir + "/sdins-audit-build.log";
   std::filesystem::create_directories(dir);
   const std::string cmake = shell_quote(SDINS_CMAKE_COMMAND);
-  const std::string cmd = cmake + " --preset stack-audit -S " + shell_quote(SDINS_SOURCE_DIR) + " -B " + shell_quote(dir) +
+  const std::string cmd = cmake + " --preset stack-audit -S " + shell_quote(src) + " -B " + shell_quote(dir) +
                           " > " + shell_quote(log) + " 2>&1 && " + cmake + " --build " + shell_quote(dir) + " -j " +
                           std::to_string(jobs) + " >> " + shell_quote(log) + " 2>&1";
   std::fprintf(stderr, "sdins audit stack: building fsw/ in %s (log: %s)\n", dir.c_str(), log.c_str());
@@ -154,9 +187,11 @@ std::string shorten(const std::string& s, std::size_t n) { return s.size() <= n 
 
 int run_audit_stack() {
   namespace st = tools::stack;
-  const std::string dir = stack_opt.build_dir.empty() ? std::string(SDINS_SOURCE_DIR) + "/build/stack-audit"
+  const bool need_src = stack_opt.build_dir.empty() || !stack_opt.no_build;
+  const std::string src = need_src ? project_source_dir(stack_opt.source_dir) : std::string();
+  const std::string dir = stack_opt.build_dir.empty() ? src + "/build/stack-audit"
                                                       : std::filesystem::absolute(stack_opt.build_dir).string();
-  if (!stack_opt.no_build) build_stack_audit(dir, stack_opt.jobs);
+  if (!stack_opt.no_build) build_stack_audit(src, dir, stack_opt.jobs);
   const st::BuildData b = st::load_build_dir(dir);
   const std::vector<std::string> diff = st::cross_check(b.graph, b.su);
   if (!diff.empty()) {
@@ -356,6 +391,9 @@ void register_audit(CLI::App& app) {
   g_stack->add_option("--json", stack_opt.json, "write the report as JSON");
   g_stack->add_option("--budget", stack_opt.budget_bytes, "stack budget per task [bytes]")->check(CLI::Range(1L, 1L << 30));
   g_stack->add_option("--build-dir", stack_opt.build_dir, "stack-audit build directory (default: <source>/build/stack-audit)");
+  g_stack->add_option("--source-dir", stack_opt.source_dir,
+                      "the project's source tree to build (default: the current directory or a parent of it when it "
+                      "is the source tree, else the source of the build tree sdins runs from)");
   g_stack->add_flag("--no-build", stack_opt.no_build, "analyse the build directory as it is (no configure/build)");
   g_stack->add_option("--jobs", stack_opt.jobs, "parallel compile jobs")->check(CLI::Range(1, 64));
   g_timing = audit->add_subcommand(

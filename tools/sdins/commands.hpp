@@ -76,7 +76,10 @@ struct FswRunOptions {
 };
 void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& default_lcm_url);
 
-/// Runs a plotting script with the Python that has matplotlib (SDINS_PYTHON). Returns its exit code.
+/// s quoted for a POSIX shell.
+std::string shell_quote(const std::string& s);
+/// Runs a plotting script (<data dir>/plot/SCRIPT) with the Python that has matplotlib
+/// (SDINS_PYTHON). Returns 0 on success, 1 when the script is missing or fails.
 int run_plot_script(const std::string& script, const std::string& args);
 
 }  // namespace sdins

@@ -1,8 +1,11 @@
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "sim/data_dir.hpp"
 
 namespace sdins {
 
@@ -62,8 +65,20 @@ void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& d
                   "top of the simulated aircraft's defaults");
 }
 
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 int run_plot_script(const std::string& script, const std::string& args) {
-  const std::string cmd = std::string(SDINS_PYTHON) + " " + SDINS_PLOT_DIR + "/" + script + " " + args;
+  const std::string path = sim::data_file("plot/" + script);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    std::fprintf(stderr, "sdins: plot script %s not found\n", path.c_str());
+    return 1;
+  }
+  const std::string cmd = std::string(SDINS_PYTHON) + " " + shell_quote(path) + " " + args;
   const int rc = std::system(cmd.c_str());
   return rc == 0 ? 0 : 1;
 }

@@ -4,13 +4,25 @@
 #include <exception>
 
 #include "commands.hpp"
+#include "sim/data_dir.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{
       "sdins: SDINS/GPS integrated navigation for bank-to-turn aircraft.\n"
       "Flight-software core (200 Hz strapdown mechanization), truth simulator and analysis tools."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "sdins 0.1.0");
+  app.fallthrough();  // --data-dir may follow the subcommand
+  app.set_version_flag("--version", "sdins " SDINS_VERSION);
+  // Set while parsing (before --help prints the footer that names the data directory).
+  app.add_option_function<std::string>(
+      "--data-dir", [](const std::string& dir) { sim::set_data_dir_override(dir); },
+                 "the product's data directory (almanac, scenarios, filter configurations, DBC, LCM definitions, "
+                 "plot scripts; default: $SDINS_DATA_DIR, else ../share/sdins beside the executable)");
+  app.footer([] {
+    const sim::DataDirLookup d = sim::find_data_dir();
+    return d.ok() ? "Data directory: " + d.path + " (" + sim::to_string(d.source) + ")"
+                  : "Data directory: " + d.error;
+  });
   sdins::register_analyze(app);
   sdins::register_scenario(app);
   sdins::register_fly(app);

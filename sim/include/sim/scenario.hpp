@@ -87,7 +87,7 @@ struct GpsConfig {
   int max_channels = 12;  ///< [1, fsw::kMaxGnssChannels]; the highest satellites are kept when more are visible
 };
 
-/// The almanac shipped with the project: "<SDINS_SHARED_DATA_DIR>/almanac/yuma-week431.alm".
+/// The almanac shipped with the product: "<data directory>/almanac/yuma-week431.alm" (sim/data_dir.hpp).
 std::string default_almanac_path();
 /// The almanac file a GpsConfig names: cfg.almanac, or default_almanac_path() when it is empty.
 std::string almanac_path(const GpsConfig& cfg);
