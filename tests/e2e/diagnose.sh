@@ -14,6 +14,10 @@ rm -rf "$out" && mkdir -p "$out"
   --log "$out/lever.lcmlog" > /dev/null
 "$sdins" diagnose --log "$out/lever.lcmlog" --json "$out/lever.json" --report "$out/report" | tee "$out/lever.txt"
 "$sdins" sim --duration 400 --seed 12 --truth-errors baseline --log "$out/null.lcmlog" > /dev/null
+# A component the flight cannot separate: the finding is the group (JSON, text and report).
+"$sdins" sim --duration 400 --seed 13 --truth-errors baseline --effect gyro_scale_factor.z=-800 \
+  --log "$out/group.lcmlog" > /dev/null
+"$sdins" diagnose --log "$out/group.lcmlog" --json "$out/group.json" --report "$out/group" | tee "$out/group.txt"
 "$sdins" diagnose --log "$out/null.lcmlog" --json "$out/null.json" > "$out/null.txt"
 
 $py - "$out" <<'PY'
@@ -22,11 +26,11 @@ out = sys.argv[1]
 j = json.load(open(f"{out}/lever.json"))
 assert j["baseline"] == "15", j["baseline"]
 f = j["findings"][0]
-for k in ("effect", "component", "estimate", "sigma", "unit", "statistic", "p_value", "separable", "confounded_with"):
+for k in ("effect", "component", "estimate", "sigma", "unit", "statistic", "dof", "p_value", "separable", "confounded_with", "group"):
     assert k in f, k
 assert (f["effect"], f["component"], f["unit"]) == ("antenna_lever_arm", "z", "m"), f
 assert abs(f["estimate"] - -1.2) < 3 * f["sigma"] and abs(f["estimate"] - -1.2) < 0.36, f
-assert f["statistic"] > j["method"]["threshold"] and f["separable"], f
+assert f["statistic"] > j["method"]["threshold"] and f["separable"] and f["group"] == [] and f["dof"] == 1, f
 assert j["extended_model"]["added_states"][0] == "antenna_lever_arm.z", j["extended_model"]
 g = j["gain"]
 assert g["innovations"]["log_likelihood_gain"] > 0, g["innovations"]
@@ -47,7 +51,19 @@ md = open(f"{out}/report/report.md").read()
 assert "antenna_lever_arm" in md and "![heading error](heading.png)" in md
 n = json.load(open(f"{out}/null.json"))
 assert n["findings"] == [] and n["extended_model"]["added_states"] == [], n["findings"]
-print("diagnose e2e: OK", f["estimate"], "+-", f["sigma"], "z^2", f["statistic"])
+gj = json.load(open(f"{out}/group.json"))
+assert len(gj["findings"]) == 1, gj["findings"]
+gf = gj["findings"][0]
+assert not gf["separable"] and gf["statistic"] > gf["threshold"], gf
+members = {m["candidate"]: m for m in gf["group"]}
+assert "gyro_scale_factor.z" in members and len(members) >= 2, members
+z = members["gyro_scale_factor.z"]
+assert abs(z["alone_estimate"] - -800) < 3 * z["alone_sigma"] + 0.1 * 800, z
+assert abs(sum(m["plausibility"] for m in gf["group"]) - 1) < 1e-9, gf["group"]
+assert sorted(gj["extended_model"]["added_states"]) == sorted(members), gj["extended_model"]
+assert "A group, not one cause" in open(f"{out}/group/report.md").read()
+assert "a group this data cannot separate" in open(f"{out}/group.txt").read()
+print("diagnose e2e: OK", f["estimate"], "+-", f["sigma"], "z^2", f["statistic"], "; group", sorted(members))
 PY
 
 head -c 5000 /dev/urandom > "$out/junk.lcmlog"

@@ -149,16 +149,30 @@ int run_diagnose() {
   for (const tools::Finding& f : r.findings) {
     nlohmann::json cw = nlohmann::json::array();
     for (const auto& c : f.confounded_with) cw.push_back({{"candidate", c.first}, {"correlation", c.second}});
+    nlohmann::json group = nlohmann::json::array();
+    for (const tools::GroupMember& m : f.group)
+      group.push_back({{"candidate", m.name},
+                       {"correlation", m.correlation},
+                       {"multiple_correlation", m.multiple_correlation},
+                       {"alone_estimate", m.alone_estimate},
+                       {"alone_sigma", m.alone_sigma},
+                       {"alone_statistic", m.alone_z2},
+                       {"unit", m.unit},
+                       {"prior_sigma", m.prior_sigma},
+                       {"prior_z", m.prior_z},
+                       {"plausibility", m.plausibility}});
     findings.push_back({{"effect", fsw::effect_info(f.effect).name},
                         {"component", f.component},
                         {"estimate", f.estimate},
                         {"sigma", f.sigma},
                         {"unit", f.unit},
                         {"statistic", f.z2},
+                        {"dof", f.dof},
                         {"p_value", f.p_value},
-                        {"threshold", r.threshold_z2},
-                        {"separable", f.confounded_with.empty()},
-                        {"confounded_with", cw}});
+                        {"threshold", f.threshold_z2},
+                        {"separable", f.separable()},
+                        {"confounded_with", cw},
+                        {"group", group}});
   }
   j["findings"] = findings;
   std::string ext_name = opt.baseline;
@@ -221,11 +235,17 @@ int run_diagnose() {
   std::printf("\n");
   if (r.findings.empty()) std::printf("no finding (threshold z^2 %.2f over %d components)\n", r.threshold_z2, r.tested);
   for (const tools::Finding& f : r.findings) {
-    std::printf("finding: %s%s%s = %.4g +- %.3g %s (z^2 %.1f, p %.2g)", fsw::effect_info(f.effect).name,
-                f.component.empty() ? "" : ".", f.component.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.z2,
-                f.p_value);
-    for (const auto& c : f.confounded_with) std::printf("; not separable from %s (rho %.3f)", c.first.c_str(), c.second);
-    std::printf("\n");
+    if (f.separable()) {
+      std::printf("finding: %s%s%s = %.4g +- %.3g %s (z^2 %.1f, p %.2g)\n", fsw::effect_info(f.effect).name,
+                  f.component.empty() ? "" : ".", f.component.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.z2,
+                  f.p_value);
+      continue;
+    }
+    std::printf("finding: a group this data cannot separate (z^2 %.1f, %d dof, p %.2g); the cause is one of (or a mix "
+                "of):\n", f.z2, f.dof, f.p_value);
+    for (const tools::GroupMember& m : f.group)
+      std::printf("  %-26s alone %.4g +- %.3g %s = %+.1f prior sigma, plausibility %.2f, rho %+.4f\n", m.name.c_str(),
+                  m.alone_estimate, m.alone_sigma, m.unit.c_str(), m.prior_z, m.plausibility, m.correlation);
   }
   if (!r.findings.empty()) {
     std::printf("extended %s: NIS %.3f, innovation RMS %.3f m / %.4f m/s, log-likelihood %+.1f", ext_name.c_str(),
@@ -274,11 +294,25 @@ int run_diagnose() {
       for (const tools::Finding& f : r.findings) {
         std::string cw;
         for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
-        md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | " << fmt(f.estimate) << " | "
-           << fmt(f.sigma, "%.3g") << " | " << f.unit << " | " << fmt(f.z2, "%.1f") << " | " << fmt(f.p_value, "%.2g")
-           << " | " << cw << " |\n";
+        md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | "
+           << (f.separable() ? fmt(f.estimate) : "group, below") << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "")
+           << " | " << f.unit << " | " << fmt(f.z2, "%.1f") << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
+           << " | " << fmt(f.p_value, "%.2g") << " | " << cw << " |\n";
       }
       md << "\n";
+      for (const tools::Finding& f : r.findings) {
+        if (f.separable()) continue;
+        md << "**A group, not one cause.** The data fit each of these alone about equally well and cannot tell them "
+              "apart; the finding is the group. Each member's estimate is what it alone would need; plausibility is "
+              "relative, under the members' priors only.\n\n"
+              "| member | alone estimate | sigma | unit | prior sigmas | plausibility | correlation with the lead |\n"
+              "|---|---|---|---|---|---|---|\n";
+        for (const tools::GroupMember& m : f.group)
+          md << "| " << m.name << " | " << fmt(m.alone_estimate) << " | " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
+             << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
+             << fmt(m.correlation, "%+.4f") << " |\n";
+        md << "\n";
+      }
     }
     if (!r.unobservable.empty()) {
       md << "Not observable with this data (never named as a cause): ";

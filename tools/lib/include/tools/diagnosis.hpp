@@ -17,9 +17,15 @@
 //   2. The most significant component above the threshold joins the model; the next round tries
 //      each remaining component on top of it, until none is significant (max_findings rounds). A
 //      component whose posterior correlation with one already in the model exceeds
-//      max_correlation cannot be told apart from it with this data: it is listed with that finding
-//      (confounded_with) and never named on its own.
-//   3. The extended model (all selected components) is run once more and the test repeated there.
+//      max_correlation cannot be told apart from it with this data. Such a component joins that
+//      finding's GROUP (the multiple correlation with the group's members is what counts), its
+//      state joins the model, and the round is run again on the group's whole subspace before any
+//      further component is tried: no later step builds on an arbitrary member. The finding is the
+//      group: every member with the estimate it alone would need and its plausibility under its
+//      prior (GroupMember), never one member as the cause.
+//   3. The extended model (all selected components and groups) is run once more and the test
+//      repeated there, per finding, with the joint Wald statistic of its components over the
+//      directions the data observe (joint_wald_z2; for a separable finding the z^2 above).
 //   4. Gain: baseline and extended model over the same data: innovation statistics (NIS,
 //      innovation RMS per measurement type, log-likelihood over the measurements both used) and,
 //      where the data carry truth or a reference trajectory, navigation error RMS and the error
@@ -197,16 +203,48 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
 /// b.innovations' log_likelihood and common.
 void compare_likelihood(ModelRun& a, ModelRun& b);
 
-struct Finding {
-  fsw::Effect effect;
-  std::string component;  ///< "" for scalar effects
-  double estimate = 0.0, sigma = 0.0;  ///< catalogue units, from the extended model
+/// One member of a confounded group (Finding::group).
+struct GroupMember {
+  std::string name;  ///< "effect.component"
+  fsw::Effect effect = fsw::Effect::kCount;
+  std::string component;
   std::string unit;
-  double z2 = 0.0;       ///< Wald statistic in the extended model (chi-square, 1 dof under the null)
+  /// Posterior correlation with the group's lead component in the run where it joined (the lead
+  /// itself: 1), and the multiple correlation with the members already in the group then.
+  double correlation = 1.0, multiple_correlation = 1.0;
+  /// The estimate this member alone would need: the member alone on top of the model as it was
+  /// when the group's lead was selected (catalogue units), its sigma and Wald z^2 there.
+  double alone_estimate = 0.0, alone_sigma = 0.0, alone_z2 = 0.0;
+  double prior_sigma = 0.0;  ///< the member's prior 1-sigma (catalogue units)
+  /// alone_estimate / prior_sigma: how many prior sigmas the member alone would need.
+  double prior_z = 0.0;
+  /// exp(-prior_z^2 / 2) normalised over the group: the members' relative plausibility under their
+  /// priors, given that the data fit each alone equally well (prior only: not a probability that
+  /// the data establish).
+  double plausibility = 0.0;
+};
+
+struct Finding {
+  fsw::Effect effect;     ///< the lead component (the most significant when it was selected)
+  std::string component;  ///< "" for scalar effects
+  /// Separable: the extended model's estimate and sigma. A group: the lead's alone_estimate and
+  /// alone_sigma (the group's members share the extended model's information and are not told
+  /// apart there; every member's own value is in group).
+  double estimate = 0.0, sigma = 0.0;  ///< catalogue units
+  std::string unit;
+  /// Joint Wald statistic of the finding's components in the extended model over the directions
+  /// the data observe (dof of them; one for a separable finding: the classic z^2).
+  double z2 = 0.0;
+  int dof = 1;
+  double threshold_z2 = 0.0;  ///< the finding's threshold (chi-square, dof, at alpha / tested)
   double p_value = 0.0;
-  /// Components the data cannot tell apart from this one ("effect.component"), with their
+  /// Components the data cannot tell apart from the lead ("effect.component"), with their
   /// posterior correlation; empty when it is separable.
   std::vector<std::pair<std::string, double>> confounded_with;
+  /// The confounded group, lead first: empty when the finding is separable. The finding is the
+  /// group, not its lead.
+  std::vector<GroupMember> group;
+  bool separable() const { return group.empty(); }
 };
 
 struct DiagnosisResult {
@@ -225,6 +263,17 @@ struct DiagnosisResult {
 /// The whole diagnosis. progress (optional) receives one line per step.
 DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
                          const std::function<void(const std::string&)>& progress = {});
+
+/// Joint Wald statistic of random-constant states (catalogue units) whose estimate x, posterior
+/// covariance P and prior sigmas s0 are given: under the null (all zero) x has covariance
+/// P - P P0^-1 P; only directions whose posterior/prior variance ratio is at most max_ratio count
+/// (at least the best-observed one). Returns z^2 and sets dof to the number of directions.
+double joint_wald_z2(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const Eigen::VectorXd& s0, double max_ratio,
+                     int& dof);
+/// P(X > x) and the upper quantile (P(X > q) = p) of chi-square with k degrees of freedom (exact
+/// for integer k: the incomplete gamma function's finite sums).
+double chi2_survival(double x, int k);
+double chi2_upper_quantile(double p, int k);
 
 /// Upper quantile of chi-square with 1 degree of freedom: P(X > q) = p.
 double chi2_1_upper_quantile(double p);
