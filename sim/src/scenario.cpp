@@ -35,6 +35,17 @@ std::vector<Segment> Scenario::default_segments() {
           Segment{.type = SegmentType::kStraight, .duration_s = 30.0}};
 }
 
+const char* to_string(SegmentType t) {
+  switch (t) {
+    case SegmentType::kStraight: return "straight";
+    case SegmentType::kTurn: return "turn";
+    case SegmentType::kSpeedChange: return "speed_change";
+    case SegmentType::kClimb: return "climb";
+    case SegmentType::kRoll: return "roll";
+  }
+  return "?";
+}
+
 std::string default_almanac_path() { return data_file("almanac/yuma-week431.alm"); }
 
 std::string almanac_path(const GpsConfig& cfg) { return cfg.almanac.empty() ? default_almanac_path() : cfg.almanac; }
@@ -124,29 +135,57 @@ class Parser : public toml_schema::Reader {
 
   bool segment(const toml::table& t, const std::string& path, Segment& seg) {
     const toml::node* type = t.get("type");
-    if (!type) return fail(t, "'" + path + ".type' is required (\"straight\" or \"turn\")");
-    if (!choice(seg.type, {{"straight", SegmentType::kStraight}, {"turn", SegmentType::kTurn}})(*type, path + ".type")) {
+    if (!type) {
+      return fail(t, "'" + path + ".type' is required (\"straight\", \"turn\", \"speed_change\", \"climb\" or \"roll\")");
+    }
+    if (!choice(seg.type, {{"straight", SegmentType::kStraight},
+                           {"turn", SegmentType::kTurn},
+                           {"speed_change", SegmentType::kSpeedChange},
+                           {"climb", SegmentType::kClimb},
+                           {"roll", SegmentType::kRoll}})(*type, path + ".type")) {
       return false;
     }
     const SegmentType type_of_segment = seg.type;
-    const auto only = [this, type_of_segment](SegmentType allowed, Handler h) -> Handler {
-      return [this, allowed, type_of_segment, h](const toml::node& n, const std::string& p) {
-        if (type_of_segment != allowed) {
-          return fail(n, "'" + p + "' is not allowed for a " +
-                             (type_of_segment == SegmentType::kTurn ? "turn" : "straight") + " segment");
+    using Types = std::initializer_list<SegmentType>;
+    const auto only = [this, type_of_segment](Types allowed, Handler h) -> Handler {
+      const std::vector<SegmentType> ok(allowed);
+      return [this, ok, type_of_segment, h](const toml::node& n, const std::string& p) {
+        if (std::find(ok.begin(), ok.end(), type_of_segment) == ok.end()) {
+          return fail(n, "'" + p + "' is not allowed for a " + to_string(type_of_segment) + " segment");
         }
         return h(n, p);
       };
     };
-    const SegmentType straight = SegmentType::kStraight;
-    const SegmentType turn = SegmentType::kTurn;
+    const SegmentType straight = SegmentType::kStraight, turn = SegmentType::kTurn;
+    const SegmentType speed = SegmentType::kSpeedChange, climb = SegmentType::kClimb, roll = SegmentType::kRoll;
+    // The hold of a climb may be 0 (pull-up then push-over); every other duration is positive.
+    const bool zero_ok = seg.type == climb || seg.type == roll;
+    // A signed amount in [-limit, limit] that must not be 0 (a speed change or climb of nothing).
+    const auto nonzero = [this](double& v, double limit) -> Handler {
+      return [this, &v, limit](const toml::node& n, const std::string& p) {
+        const auto* d = n.as_floating_point();
+        const auto* i = n.as_integer();
+        const double x = d ? d->get() : i ? static_cast<double>(i->get()) : 0.0;
+        if ((!d && !i) || !std::isfinite(x) || x == 0.0 || std::abs(x) > limit) {
+          std::ostringstream range;
+          range << "[" << -limit << ", " << limit << "]";
+          return fail(n, "'" + p + "' must be a number in " + range.str() + ", not 0" + got(n));
+        }
+        v = x;
+        return true;
+      };
+    };
     return fields(t, path + ".", {
         {"type", [](const toml::node&, const std::string&) { return true; }},
-        {"duration_s", only(straight, number(seg.duration_s, left_open(0.0, 86400.0)))},
-        {"direction", only(turn, choice(seg.direction, {{"left", TurnDirection::kLeft}, {"right", TurnDirection::kRight}}))},
-        {"bank_deg", only(turn, number(seg.bank_deg, left_open(0.0, 80.0)))},
-        {"heading_change_deg", only(turn, number(seg.heading_change_deg, left_open(0.0, 3600.0)))},
-        {"roll_time_s", only(turn, number(seg.roll_time_s, left_open(0.0, 60.0)))},
+        {"duration_s", only({straight, speed, climb, roll},
+                            number(seg.duration_s, zero_ok ? closed(0.0, 86400.0) : left_open(0.0, 86400.0)))},
+        {"direction", only({turn, roll}, choice(seg.direction, {{"left", TurnDirection::kLeft}, {"right", TurnDirection::kRight}}))},
+        {"bank_deg", only({turn, roll}, number(seg.bank_deg, left_open(0.0, 80.0)))},
+        {"heading_change_deg", only({turn}, number(seg.heading_change_deg, left_open(0.0, 3600.0)))},
+        {"roll_time_s", only({turn, roll}, number(seg.roll_time_s, left_open(0.0, 60.0)))},
+        {"delta_speed_mps", only({speed}, nonzero(seg.delta_speed_mps, 400.0))},
+        {"flight_path_deg", only({climb}, nonzero(seg.flight_path_deg, 45.0))},
+        {"transition_s", only({climb}, number(seg.transition_s, left_open(0.0, 120.0)))},
     });
   }
 

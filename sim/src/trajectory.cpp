@@ -109,14 +109,19 @@ std::unique_ptr<FlightMotion> FlightMotion::create(const Scenario& sc, std::stri
   std::unique_ptr<FlightMotion> m(new FlightMotion());
   m->start_ = sc.start;
   m->g_coord_mps2_ = fsw::normal_gravity_mps2(sc.start.lat_deg * kDegToRad, sc.start.alt_m);
-  const double V = sc.start.speed_mps;
+  double V = sc.start.speed_mps;
   if (!(V > 0.0) || sc.segments.empty()) {
     error = "scenario needs a positive speed and at least one segment";
     return nullptr;
   }
+  constexpr double kMinSpeed_mps = 20.0;
   double t = 0.0;
   std::size_t idx = 0;
   int turn = 0;
+  // A phase at constant speed V and level flight.
+  const auto level = [&V](FlightPhase::Kind kind, double t0, double t1, double bank, int seg, int trn, bool coord) {
+    return FlightPhase{kind, t0, t1, bank, seg, trn, V, V, 0.0, 0.0, coord};
+  };
   while (t < sc.duration_s) {
     if (idx >= sc.segments.size()) {
       // No repeat: the closing straight phase below starts here (pushing one that ends at
@@ -126,34 +131,81 @@ std::unique_ptr<FlightMotion> FlightMotion::create(const Scenario& sc, std::stri
     }
     const Segment& s = sc.segments[idx];
     const int seg = static_cast<int>(idx);
-    if (s.type == SegmentType::kStraight) {
-      m->phases_.push_back({FlightPhase::Kind::kStraight, t, t + s.duration_s, 0.0, seg, -1});
-      t += s.duration_s;
-    } else {
-      const double sign = s.direction == TurnDirection::kRight ? 1.0 : -1.0;
-      const double phi_b = s.bank_deg * kDegToRad;
-      const double T = s.roll_time_s;
-      const double dpsi_roll = transition_heading_change(m->g_coord_mps2_, V, phi_b, T);
-      const double psi_rate = m->g_coord_mps2_ * std::tan(phi_b) / V;
-      const double dpsi_total = s.heading_change_deg * kDegToRad;
-      const double t_bank = (dpsi_total - 2.0 * dpsi_roll) / psi_rate;
-      if (t_bank < 0.0) {
-        error = "segment " + std::to_string(idx) + ": heading change " + std::to_string(s.heading_change_deg) +
-                " deg is smaller than the " + std::to_string(2.0 * dpsi_roll / kDegToRad) +
-                " deg turned during roll-in and roll-out";
-        return nullptr;
+    const double sign = s.direction == TurnDirection::kRight ? 1.0 : -1.0;
+    switch (s.type) {
+      case SegmentType::kStraight:
+        m->phases_.push_back(level(FlightPhase::Kind::kStraight, t, t + s.duration_s, 0.0, seg, -1, true));
+        t += s.duration_s;
+        break;
+      case SegmentType::kTurn: {
+        const double phi_b = s.bank_deg * kDegToRad;
+        const double T = s.roll_time_s;
+        const double dpsi_roll = transition_heading_change(m->g_coord_mps2_, V, phi_b, T);
+        const double psi_rate = m->g_coord_mps2_ * std::tan(phi_b) / V;
+        const double dpsi_total = s.heading_change_deg * kDegToRad;
+        const double t_bank = (dpsi_total - 2.0 * dpsi_roll) / psi_rate;
+        if (t_bank < 0.0) {
+          error = "segment " + std::to_string(idx) + ": heading change " + std::to_string(s.heading_change_deg) +
+                  " deg is smaller than the " + std::to_string(2.0 * dpsi_roll / kDegToRad) +
+                  " deg turned during roll-in and roll-out";
+          return nullptr;
+        }
+        m->phases_.push_back(level(FlightPhase::Kind::kRollIn, t, t + T, sign * phi_b, seg, turn, true));
+        m->phases_.push_back(level(FlightPhase::Kind::kBank, t + T, t + T + t_bank, sign * phi_b, seg, turn, true));
+        m->phases_.push_back(
+            level(FlightPhase::Kind::kRollOut, t + T + t_bank, t + 2.0 * T + t_bank, sign * phi_b, seg, turn, true));
+        t += 2.0 * T + t_bank;
+        ++turn;
+        break;
       }
-      m->phases_.push_back({FlightPhase::Kind::kRollIn, t, t + T, sign * phi_b, seg, turn});
-      m->phases_.push_back({FlightPhase::Kind::kBank, t + T, t + T + t_bank, sign * phi_b, seg, turn});
-      m->phases_.push_back(
-          {FlightPhase::Kind::kRollOut, t + T + t_bank, t + 2.0 * T + t_bank, sign * phi_b, seg, turn});
-      t += 2.0 * T + t_bank;
-      ++turn;
+      case SegmentType::kRoll: {
+        const double phi_b = sign * s.bank_deg * kDegToRad;
+        const double T = s.roll_time_s;
+        m->phases_.push_back(level(FlightPhase::Kind::kRollIn, t, t + T, phi_b, seg, -1, false));
+        if (s.duration_s > 0.0)
+          m->phases_.push_back(level(FlightPhase::Kind::kBank, t + T, t + T + s.duration_s, phi_b, seg, -1, false));
+        m->phases_.push_back(
+            level(FlightPhase::Kind::kRollOut, t + T + s.duration_s, t + 2.0 * T + s.duration_s, phi_b, seg, -1, false));
+        t += 2.0 * T + s.duration_s;
+        break;
+      }
+      case SegmentType::kSpeedChange: {
+        const double v1 = V + s.delta_speed_mps;
+        if (!(v1 >= kMinSpeed_mps)) {
+          error = "segment " + std::to_string(idx) + ": the speed change of " + std::to_string(s.delta_speed_mps) +
+                  " m/s from " + std::to_string(V) + " m/s leaves less than " + std::to_string(kMinSpeed_mps) + " m/s";
+          return nullptr;
+        }
+        FlightPhase p = level(FlightPhase::Kind::kStraight, t, t + s.duration_s, 0.0, seg, -1, true);
+        p.v1_mps = v1;
+        m->phases_.push_back(p);
+        V = v1;
+        t += s.duration_s;
+        break;
+      }
+      case SegmentType::kClimb: {
+        const double g1 = s.flight_path_deg * kDegToRad;
+        const double T = s.transition_s;
+        FlightPhase up = level(FlightPhase::Kind::kStraight, t, t + T, 0.0, seg, -1, true);
+        up.gamma1_rad = g1;
+        m->phases_.push_back(up);
+        if (s.duration_s > 0.0) {
+          FlightPhase hold = level(FlightPhase::Kind::kStraight, t + T, t + T + s.duration_s, 0.0, seg, -1, true);
+          hold.gamma0_rad = hold.gamma1_rad = g1;
+          m->phases_.push_back(hold);
+        }
+        FlightPhase down = level(FlightPhase::Kind::kStraight, t + T + s.duration_s, t + 2.0 * T + s.duration_s, 0.0,
+                                 seg, -1, true);
+        down.gamma0_rad = g1;
+        m->phases_.push_back(down);
+        t += 2.0 * T + s.duration_s;
+        break;
+      }
     }
     ++idx;
   }
   // Past the end of the timeline the aircraft flies straight.
-  m->phases_.push_back({FlightPhase::Kind::kStraight, t, 1e300, 0.0, -1, -1});
+  m->phases_.push_back(level(FlightPhase::Kind::kStraight, t, 1e300, 0.0, -1, -1, true));
   return m;
 }
 
@@ -201,14 +253,45 @@ Motion::State FlightMotion::initial_state() const {
   return y;
 }
 
+namespace {
+/// The value and rate of a quantity going from a0 to a1 over the phase (smooth_step shape).
+void blend(const FlightPhase& p, double t_s, double a0, double a1, double& a, double& a_rate) {
+  const double T = p.t1_s - p.t0_s;
+  if (a0 == a1 || !(T > 0.0) || !(T < 1e299)) {
+    a = a1;
+    a_rate = 0.0;
+    return;
+  }
+  const double x = std::clamp((t_s - p.t0_s) / T, 0.0, 1.0);
+  a = a0 + (a1 - a0) * smooth_step(x);
+  a_rate = (a1 - a0) * smooth_step_rate(x) / T;
+}
+}  // namespace
+
+void FlightMotion::speed(double t_s, double& v_mps, double& v_rate_mps2) const {
+  const FlightPhase& p = phase_at(t_s);
+  blend(p, t_s, p.v0_mps, p.v1_mps, v_mps, v_rate_mps2);
+}
+
+void FlightMotion::flight_path(double t_s, double& gamma_rad, double& gamma_rate_radps) const {
+  const FlightPhase& p = phase_at(t_s);
+  blend(p, t_s, p.gamma0_rad, p.gamma1_rad, gamma_rad, gamma_rate_radps);
+}
+
+double FlightMotion::heading_rate(double t_s, double phi, double V) const {
+  return phase_at(t_s).coordinated ? g_coord_mps2_ * std::tan(phi) / V : 0.0;
+}
+
 Motion::State FlightMotion::derivative(double t_s, const State& y) const {
-  double phi = 0.0, phi_dot = 0.0;
+  double phi = 0.0, phi_dot = 0.0, V = 0.0, V_dot = 0.0, gam = 0.0, gam_dot = 0.0;
   roll(t_s, phi, phi_dot);
-  const double V = start_.speed_mps;
-  const Vec3 v(V * std::sin(y(0)), V * std::cos(y(0)), 0.0);
+  speed(t_s, V, V_dot);
+  flight_path(t_s, gam, gam_dot);
+  const double ch = V * std::cos(gam);
+  const Vec3 v(ch * std::sin(y(0)), ch * std::cos(y(0)), V * std::sin(gam));
   const Vec3 rate = fsw::llh_rate(Vec3(y(1), y(2), y(3)), v);
   State d = State::Zero();
-  d(0) = g_coord_mps2_ * std::tan(phi) / V;
+  d(0) = heading_rate(t_s, phi, V);
   d(1) = rate.x();
   d(2) = rate.y();
   d(3) = rate.z();
@@ -216,18 +299,22 @@ Motion::State FlightMotion::derivative(double t_s, const State& y) const {
 }
 
 Kinematics FlightMotion::eval(double t_s, const State& y) const {
-  double phi = 0.0, phi_dot = 0.0;
+  double phi = 0.0, phi_dot = 0.0, V = 0.0, V_dot = 0.0, gam = 0.0, gam_dot = 0.0;
   roll(t_s, phi, phi_dot);
-  const double V = start_.speed_mps;
+  speed(t_s, V, V_dot);
+  flight_path(t_s, gam, gam_dot);
   const double psi = y(0);
-  const double psi_dot = g_coord_mps2_ * std::tan(phi) / V;
-  const double theta = start_.pitch_deg * kDegToRad;
+  const double psi_dot = heading_rate(t_s, phi, V);
+  const double theta = start_.pitch_deg * kDegToRad + gam;
+  const double sp = std::sin(psi), cp = std::cos(psi), sg = std::sin(gam), cg = std::cos(gam);
   Kinematics k;
   k.llh = Vec3(y(1), y(2), y(3));
-  k.vel_enu_mps = Vec3(V * std::sin(psi), V * std::cos(psi), 0.0);
-  k.acc_enu_mps2 = Vec3(V * std::cos(psi) * psi_dot, -V * std::sin(psi) * psi_dot, 0.0);
+  k.vel_enu_mps = V * Vec3(cg * sp, cg * cp, sg);
+  // d/dt of V (cos g sin psi, cos g cos psi, sin g).
+  k.acc_enu_mps2 = V_dot * Vec3(cg * sp, cg * cp, sg) + V * gam_dot * Vec3(-sg * sp, -sg * cp, cg) +
+                   V * psi_dot * Vec3(cg * cp, -cg * sp, 0.0);
   k.C_b_n = fsw::C_b_n_from_euler(phi, theta, psi);
-  k.omega_nb_b_radps = fsw::omega_nb_b_from_euler_rates(phi, theta, phi_dot, 0.0, psi_dot);
+  k.omega_nb_b_radps = fsw::omega_nb_b_from_euler_rates(phi, theta, phi_dot, gam_dot, psi_dot);
   return k;
 }
 
@@ -236,7 +323,7 @@ MotionPhase FlightMotion::phase(double t_s) const {
   MotionPhase mp;
   mp.segment = p.segment;
   mp.turn = p.turn;
-  mp.turning = p.kind != FlightPhase::Kind::kStraight;
+  mp.turning = p.turn >= 0;
   return mp;
 }
 

@@ -45,6 +45,8 @@ void register_import(CLI::App& app) {
                   "record); the first sample stays at the tag's start time")
       ->check(CLI::Range(0.99, 1.01));
   sub->add_flag("--keep-temp", opt.imp.keep_temp, "keep convbin's RINEX files (the directory is in the summary)");
+  sub->add_option("--convbin", opt.imp.convbin, "RTKLIB's convbin program, for a u-blox .ubx beside the solution")
+      ->capture_default_str();
 }
 
 int run_import() {

@@ -27,16 +27,22 @@ int run_scenario_check() {
   std::printf("scenario '%s': %.1f s, seed %llu, start %.4f N %.4f E %.0f m, %.1f m/s, heading %.1f deg\n",
               sc.name.c_str(), sc.duration_s, static_cast<unsigned long long>(sc.seed), sc.start.lat_deg,
               sc.start.lon_deg, sc.start.alt_m, sc.start.speed_mps, sc.start.heading_deg);
-  int turns = 0;
+  int turns = 0, manoeuvres = 0, last_segment = -2;
   double turning_s = 0.0;
   for (const auto& p : motion->timeline()) {
     if (p.t0_s >= sc.duration_s) break;
     const double t1 = std::min(p.t1_s, sc.duration_s);
-    if (p.kind != sim::FlightPhase::Kind::kStraight) turning_s += t1 - p.t0_s;
-    if (p.kind == sim::FlightPhase::Kind::kRollIn) ++turns;
+    if (p.turn >= 0) turning_s += t1 - p.t0_s;
+    if (p.turn >= 0 && p.kind == sim::FlightPhase::Kind::kRollIn) ++turns;
+    if (p.segment >= 0 && p.segment != last_segment) {
+      const sim::Segment& s = sc.segments[static_cast<std::size_t>(p.segment)];
+      if (s.type != sim::SegmentType::kStraight && s.type != sim::SegmentType::kTurn) ++manoeuvres;
+    }
+    last_segment = p.segment;
   }
-  std::printf("timeline: %d turns started, %.1f s turning, %.1f s straight; IMU %d Hz, errors %s\n", turns, turning_s,
-              sc.duration_s - turning_s, sc.imu.rate_hz,
+  std::printf("timeline: %d turns started, %.1f s turning, %.1f s otherwise; %d other manoeuvres (speed changes, "
+              "climbs, rolls without turning); IMU %d Hz, errors %s\n",
+              turns, turning_s, sc.duration_s - turning_s, manoeuvres, sc.imu.rate_hz,
               sc.imu.errors == sim::ImuErrorSet::kPaper      ? "paper"
               : sc.imu.errors == sim::ImuErrorSet::kBaseline ? "baseline"
                                                              : "none");

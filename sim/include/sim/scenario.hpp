@@ -13,27 +13,41 @@
 
 namespace sim {
 
-enum class SegmentType { kStraight, kTurn };
+enum class SegmentType { kStraight, kTurn, kSpeedChange, kClimb, kRoll };
+const char* to_string(SegmentType t);
 enum class TurnDirection { kLeft, kRight };
 
-/// One piece of the flight. A turn is a coordinated level bank-to-turn: roll-in over roll_time_s
-/// to bank_deg, constant bank (heading rate g tan(phi) / V, no sideslip), roll-out over
-/// roll_time_s; heading_change_deg counts the heading turned during the whole segment including
-/// the transitions.
+/// One piece of the flight. Every transition has the smooth_step shape (zero rate and
+/// acceleration at both ends).
+///  - straight: duration_s at the current speed, wings level.
+///  - turn: a coordinated level bank-to-turn: roll-in over roll_time_s to bank_deg, constant bank
+///    (heading rate g tan(phi) / V, no sideslip), roll-out over roll_time_s; heading_change_deg
+///    counts the heading turned during the whole segment including the transitions.
+///  - speed_change: wings level, the speed changes by delta_speed_mps over duration_s (a
+///    longitudinal acceleration: what separates an accelerometer x scale factor from a bias).
+///  - climb: pull-up over transition_s to the flight-path angle flight_path_deg (negative: a
+///    push-over into a descent), held for duration_s (0: a pull-up followed at once by a push-over),
+///    back to level over transition_s (body pitch rate and load factor, apart from a turn).
+///  - roll: roll to bank_deg (direction) over roll_time_s, held for duration_s, back over
+///    roll_time_s, with the heading held (not coordinated: the sideslip a pilot flies with rudder):
+///    a roll without turning, which separates roll-rate effects from turn-rate ones.
 struct Segment {
   SegmentType type = SegmentType::kStraight;
-  double duration_s = 60.0;           ///< straight only
-  TurnDirection direction = TurnDirection::kRight;  ///< turn only
-  double bank_deg = 60.0;             ///< turn only, magnitude (0, 80]
-  double heading_change_deg = 180.0;  ///< turn only, magnitude (0, 3600]
-  double roll_time_s = 5.0;           ///< turn only, each of roll-in and roll-out (0, 60]
+  double duration_s = 60.0;           ///< straight, speed_change, climb (hold), roll (hold) [s]
+  TurnDirection direction = TurnDirection::kRight;  ///< turn, roll
+  double bank_deg = 60.0;             ///< turn, roll: magnitude (0, 80] [deg]
+  double heading_change_deg = 180.0;  ///< turn only, magnitude (0, 3600] [deg]
+  double roll_time_s = 5.0;           ///< turn, roll: each of roll-in and roll-out (0, 60] [s]
+  double delta_speed_mps = 50.0;      ///< speed_change: [-400, 400], not 0 [m/s]
+  double flight_path_deg = 10.0;      ///< climb: [-45, 45], not 0 [deg]
+  double transition_s = 10.0;         ///< climb: each of pull-up and push-over (0, 120] [s]
 };
 
 struct StartState {
   double lat_deg = 35.0;
   double lon_deg = 127.0;
   double alt_m = 5000.0;      ///< ellipsoidal height
-  double speed_mps = 250.0;   ///< ground speed, constant during the flight
+  double speed_mps = 250.0;   ///< ground speed at t = 0 (speed_change segments change it)
   double heading_deg = 0.0;   ///< true heading
   double pitch_deg = 0.0;     ///< constant body pitch above the (level) flight path
 };

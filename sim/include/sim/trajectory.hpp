@@ -102,7 +102,10 @@ void imu_from_kinematics(const Kinematics& k, Vec3& omega_ib_b, Vec3& f_b);
 // Motions
 // ------------------------------------------------------------------------------------------------
 
-/// One phase of a flight timeline.
+/// One phase of a flight timeline. Over the phase the speed goes from v0_mps to v1_mps and the
+/// flight-path angle from gamma0_rad to gamma1_rad (smooth_step shape; equal ends: constant); the
+/// bank follows kind. A coordinated phase turns at g tan(phi) / V; an uncoordinated one (a roll
+/// without turning) holds the heading.
 struct FlightPhase {
   enum class Kind { kStraight, kRollIn, kBank, kRollOut };
   Kind kind = Kind::kStraight;
@@ -110,11 +113,14 @@ struct FlightPhase {
   double t1_s = 0.0;
   double bank_rad = 0.0;  ///< signed target bank (+ right)
   int segment = -1;
-  int turn = -1;
+  int turn = -1;          ///< running turn number (coordinated turns only), -1 otherwise
+  double v0_mps = 0.0, v1_mps = 0.0;
+  double gamma0_rad = 0.0, gamma1_rad = 0.0;
+  bool coordinated = true;
 };
 
-/// The scenario flight: level flight at constant speed with coordinated bank-to-turn segments.
-/// ODE state y = (heading, lat, lon, h).
+/// The scenario flight: coordinated bank-to-turn segments, speed changes, climbs (pull-up and
+/// push-over) and rolls without turning (scenario.hpp, Segment). ODE state y = (heading, lat, lon, h).
 class FlightMotion final : public Motion {
  public:
   /// Builds the timeline up to the scenario duration; returns nullptr and an error message when
@@ -129,10 +135,16 @@ class FlightMotion final : public Motion {
   const std::vector<FlightPhase>& timeline() const { return phases_; }
   /// Roll angle [rad] and roll rate [rad/s] at t.
   void roll(double t_s, double& roll_rad, double& roll_rate_radps) const;
+  /// Speed [m/s] and its rate [m/s^2] at t.
+  void speed(double t_s, double& v_mps, double& v_rate_mps2) const;
+  /// Flight-path angle [rad] and its rate [rad/s] at t.
+  void flight_path(double t_s, double& gamma_rad, double& gamma_rate_radps) const;
 
  private:
   FlightMotion() = default;
   const FlightPhase& phase_at(double t_s) const;
+  /// Heading rate [rad/s] at t for roll phi and speed V.
+  double heading_rate(double t_s, double phi, double V) const;
 
   StartState start_{};
   double g_coord_mps2_ = 9.8;  ///< gravity used by the coordination law g tan(phi) / V
