@@ -1,4 +1,4 @@
-// sdins audit stack | timing: the flight-software audits of README "Audits".
+// sdins audit stack | timing: the flight-software audits of docs/audits.md.
 //
 //   stack   builds fsw/ in the stack-audit configuration (preset stack-audit: GCC, Release flags,
 //           -fstack-usage -fcallgraph-info=su), checks the instrument on its fixtures, computes the
@@ -289,7 +289,7 @@ int run_audit_timing() {
                 l.sats_min, l.sats_median, l.sats_max, l.wall_s);
   std::printf("\nStatistics leave out the samples during which the thread was switched out (preempted); jitter is the "
               "start delay on one core at real time with these execution times (SIL releases are exact in virtual "
-              "time); see README \"Audits\".\n");
+              "time); see docs/audits.md.\n");
 
   if (!timing_opt.json.empty()) {
     nlohmann::json j;

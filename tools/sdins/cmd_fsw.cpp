@@ -43,7 +43,7 @@ void register_fsw(CLI::App& app) {
       ->check(CLI::Range(1, 99));
   sub->add_option("--idle-timeout", opt.idle_timeout_s, "stop after this long without frames [s] (default 5)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--json", opt.json, "write the summary as JSON (fields in README)");
+  sub->add_option("--json", opt.json, "write the summary as JSON (fields: docs/running.md)");
 }
 
 int run_fsw() {

@@ -21,7 +21,7 @@ void register_import(CLI::App& app) {
       "import",
       "Convert a recording into an LCM log: IMU (body axes x forward, y right, z down; increments), GNSS_RAW "
       "(pseudorange + rate) with GPS_ALMANAC fitted to the broadcast ephemeris, GNSS_PVT solutions and the RTK "
-      "reference on TRUTH; t_s on the GPS time scale (README \"Importing recorded data\").");
+      "reference on TRUTH; t_s on the GPS time scale (docs/import.md).");
   sub->add_option("FORMAT", opt.imp.format,
                   "rtklib: an RTKLIB .pos, an IMU CSV with its .tag, optionally a u-blox .ubx (through convbin); "
                   "psins: imu_200hz.csv, gps_obs.csv, gps_eph.csv")
