@@ -97,7 +97,8 @@ void register_diagnose(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--filter-config", opt.filter_config,
                   "filter configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
-                  "(raw or solutions), initialisation, priors and outage pattern of the diagnosis");
+                  "(raw or solutions), initialisation, priors and outage pattern of the diagnosis (default: none, the "
+                  "simulated aircraft's configuration)");
 }
 
 int run_diagnose() {
