@@ -29,7 +29,7 @@ def skip(why):
 for d in ("gnss-imu-drive", "gnss-imu-walk", "psins-tc"):
     if not os.path.isdir(os.path.join(data, d)):
         skip(f"data set {os.path.join(data, d)} is missing (the shared data directory is read in place, "
-             "see docs/data.md; override with -DSDINS_SHARED_DATA_DIR)")
+             "see README 'Data'; override with -DSDINS_SHARED_DATA_DIR)")
 if shutil.which("convbin") is None:
     skip("RTKLIB's convbin is not installed (Debian package rtklib, in tools/setup)")
 
