@@ -1,4 +1,4 @@
-# The stack-audit build (`sdins audit stack`, README "Audits"; configure preset `stack-audit`):
+# The stack-audit build (`sdins audit stack`, docs/audits.md; configure preset `stack-audit`):
 # fsw/ compiled with GCC's per-function stack usage (.su) and call graph (.ci), plus the task
 # entry wrappers (fsw/audit/stack_entries.cpp) and the audit's self-check fixtures
 # (tests/stack/stack_fixtures.cpp), with the same flags. Nothing here is linked: the audit reads

@@ -1,6 +1,6 @@
 # CMake toolchain file: bare-metal Cortex-M7 with double-precision FPU (e.g. STM32H7), Debian's
 # gcc-arm-none-eabi with newlib (libnewlib-arm-none-eabi, libstdc++-arm-none-eabi-newlib), no OS.
-# Used by the configure preset arm-cortex-m7 (README "Bare-metal build").
+# Used by the configure preset arm-cortex-m7 (docs/baremetal.md).
 set(CMAKE_SYSTEM_NAME Generic)
 set(CMAKE_SYSTEM_PROCESSOR arm)
 

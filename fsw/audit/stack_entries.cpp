@@ -1,4 +1,4 @@
-// Task entry points for the stack audit (sdins audit stack; README "Audits"). Compiled only in
+// Task entry points for the stack audit (sdins audit stack; docs/audits.md). Compiled only in
 // the stack-audit build (-DSDINS_STACK_AUDIT=ON, cmake/StackAudit.cmake), never linked into a
 // program.
 //

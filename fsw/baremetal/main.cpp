@@ -1,4 +1,4 @@
-// Bare-metal entry of the fsw image (README "Bare-metal build"): the rate-group executive with the
+// Bare-metal entry of the fsw image (docs/baremetal.md): the rate-group executive with the
 // paper's 24-state and 15-state filters, statically allocated, fed a stationary IMU (gravity and
 // Earth rate at the initial position) and a 1 Hz GNSS epoch of six satellites whose pseudoranges
 // and rates come from fsw::gnss_geometry at that position. One tick per 5 ms minor frame; a real

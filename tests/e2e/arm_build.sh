@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Bare-metal build gate (README "Bare-metal build"): configures and builds the arm-cortex-m7 preset
+# Bare-metal build gate (docs/baremetal.md): configures and builds the arm-cortex-m7 preset
 # (fsw/ only, gcc-arm-none-eabi, newlib-nano) and checks the image: Cortex-M7 hard-float
 # attributes, the executive of both paper layouts linked, the vector table at the start of flash,
 # no heap allocator; prints flash and RAM from arm-none-eabi-size.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Stack budget gate (README "Audits"): `sdins audit stack` builds fsw/ in the stack-audit
+# Stack budget gate (docs/audits.md): `sdins audit stack` builds fsw/ in the stack-audit
 # configuration and computes each task's worst-case stack. This test checks the JSON report's
 # structure and consistency, then FAILS when any task is unbounded or over its budget, listing
 # those tasks with their numbers, the reasons and the deepest call path.

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # End to end: a measured-data log with a hidden effect (`sdins sim --effect`) is diagnosed by
-# `sdins diagnose` without being told: the JSON (README "Diagnosis") names the effect first with
+# `sdins diagnose` without being told: the JSON (docs/diagnosis.md) names the effect first with
 # an estimate within 3 sigma and 30 % of the truth and a positive likelihood gain, the report has
 # its markdown and plots; a log without the effect gives no finding; a log that is not a log is
 # refused with a message.

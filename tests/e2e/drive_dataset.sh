@@ -41,7 +41,7 @@ assert d["gnss_source"] == "pvt"
 f = d["findings"]
 assert f, "no finding"
 # The timing between the IMU log and the GNSS solutions is the strongest finding on this drive:
-# the tag file's time scale runs the IMU clock ~240 ppm fast (README worked example).
+# the tag file's time scale runs the IMU clock ~240 ppm fast (docs/datasets/gnss-imu-drive.md).
 assert f[0]["effect"] == "imu_clock_drift", f[0]
 assert 80 < f[0]["estimate"] < 400 and f[0]["sigma"] < 40, f[0]
 o = d["gain"]["outages"]

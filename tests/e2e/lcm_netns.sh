@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the LcmNetns.* unit tests inside a fresh network namespace (`unshare -n`: loopback only, no
-# routes), the situation the README's multicast route is for.
+# routes), the situation the multicast route in docs/lcm.md is for.
 #   no-route:        as created: LCM udpm cannot be created -> log-only fallback.
 #   loopback-route:  lo up + `ip route add 224.0.0.0/4 dev lo` -> udpm works on loopback.
 # Exit 77 (skipped) when namespaces cannot be created here (needs root / CAP_SYS_ADMIN).

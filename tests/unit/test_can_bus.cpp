@@ -358,7 +358,7 @@ std::string usable_udp_bus(int port, std::string& why) {
   if (host_multicast_works(hal::kUdpDefaultGroupV4, port, why4))
     return std::string("udp:") + hal::kUdpDefaultGroupV4 + ":" + std::to_string(port);
   why = "no multicast delivery on this host (IPv6: " + why6 + "; IPv4: " + why4 +
-        "); see README: ip link set lo multicast on; ip route add 224.0.0.0/4 dev lo";
+        "); see docs/can.md: ip link set lo multicast on; ip route add 224.0.0.0/4 dev lo";
   return "";
 }
 

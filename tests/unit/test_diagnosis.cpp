@@ -38,7 +38,7 @@ constexpr Hidden kSeparable[] = {
     {"antenna_lever_arm", "z", 0.5, 1.5},
     {"accel_scale_factor", "z", 400.0, 800.0},
 };
-/// Detectable, but each is one of a group this flight cannot tell apart (README "Diagnosis"):
+/// Detectable, but each is one of a group this flight cannot tell apart (docs/diagnosis.md):
 /// gyro scale factors x, y, z (the turns rotate about all three in fixed proportion), gyro
 /// misalignments yz, zy and the z gyro's g-sensitivity (pitch rate and load factor come together).
 constexpr Hidden kConfounded[] = {

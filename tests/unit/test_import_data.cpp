@@ -161,7 +161,7 @@ namespace {
 // The drive's IMU time scale: by default the tag file's (its start time and last record: 1.000257
 // GPS s per IMU-clock s, as the data set's source maps it); --imu-clock-ratio replaces the rate and
 // keeps the first sample at the start time. With 1 (the IMU's own millisecond tick) the diagnosis'
-// drifting IMU-GNSS time offset of the default import disappears (README worked example).
+// drifting IMU-GNSS time offset of the default import disappears (docs/datasets/gnss-imu-drive.md).
 TEST(ImportData, DriveImuClockRatioReplacesTheTagFilesRate) {
   if (!fs::exists(kData + "/gnss-imu-drive")) GTEST_SKIP() << "no recording " << kData << "/gnss-imu-drive (set SDINS_RECORDINGS_DIR, docs/data.md)";
   const Imported tag = import_and_read("rtklib", "gnss-imu-drive", "drive_tag");

@@ -1,4 +1,4 @@
-// sdins audit stack | timing: the flight-software audits of README "Audits".
+// sdins audit stack | timing: the flight-software audits of docs/audits.md.
 //
 //   stack   builds fsw/ in the stack-audit configuration (preset stack-audit: GCC, Release flags,
 //           -fstack-usage -fcallgraph-info=su), checks the instrument on its fixtures, computes the
@@ -324,7 +324,7 @@ int run_audit_timing() {
                 l.sats_min, l.sats_median, l.sats_max, l.wall_s);
   std::printf("\nStatistics leave out the samples during which the thread was switched out (preempted); jitter is the "
               "start delay on one core at real time with these execution times (SIL releases are exact in virtual "
-              "time); see README \"Audits\".\n");
+              "time); see docs/audits.md.\n");
 
   if (!timing_opt.json.empty()) {
     nlohmann::json j;
@@ -389,20 +389,21 @@ void register_audit(CLI::App& app) {
       "dynamic frames and heap calls as unbounded, and reports the static RAM of the fsw library. Exit status 3 when "
       "a task is over budget or unbounded.");
   g_stack->add_option("--json", stack_opt.json, "write the report as JSON");
-  g_stack->add_option("--budget", stack_opt.budget_bytes, "stack budget per task [bytes]")->check(CLI::Range(1L, 1L << 30));
+  g_stack->add_option("--budget", stack_opt.budget_bytes, "stack budget per task [bytes]")->capture_default_str()->check(CLI::Range(1L, 1L << 30));
   g_stack->add_option("--build-dir", stack_opt.build_dir, "stack-audit build directory (default: <source>/build/stack-audit)");
   g_stack->add_option("--source-dir", stack_opt.source_dir,
                       "the project's source tree to build (default: the current directory or a parent of it when it "
                       "is the source tree, else the source of the build tree sdins runs from)");
   g_stack->add_flag("--no-build", stack_opt.no_build, "analyse the build directory as it is (no configure/build)");
-  g_stack->add_option("--jobs", stack_opt.jobs, "parallel compile jobs")->check(CLI::Range(1, 64));
+  g_stack->add_option("--jobs", stack_opt.jobs, "parallel compile jobs")->capture_default_str()->check(CLI::Range(1, 64));
   g_timing = audit->add_subcommand(
       "timing",
       "Flies a scenario through the fsw executive of each layout (SIL: truth -> IMU/GPS models -> Executive::tick) "
       "and reports per task execution time min/median/p99/p99.9/max, release jitter and the share of one core at "
       "real time.");
   add_scenario_options(g_timing, timing_opt.scenario);
-  g_timing->add_option("--layouts", timing_opt.layouts, "comma-separated: Layout15, Layout24, Layout15Full, Layout24Full");
+  g_timing->add_option("--layouts", timing_opt.layouts, "comma-separated: Layout15, Layout24, Layout15Full, Layout24Full")
+      ->capture_default_str();
   g_timing->add_option("--json", timing_opt.json, "write the report as JSON");
 }
 

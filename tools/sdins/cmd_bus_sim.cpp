@@ -35,13 +35,16 @@ void register_bus_sim(CLI::App& app) {
   mode->add_flag("--lockstep", opt.lockstep, "wait for FSW_ACK: never more than --window IMU samples ahead");
   mode->add_flag("--realtime", opt.realtime, "pace the IMU samples on CLOCK_MONOTONIC (clock_nanosleep)");
   mode->require_option(1);
-  sub->add_option("--window", opt.window, "lockstep: IMU samples allowed beyond the last acknowledged (default 200)")
+  sub->add_option("--window", opt.window, "lockstep: IMU samples allowed beyond the last acknowledged [samples]")
+      ->capture_default_str()
       ->check(CLI::Range(1, 65535));
-  sub->add_option("--speed", opt.speed, "realtime: time factor (2 = twice as fast)")->check(CLI::PositiveNumber);
-  sub->add_option("--pace-every", opt.pace_every, "realtime: sleep before every N-th IMU sample (default 1)")
+  sub->add_option("--speed", opt.speed, "realtime: time factor (2 = twice as fast)")->capture_default_str()->check(CLI::PositiveNumber);
+  sub->add_option("--pace-every", opt.pace_every, "realtime: sleep before every N-th IMU sample [samples]")
+      ->capture_default_str()
       ->check(CLI::Range(1, 1000));
   sub->add_option("--ack-timeout", opt.ack_timeout_s,
-                  "give up when no flight software answers / acknowledges for this long [s] (default 10)")
+                  "give up when no flight software answers / acknowledges for this long [s]")
+      ->capture_default_str()
       ->check(CLI::PositiveNumber);
   sub->add_option("--json", opt.json, "write the run's counters as JSON");
 }

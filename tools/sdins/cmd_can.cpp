@@ -354,7 +354,7 @@ void register_can(CLI::App& app) {
   g_encode->add_option("--expected", opt.expected,
                        "also write a CSV of the physical value every signal must decode to (line,message,signal,"
                        "value,tolerance), from the encoder's inputs");
-  g_encode->add_option("--iface", opt.iface, "interface name in the log (default can0)");
+  g_encode->add_option("--iface", opt.iface, "interface name in the log")->capture_default_str();
 
   g_dump = can->add_subcommand("dump", "Decode frames from a bus (--can) or a candump log (--log) and print the "
                                        "physical values, then the receive health counters.");
@@ -362,24 +362,24 @@ void register_can(CLI::App& app) {
   src->add_option("--can", opt.bus, "bus to listen on");
   src->add_option("--log", opt.log, "candump log to decode");
   src->require_option(1);
-  g_dump->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent / the log ends)");
-  g_dump->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the dump [s] (default 2)");
+  g_dump->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent / the log ends)")->capture_default_str();
+  g_dump->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the dump [s]")->capture_default_str();
   g_dump->add_flag("--quiet", opt.quiet, "print only the counters");
 
   g_record = can->add_subcommand("record", "Record frames from a bus into a candump log.");
   g_record->add_option("--can", opt.bus, "bus to listen on")->required();
   g_record->add_option("--out", opt.out, "candump log to write")->required();
-  g_record->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent)");
-  g_record->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the recording [s] (default 2)");
-  g_record->add_option("--iface", opt.iface, "interface name in the log (default can0)");
+  g_record->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent)")->capture_default_str();
+  g_record->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the recording [s]")->capture_default_str();
+  g_record->add_option("--iface", opt.iface, "interface name in the log")->capture_default_str();
 
   g_play = can->add_subcommand("play", "Send the frames of a candump log onto a bus.");
   g_play->add_option("log", opt.log, "candump log")->required();
   g_play->add_option("--can", opt.bus, "bus to send on")->required();
-  g_play->add_option("--count", opt.count, "send only the first N frames");
+  g_play->add_option("--count", opt.count, "send only the first N frames (0: all)")->capture_default_str();
   g_play->add_flag("--realtime", opt.realtime, "pace the frames by the log's timestamps");
-  g_play->add_option("--speed", opt.speed, "with --realtime: time factor (2 = twice as fast)")->check(CLI::PositiveNumber);
-  g_play->add_option("--gap", opt.gap_s, "without --realtime: pause between frames [s]")->check(CLI::NonNegativeNumber);
+  g_play->add_option("--speed", opt.speed, "with --realtime: time factor (2 = twice as fast)")->capture_default_str()->check(CLI::PositiveNumber);
+  g_play->add_option("--gap", opt.gap_s, "without --realtime: pause between frames [s]")->capture_default_str()->check(CLI::NonNegativeNumber);
 }
 
 int run_can() {

@@ -1,5 +1,5 @@
 // sdins diagnose: which error the navigation model is missing in a recording, how large it is,
-// and how much better navigation gets with it (tools/diagnosis.hpp, README "Diagnosis").
+// and how much better navigation gets with it (tools/diagnosis.hpp, docs/diagnosis.md).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -86,7 +86,7 @@ void register_diagnose(CLI::App& app) {
       "chi-square test at a stated family-wise false-alarm rate, names the significant ones (and those the data "
       "cannot tell apart), re-runs with the extended model and measures the gain.");
   sub->add_option("--log", opt.log, "LCM log to diagnose")->required()->check(CLI::ExistingFile);
-  sub->add_option("--json", opt.json, "write the result as JSON (README \"Diagnosis\")")->required();
+  sub->add_option("--json", opt.json, "write the result as JSON (docs/diagnosis.md)")->required();
   sub->add_option("--report", opt.report, "write a markdown report with plots and CSV traces into this directory");
   sub->add_option("--baseline", opt.baseline,
                   "baseline model: 15 (position, velocity, attitude, biases) or 24 (plus the 9 misalignments)")
@@ -97,7 +97,8 @@ void register_diagnose(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--filter-config", opt.filter_config,
                   "filter configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
-                  "(raw or solutions), initialisation, priors and outage pattern of the diagnosis");
+                  "(raw or solutions), initialisation, priors and outage pattern of the diagnosis (default: none, the "
+                  "simulated aircraft's configuration)");
 }
 
 int run_diagnose() {

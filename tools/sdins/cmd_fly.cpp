@@ -24,7 +24,7 @@ void register_fly(CLI::App& app) {
       "fly", "Free-inertial flight of a scenario: truth simulator -> IMU error model -> fsw 200 Hz mechanization, "
              "no aiding. Prints position/velocity/attitude error against truth every 60 s.");
   add_scenario_options(sub, opt.scenario);
-  sub->add_option("--errors", opt.errors, "override the IMU error set")->check(CLI::IsMember({"paper", "baseline", "none"}));
+  sub->add_option("--errors", opt.errors, "override the IMU error set (default: the scenario's)")->check(CLI::IsMember({"paper", "baseline", "none"}));
   sub->add_option("--csv", opt.csv, "write the 1 Hz error history to this CSV file");
 }
 

@@ -33,17 +33,19 @@ void register_fsw(CLI::App& app) {
       "fsw", "Run the flight software fed by a CAN bus (IMU and GPS frames of hal/can/sdins.dbc), with LCM "
              "telemetry and log; answers `sdins bus-sim` with FSW_ACK. Exit 0: end of run; 2: silent bus.");
   sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT")->required();
-  sub->add_option("--model", opt.model, "filter model: 15 or 24 (default 24)")->check(CLI::IsMember({"15", "24"}));
+  sub->add_option("--model", opt.model, "filter model: 15 or 24")->check(CLI::IsMember({"15", "24"}))->capture_default_str();
   sub->add_option("--log", opt.log, "write an LCM log (inputs and outputs)");
   sub->add_option("--lcm-url", opt.lcm_url,
                   "LCM telemetry URL (default $LCM_DEFAULT_URL or udpm://239.255.76.67:7667?ttl=0; none: off)");
   sub->add_flag("--realtime", opt.realtime,
                 "real-time mode: SCHED_FIFO when permitted, minor-frame execution times (overruns), IMU lateness");
-  sub->add_option("--fifo-priority", opt.fifo_priority, "realtime: SCHED_FIFO priority (default 50)")
+  sub->add_option("--fifo-priority", opt.fifo_priority, "realtime: SCHED_FIFO priority")
+      ->capture_default_str()
       ->check(CLI::Range(1, 99));
-  sub->add_option("--idle-timeout", opt.idle_timeout_s, "stop after this long without frames [s] (default 5)")
+  sub->add_option("--idle-timeout", opt.idle_timeout_s, "stop after this long without frames [s]")
+      ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  sub->add_option("--json", opt.json, "write the summary as JSON (fields in README)");
+  sub->add_option("--json", opt.json, "write the summary as JSON (fields: docs/running.md)");
 }
 
 int run_fsw() {

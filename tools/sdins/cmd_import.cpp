@@ -21,7 +21,7 @@ void register_import(CLI::App& app) {
       "import",
       "Convert a recording into an LCM log: IMU (body axes x forward, y right, z down; increments), GNSS_RAW "
       "(pseudorange + rate) with GPS_ALMANAC fitted to the broadcast ephemeris, GNSS_PVT solutions and the RTK "
-      "reference on TRUTH; t_s on the GPS time scale (README \"Importing recorded data\").");
+      "reference on TRUTH; t_s on the GPS time scale (docs/import.md).");
   sub->add_option("FORMAT", opt.imp.format,
                   "rtklib: an RTKLIB .pos, an IMU CSV with its .tag, optionally a u-blox .ubx (through convbin); "
                   "psins: imu_200hz.csv, gps_obs.csv, gps_eph.csv")
@@ -35,13 +35,15 @@ void register_import(CLI::App& app) {
                   "z up; psins y,x,-z, Right-Front-Up)");
   sub->add_option("--truth-max-q", opt.imp.truth_max_quality,
                   "solutions with RTKLIB Q from 1 to this also go on TRUTH as the reference (1: RTK fixed only)")
+      ->capture_default_str()
       ->check(CLI::Range(0, 7));
   sub->add_option("--max-fit-error", opt.imp.max_fit_error_m,
-                  "largest position + clock error [m] of an almanac fitted to the broadcast ephemeris that is written");
+                  "largest position + clock error [m] of an almanac fitted to the broadcast ephemeris that is written")
+      ->capture_default_str();
   sub->add_flag("--clip-gnss-to-imu", opt.imp.clip_gnss_to_imu,
                 "keep GNSS epochs and solutions only within the IMU's time span (+-1 s)");
   sub->add_option("--imu-clock-ratio", opt.imp.imu_clock_ratio,
-                  "rtklib IMU logs: GPS seconds per IMU-clock second (default: from the .tag file's start and last "
+                  "rtklib IMU logs: GPS seconds per IMU-clock second [s/s] (default: from the .tag file's start and last "
                   "record); the first sample stays at the tag's start time")
       ->check(CLI::Range(0.99, 1.01));
   sub->add_flag("--keep-temp", opt.imp.keep_temp, "keep convbin's RINEX files (the directory is in the summary)");

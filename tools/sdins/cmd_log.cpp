@@ -260,14 +260,16 @@ void register_log(CLI::App& app) {
               "the reader's and decoders' rejection counts (truncated or corrupted logs are read past the damage).");
   info_cmd->add_option("log", opt.log, "LCM log file")->required();
   info_cmd->add_flag("--json", opt.json, "print the summary as JSON");
-  info_cmd->add_option("--show-rejections", opt.show_rejections, "list at most this many rejections with their offsets");
+  info_cmd->add_option("--show-rejections", opt.show_rejections, "list at most this many rejections with their offsets")
+      ->capture_default_str();
   export_cmd = sub->add_subcommand(
       "export", "Write one channel of a log as CSV: one row per message, a header of field names carrying their units "
                 "(arrays as name[i]; array slots beyond a count field are empty cells).");
   export_cmd->add_option("log", opt.log, "LCM log file")->required();
   export_cmd->add_option("--channel", opt.channel, "channel to export, e.g. NAV_SOLUTION")->required();
   export_cmd->add_option("--csv", opt.csv, "output CSV file")->required();
-  export_cmd->add_option("--show-rejections", opt.show_rejections, "list at most this many reader rejections");
+  export_cmd->add_option("--show-rejections", opt.show_rejections, "list at most this many reader rejections")
+      ->capture_default_str();
 }
 
 int run_log() {

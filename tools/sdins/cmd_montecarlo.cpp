@@ -46,18 +46,16 @@ void register_montecarlo(CLI::App& app) {
       "montecarlo",
       "Monte Carlo of the tightly coupled GPS/INS filters: N seeded runs (seed = scenario seed + run index) of the "
       "scenario through the fsw executive, on all cores; writes per-epoch statistics across runs (residual attitude "
-      "error mean and 1-sigma, filter sigma, position/velocity RMS, NEES) and summary.json."
-#if SDINS_WITH_MPI
-      " Under mpirun -np K the runs are split across the K ranks and rank 0 writes the (identical) results."
-#endif
-      );
+      "error mean and 1-sigma, filter sigma, position/velocity RMS, NEES) and summary.json. In a build with MPI, "
+      "under mpirun -np K the runs are split across the K ranks and rank 0 writes the (identical) results.");
   add_scenario_options(sub, opt.scenario);
-  sub->add_option("--runs", opt.runs, "number of runs")->check(CLI::Range(1, 100000));
-  sub->add_option("--models", opt.models, "filters to run on the same data: 15, 24 or 15,24");
+  sub->add_option("--runs", opt.runs, "number of runs")->check(CLI::Range(1, 100000))->capture_default_str();
+  sub->add_option("--models", opt.models, "filters to run on the same data: 15, 24 or 15,24")->capture_default_str();
   sub->add_option("--threads", opt.threads,
                   "worker threads per process (0: all cores; under mpirun with more than one rank: 1 per rank)")
-      ->check(CLI::Range(0, 1024));
-  sub->add_option("--out", opt.out, "output directory");
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  sub->add_option("--out", opt.out, "output directory")->capture_default_str();
 }
 
 int run_montecarlo() {

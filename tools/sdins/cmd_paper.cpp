@@ -178,7 +178,7 @@ void register_paper(CLI::App& app) {
   add_scenario_options(sub, opt.scenario);
   sub->add_option("--runs", opt.runs, "runs per case")->check(CLI::Range(2, 100000))->capture_default_str();
   sub->add_option("--levels", opt.levels, "gyro misalignment 1-sigma levels [arcsec]")->delimiter(',')->capture_default_str();
-  sub->add_option("--threads", opt.threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024));
+  sub->add_option("--threads", opt.threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   sub->add_option("--out", opt.out, "output directory")->capture_default_str();
   sub->add_flag("!--no-plots", opt.plots, "skip the PNG figures (matplotlib)");
   sub->add_flag("!--no-analysis", opt.analysis, "skip the section-II analysis");

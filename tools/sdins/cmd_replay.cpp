@@ -30,7 +30,8 @@ void register_replay(CLI::App& app) {
   add_fsw_run_options(sub, opt.run, "none");
   sub->add_option("--outages", opt.outages,
                   "withhold GNSS (raw epochs and solutions) for LENGTH s every PERIOD s from FIRST s after the "
-                  "initialisation, to score the coasting solution against a reference (LENGTH PERIOD FIRST)")
+                  "initialisation, to score the coasting solution against a reference (LENGTH PERIOD FIRST [s]; default: "
+                  "none)")
       ->expected(3);
 }
 

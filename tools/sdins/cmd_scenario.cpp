@@ -16,7 +16,7 @@ void register_scenario(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "scenario", "Check a scenario TOML file (unknown keys and bad values are reported with their line) and print "
                   "the flight timeline it produces. Without FILE: the built-in bank-to-turn scenario.");
-  sub->add_option("file", opt.file, "scenario TOML file");
+  sub->add_option("file", opt.file, "scenario TOML file (default: the built-in bank-to-turn scenario)");
 }
 
 int run_scenario_check() {

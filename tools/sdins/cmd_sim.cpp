@@ -132,7 +132,7 @@ void register_sim(CLI::App& app) {
                   "switch a truth-side effect on, NAME[.COMPONENT]=VALUE in catalogue units (repeatable; on top of "
                   "the scenario's effects, replacing the scenario's value of the same component)")
       ->allow_extra_args(false);
-  sub->add_option("--truth-rate", opt.truth_rate_hz, "TRUTH samples per second; must divide the IMU rate")
+  sub->add_option("--truth-rate", opt.truth_rate_hz, "TRUTH samples per second [Hz]; must divide the IMU rate")
       ->check(CLI::Range(1.0, 1000.0))
       ->capture_default_str();
 }

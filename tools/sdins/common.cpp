@@ -23,8 +23,8 @@ sim::Scenario ScenarioOptions::load() const {
 
 void add_scenario_options(CLI::App* sub, ScenarioOptions& opt) {
   sub->add_option("--scenario", opt.file, "scenario TOML file (default: built-in bank-to-turn)");
-  sub->add_option("--duration", opt.duration_s, "override the scenario duration [s]")->check(CLI::Range(0.001, 86400.0));
-  sub->add_option("--seed", opt.seed, "override the scenario seed")
+  sub->add_option("--duration", opt.duration_s, "override the scenario duration [s] (default: the scenario's)")->check(CLI::Range(0.001, 86400.0));
+  sub->add_option("--seed", opt.seed, "override the scenario seed (default: the scenario's)")
       ->check(CLI::Range(0LL, std::numeric_limits<long long>::max()));
 }
 
@@ -56,13 +56,13 @@ void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& d
                   "LCM URL for live telemetry (empty: $LCM_DEFAULT_URL or udpm://239.255.76.67:7667?ttl=0; "
                   "'none': no network)")
       ->capture_default_str();
-  sub->add_option("--nav-decimation", opt.nav_decimation, "NAV_SOLUTION every n-th 200 Hz frame")
+  sub->add_option("--nav-decimation", opt.nav_decimation, "NAV_SOLUTION every n-th 200 Hz frame [frames]")
       ->check(CLI::Range(1, 200))
       ->capture_default_str();
   sub->add_option("--json", opt.json, "write the end-of-run summary as JSON");
   sub->add_option("--filter-config", opt.filter_config,
                   "filter configuration TOML (config/README.md; e.g. config/datasets/gnss-imu-drive.toml) applied on "
-                  "top of the simulated aircraft's defaults");
+                  "top of the simulated aircraft's defaults (default: none, the defaults alone)");
 }
 
 std::string shell_quote(const std::string& s) {

@@ -1,6 +1,6 @@
 // The sdins CAN FD protocol for the IMU and the GPS receiver: identifiers, signal scaling, the
 // frame encoders and decoders. hal/can/sdins.dbc is the same protocol in DBC form (the two are
-// kept identical by the canmatrix test in tests/e2e/can_canmatrix.py); README "CAN bus" explains
+// kept identical by the canmatrix test in tests/e2e/can_canmatrix.py); docs/can.md explains
 // the choices.
 //
 // All frames are CAN FD with bit rate switch, 11-bit identifiers, little-endian (Intel) signals,
@@ -18,7 +18,7 @@
 //   0x040  SIM_CONTROL   32  run start / end   bus simulator -> fsw: run id, mode, window, seed, totals
 //   0x041  FSW_ACK       24  every minor frame fsw -> bus simulator: IMU frames / frames consumed
 //
-// SIM_CONTROL and FSW_ACK are the lockstep flow control of HIL runs (README "Lockstep protocol");
+// SIM_CONTROL and FSW_ACK are the lockstep flow control of HIL runs (docs/running.md, "Lockstep protocol");
 // they carry no sensor data, so the receive assembler only counts them (control_frames) and
 // hal::CanFswInput takes them out before it. Their IDs are the lowest priority on the bus: a
 // control frame never delays a sensor frame in arbitration.

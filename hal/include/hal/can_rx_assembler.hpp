@@ -3,7 +3,7 @@
 // or a value was not passed on. Fixed-capacity queues, no allocation, no exceptions, no clock
 // (the caller passes frame receive times and the current time for the epoch timeout).
 //
-// Rules (README "CAN bus" has the table):
+// Rules (docs/can.md has the table):
 //  - Every frame is checked for identifier, length and CRC; failures are counted and dropped.
 //  - IMU: the sample counter must advance by one. A jump forward is a dropout: the frame is
 //    delivered and the missing samples are counted. A counter already delivered (the last 64 are

@@ -1,6 +1,5 @@
 // The LCM channel names of the project, in one place. Every process that publishes or logs uses
-// these names; the message type of each channel is in hal/lcm/*.lcm (README "LCM telemetry and
-// logs").
+// these names; the message type of each channel is in hal/lcm/*.lcm (docs/lcm.md).
 #pragma once
 
 namespace hal {

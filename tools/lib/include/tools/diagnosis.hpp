@@ -1,7 +1,7 @@
 // Diagnosis of measured data: which error the navigation model is missing, how large it is, and
 // how much better navigation gets once the model includes it (`sdins diagnose`).
 //
-// METHOD (README "Diagnosis")
+// METHOD (docs/diagnosis.md)
 //   The candidates are the components of the effect catalogue (fsw/effect_catalogue.hpp): every
 //   component is one state of the diagnosis model fsw::LayoutDiag, switched on by giving it a
 //   prior sigma (DiagnosisConfig::prior) and off by freezing it at zero.

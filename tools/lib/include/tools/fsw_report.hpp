@@ -1,5 +1,5 @@
 // The end-of-run summary of a flight-software node as JSON (`sdins sil/fsw/replay --json`), one
-// format for every way of running the flight software (fields documented in README).
+// format for every way of running the flight software (fields documented in docs/running.md).
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -1,5 +1,4 @@
-// Importing recorded data into the project's LCM log format (`sdins import`, README "Importing
-// recorded data").
+// Importing recorded data into the project's LCM log format (`sdins import`, docs/import.md).
 //
 // The readers take streams (or bytes) so that the tests can feed them hand-made lines; each counts
 // every line it could not use under a reason (LineStats) and never throws for bad data lines. A

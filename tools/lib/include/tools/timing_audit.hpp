@@ -1,4 +1,4 @@
-// Timing audit of the flight-software tasks (`sdins audit timing`, README "Audits"): the fsw
+// Timing audit of the flight-software tasks (`sdins audit timing`, docs/audits.md): the fsw
 // executive flies a whole scenario on the SIL wiring of the Monte Carlo (truth simulator -> IMU and
 // GPS error models -> Executive<Layout>::tick, run 0's seed) and every tick is timed with the
 // steady clock.
