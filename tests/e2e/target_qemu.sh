@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# The Cortex-M7 image runs, in QEMU (docs/baremetal-qemu.md; issue 16). Builds the bare-metal image
+# for QEMU's mps2-an500 (preset arm-cortex-m7, target sdins_fsw_mps2), records a short simulated
+# bank-to-turn flight with GNSS (`sdins sil`, its LCM log -> `sdins_target record`), runs the image
+# on it under qemu-system-arm -icount shift=0 with a time limit, runs the host replay of the same
+# input (`sdins_target replay`: the same replay source on the host's sdins_fsw), checks the host
+# replay against HIL's own replay of the log (`sdins replay`: the same navigation digest), compares
+# the image's output with the host's field by field and writes the JSON report:
+#   matches_host, frames, max_abs_diff per field, instructions (worst 200 Hz frame, worst 1 Hz epoch,
+#   the budget), qemu version, fpu registers, compile flags.
+# Fails on a mismatch, a QEMU failure or timeout, or an instruction count over the budget.
+# Usage: target_qemu.sh SOURCE_DIR SDINS SDINS_TARGET OUTDIR [DURATION_S]
+set -euo pipefail
+src=${1:?usage: target_qemu.sh SOURCE_DIR SDINS SDINS_TARGET OUTDIR [DURATION_S]}
+sdins=${2:?}; sdins_target=${3:?}; out=${4:?}; duration=${5:-40}
+qemu=${SDINS_QEMU:-qemu-system-arm}
+command -v "$qemu" > /dev/null || { echo "$qemu not found (Debian: qemu-system-arm; tools/setup)"; exit 1; }
+command -v arm-none-eabi-g++ > /dev/null || { echo "arm-none-eabi-g++ not found (tools/setup)"; exit 1; }
+rm -rf "$out" && mkdir -p "$out"
+sdins=$(realpath "$sdins"); sdins_target=$(realpath "$sdins_target")
+
+# 1. The image (fsw/ for the Cortex-M7 with the mps2-an500 board port).
+(cd "$src" && cmake --preset arm-cortex-m7 > "$out/arm_configure.log" &&
+ cmake --build --preset arm-cortex-m7 --target sdins_fsw_mps2 > "$out/arm_build.log") ||
+  { tail -n 30 "$out/arm_build.log" 2>/dev/null; echo "the arm-cortex-m7 build failed"; exit 1; }
+elf="$src/build/arm-cortex-m7/fsw/baremetal/sdins_fsw_mps2.elf"
+[ -s "$elf" ] || { echo "no image: $elf"; exit 1; }
+
+# 2. The recorded input: a simulated flight through HIL's CAN path, its LCM log, HIL's replay digests.
+"$sdins" sil --duration "$duration" --seed 4 --log "$out/sil.lcmlog" --lcm-url none --json "$out/sil.json" > "$out/sil.txt"
+for m in 24 15; do "$sdins" replay "$out/sil.lcmlog" --model $m --json "$out/replay$m.json" > /dev/null; done
+"$sdins_target" record "$out/sil.lcmlog" "$out/input.bin"
+
+# 3. The host replay and the image under QEMU (1 instruction = 1 ns of virtual time; SysTick at the
+#    board's 25 MHz processor clock counts every 40 instructions).
+"$sdins_target" replay "$out/input.bin" "$out/host.txt"
+qemu_args=(-M mps2-an500 -cpu cortex-m7 -nographic -monitor none -serial none -icount shift=0
+           -semihosting-config "enable=on,target=native,arg=sdins_fsw_mps2,arg=input.bin,arg=image.txt,arg=dwt"
+           -kernel "$elf")
+start=$(date +%s%N)
+rc=0
+(cd "$out" && timeout "${SDINS_QEMU_TIMEOUT:-240}" "$qemu" "${qemu_args[@]}" > qemu_console.txt 2>&1) || rc=$?
+end=$(date +%s%N)
+cat "$out/qemu_console.txt"
+[ $rc -eq 0 ] || { echo "QEMU failed (exit $rc; 124: the time limit)"; exit 1; }
+
+# 4. Compare and report.
+"$(command -v python3)" "$src/tests/e2e/target_compare.py" --out "$out" --elf "$elf" \
+  --qemu-version "$("$qemu" --version | head -n 1)" --qemu-args "${qemu_args[*]}" \
+  --qemu-wall-s "$(( (end - start) / 1000000 ))e-3" --arm-compile-commands "$src/build/arm-cortex-m7/compile_commands.json" \
+  --host-compile-commands "$(dirname "$(dirname "$sdins_target")")/compile_commands.json" --json "${SDINS_TARGET_JSON:-$out/target.json}"
