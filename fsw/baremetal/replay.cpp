@@ -1,6 +1,7 @@
 // The target replay (see replay.hpp): the same file in the QEMU image and in the host tool.
 #include "replay.hpp"
 
+#include <cmath>
 #include <cstring>
 
 #include "fsw/flight_app.hpp"
@@ -262,6 +263,43 @@ ReplayResult run_replay(const Board& b) {
   g_m24.finish(b);
   g_m15.finish(b);
   return ReplayResult::kOk;
+}
+
+namespace {
+
+/// Uniform in [0, 1) from a 64-bit LCG (integer arithmetic: identical on both builds).
+double u01(std::uint64_t& state) {
+  state = state * 6364136223846793005ull + 1442695040888963407ull;
+  return static_cast<double>(state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+void probe_line(const Board& b, const char* name, double v) {
+  Line l("L");
+  l.text(name);
+  l.hex(v);
+  l.emit(b);
+}
+
+}  // namespace
+
+void run_libm_probe(const Board& b) {
+  std::uint64_t st = 88172645463325252ull;
+  for (int i = 0; i < kLibmProbeArgs; ++i) {
+    // Ranges as the flight code uses them: angles, ECEF coordinates [m], sines, exponents.
+    const double angle = (2.0 * u01(st) - 1.0) * 20.0;
+    const double y = (2.0 * u01(st) - 1.0) * 3e7, x = (2.0 * u01(st) - 1.0) * 3e7;
+    const double s = 2.0 * u01(st) - 1.0;
+    const double e = -5.0 * u01(st);
+    const double p = 2e7 * u01(st) + 1.0;
+    probe_line(b, "sin", std::sin(angle));
+    probe_line(b, "cos", std::cos(angle));
+    probe_line(b, "tan", std::tan(1.5 * s));
+    probe_line(b, "asin", std::asin(s));
+    probe_line(b, "atan2", std::atan2(y, x));
+    probe_line(b, "exp", std::exp(e));
+    probe_line(b, "hypot", std::hypot(y, x));
+    probe_line(b, "pow", std::pow(p, 1.5));
+  }
 }
 
 }  // namespace sdins_target

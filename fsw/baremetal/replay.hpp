@@ -57,4 +57,11 @@ enum class ReplayResult : int {
 
 ReplayResult run_replay(const Board& board);
 
+/// The libm probe: the functions fsw/ calls (sin, cos, tan, asin, atan2, exp, hypot, pow) on
+/// kLibmProbeArgs deterministic arguments each (an integer generator: the same on both builds),
+/// one line "L<function> hex" per result. The two C libraries (newlib on the target, glibc on the
+/// host) round some results differently in the last bit; the probe counts how often.
+inline constexpr int kLibmProbeArgs = 20000;
+void run_libm_probe(const Board& board);
+
 }  // namespace sdins_target

@@ -8,6 +8,20 @@ import shlex
 import struct
 import sys
 
+# The tolerance of matches_host and its reason. The builds compute the same operations in the same
+# order (-ffp-contract=off on both: no fused multiply-add on the M7), but newlib's libm (target) and
+# glibc's (host) round sin, cos, atan2, ... differently in the last bit for a few percent of the
+# arguments (the libm probe measures it on every run). The first differing result appears at the
+# initialisation (the single-point fix: Kepler's equation, atan2), and the stable filter carries it
+# as a last-bits difference. Observed over 40 s: lat/lon 4e-16 rad, h 6e-9 m, velocity 1.5e-10 m/s,
+# quaternion 2e-13, P relative 1.2e-13, NIS relative 3e-9. The tolerances are 100-1000x those and
+# far below any real divergence (a wrong input or configuration moves these by > 1e-3). Counts
+# (frames, epochs, measurements used, health counters) must be equal exactly.
+TOL_ABS = {"t_s": 0.0, "lat_rad": 1e-13, "lon_rad": 1e-13, "h_m": 1e-6, "vel_e_mps": 1e-8, "vel_n_mps": 1e-8,
+           "vel_u_mps": 1e-8, "qw": 1e-10, "qx": 1e-10, "qy": 1e-10, "qz": 1e-10, "clock_bias_m": 1e-6,
+           "clock_drift_mps": 1e-8, "pr_used": 0, "prr_used": 0}
+TOL_REL = {"nis_sum": 1e-6, "P_diag": 1e-10}
+
 FRAME_FIELDS = ["t_s", "lat_rad", "lon_rad", "h_m", "vel_e_mps", "vel_n_mps", "vel_u_mps", "qw", "qx", "qy", "qz"]
 EPOCH_FIELDS = ["t_s", "clock_bias_m", "clock_drift_mps", "nis_sum"]  # then pr_used prr_used (decimal), P diagonal
 
@@ -56,30 +70,59 @@ def pct(sorted_vals, p):
 
 
 def compare_rows(a_rows, b_rows, names, n_hex_head, n_dec):
-    """Bitwise equality and per-field max |a - b|; rows: n_hex_head hex, n_dec decimal, then hex."""
+    """Bitwise equality, per-field max |a - b| (and relative for nis_sum and the P diagonal) and the
+    fields out of tolerance; rows: n_hex_head hex, n_dec decimal, then hex (the P diagonal)."""
     n = min(len(a_rows), len(b_rows))
     bit_equal = len(a_rows) == len(b_rows)
-    diff = {}
+    diff, rel = {}, {}
     for i in range(n):
         a, b = a_rows[i], b_rows[i]
         if a != b:
             bit_equal = False
         if len(a) != len(b):
-            diff["row_length"] = max(diff.get("row_length", 0), 1)
+            diff["row_length"] = 1
             continue
         for k, (x, y) in enumerate(zip(a, b)):
-            if k < n_hex_head:
-                name = names[k]
-            elif k < n_hex_head + n_dec:
+            if n_hex_head <= k < n_hex_head + n_dec:
                 name = ["pr_used", "prr_used"][k - n_hex_head]
-                d = abs(int(x) - int(y))
-                diff[name] = max(diff.get(name, 0), d)
+                diff[name] = max(diff.get(name, 0), abs(int(x) - int(y)))
                 continue
-            else:
-                name = "P_diag_max"
-            d = abs(dbl(x) - dbl(y))
-            diff[name] = max(diff.get(name, 0.0), d)
-    return bit_equal, diff, n
+            name = names[k] if k < n_hex_head else "P_diag"
+            u, v = dbl(x), dbl(y)
+            diff[name] = max(diff.get(name, 0.0), abs(u - v))
+            if name in TOL_REL:
+                scale = max(abs(u), abs(v))
+                rel[name] = max(rel.get(name, 0.0), abs(u - v) / scale if scale > 0 else 0.0)
+    out_of_tol = [k for k, v in diff.items() if k in TOL_ABS and v > TOL_ABS[k]]
+    out_of_tol += [k for k, v in rel.items() if v > TOL_REL[k]]
+    if "row_length" in diff or len(a_rows) != len(b_rows):
+        out_of_tol.append("rows")
+    return bit_equal, diff, rel, out_of_tol, n
+
+
+def libm_probe(d):
+    """Per function: results compared, results that differ, the largest difference in ULP."""
+    def read(p):
+        with open(p) as f:
+            return [l.split() for l in f if l.startswith("L")]
+    try:
+        h, i = read(f"{d}/libm_host.txt"), read(f"{d}/libm_image.txt")
+    except OSError:
+        return None
+    if len(h) != len(i) or not h:
+        return {"error": f"{len(h)} host results, {len(i)} image results"}
+    out = {}
+    for (fh, xh), (fi, xi) in zip(h, i):
+        e = out.setdefault(fh[1:], {"results": 0, "differ": 0, "max_ulp": 0})
+        e["results"] += 1
+        if fh != fi:
+            e["error"] = "function order differs"
+        if xh != xi:
+            e["differ"] += 1
+            e["max_ulp"] = max(e["max_ulp"], abs(int(xh, 16) - int(xi, 16)))
+    for e in out.values():
+        e["fraction"] = e["differ"] / e["results"]
+    return out
 
 
 def main():
@@ -130,19 +173,22 @@ def main():
     for m in ("24", "15"):
         fh, fi = host["F"].get(m, []), image["F"].get(m, [])
         eh, ei = host["E"].get(m, []), image["E"].get(m, [])
-        f_equal, f_diff, nf = compare_rows(fh, fi, FRAME_FIELDS, len(FRAME_FIELDS), 0)
-        e_equal, e_diff, ne = compare_rows(eh, ei, EPOCH_FIELDS, len(EPOCH_FIELDS), 2)
+        f_equal, f_diff, f_rel, f_bad, nf = compare_rows(fh, fi, FRAME_FIELDS, len(FRAME_FIELDS), 0)
+        e_equal, e_diff, e_rel, e_bad, ne = compare_rows(eh, ei, EPOCH_FIELDS, len(EPOCH_FIELDS), 2)
         dh, di = host["D"].get(m, [[None]])[0], image["D"].get(m, [[None]])[0]
         sh, si = host["S"].get(m, [[None]])[0], image["S"].get(m, [[None]])[0]
         digest_host = dh[0]
         hil_digest = hil[m]["digest"]
-        match = f_equal and e_equal and dh == di and sh == si and nf > 0 and ne > 0
+        bit_identical = f_equal and e_equal and dh == di and sh == si
+        # D lines: digest, frames, epochs (the digest differs when any bit does); S lines: health.
+        match = not f_bad and not e_bad and dh[1:] == di[1:] and sh == si and nf > 0 and ne > 0
         matches = matches and match
         if digest_host != hil_digest or int(dh[1]) != hil[m]["nav_frames"]:
             problems.append(f"model {m}: the host replay of the recorded input ({digest_host}, {dh[1]} frames) is not "
                             f"HIL's replay of the log ({hil_digest}, {hil[m]['nav_frames']} frames)")
         if not match:
-            problems.append(f"model {m}: the image's output differs from the host's")
+            problems.append(f"model {m}: the image's output differs from the host's beyond the tolerance: "
+                            f"{f_bad + e_bad}, counts {dh[1:]} vs {di[1:]}, health {sh == si}")
         # Instruction counts (SysTick ticks x instructions per tick), per frame.
         t_rows = image["T"].get(m, [])
         frames_200, epochs_1 = [], []
@@ -187,9 +233,10 @@ def main():
             if instr[k] > budget_instr:
                 over_budget = True
                 problems.append(f"model {m}: {k} {instr[k]:.0f} instructions > budget {budget_instr:.0f}")
-        models[m] = {"matches_host": match, "frames": nf, "epochs": ne,
+        models[m] = {"matches_host": match, "bit_identical": bit_identical, "frames": nf, "epochs": ne,
                      "frames_host": len(fh), "frames_image": len(fi),
                      "max_abs_diff": {"frame": f_diff, "epoch": e_diff},
+                     "max_rel_diff": {"frame": f_rel, "epoch": e_rel},
                      "digest": {"image": di[0] if di else None, "host": digest_host, "hil_replay": hil_digest},
                      "health_image": si, "instructions": instr}
 
@@ -203,8 +250,16 @@ def main():
             pass
         return None
 
+    probe = libm_probe(d)
+    if probe is None or "error" in probe:
+        problems.append(f"libm probe: {probe}")
     report = {
         "matches_host": matches,
+        "bit_identical": all(models[m]["bit_identical"] for m in models),
+        "tolerance": {"abs": TOL_ABS, "rel": TOL_REL,
+                      "reason": "newlib (target) and glibc (host) libm round sin/cos/tan/asin/atan2/hypot differently "
+                                "in the last bit for some arguments (libm_probe); both builds use -ffp-contract=off"},
+        "libm_probe": probe,
         "frames": models["24"]["frames"],
         "max_abs_diff": models["24"]["max_abs_diff"],
         "models": models,
@@ -237,7 +292,7 @@ def main():
     for m in ("24", "15"):
         r = models[m]
         i = r["instructions"]
-        print(f"model {m}: matches_host {r['matches_host']}, {r['frames']} frames, {r['epochs']} epochs, digest "
+        print(f"model {m}: matches_host {r['matches_host']} (bit_identical {r['bit_identical']}), {r['frames']} frames, {r['epochs']} epochs, digest "
               f"{r['digest']['image']} (host {r['digest']['host']}, HIL replay {r['digest']['hil_replay']})")
         if i["frame_200hz"] and i["epoch_1hz"]:
             print(f"  instructions: 200 Hz frame median {i['frame_200hz']['median']:.0f} p99.9 {i['frame_200hz']['p999']:.0f} "
@@ -245,8 +300,10 @@ def main():
                   f"{i['epoch_1hz']['max']:.0f}; before init: on_imu {i['pre_init_on_imu_max']:.0f}, on_gnss "
                   f"{i['pre_init_on_gnss_max']:.0f}; budgets (estimates) {budget_instr:.0f} per 5 ms frame, "
                   f"{budget_epoch:.0f} per 1 s epoch")
-        if not r["matches_host"]:
-            print("  max_abs_diff:", json.dumps(r["max_abs_diff"]))
+        print("  max_abs_diff:", json.dumps(r["max_abs_diff"]))
+    if probe and "error" not in probe:
+        print("libm probe (results differing newlib vs glibc):",
+              ", ".join(f"{k} {v['differ']}/{v['results']} (max {v['max_ulp']} ulp)" for k, v in probe.items()))
     print("fpu:", json.dumps(fpu), "| qemu:", a.qemu_version, f"{a.qemu_wall_s:.1f} s")
     for n in notes:
         print("NOTE:", n)

@@ -8,6 +8,8 @@
 # the image's output with the host's field by field and writes the JSON report:
 #   matches_host, frames, max_abs_diff per field, instructions (worst 200 Hz frame, worst 1 Hz epoch,
 #   the budget), qemu version, fpu registers, compile flags.
+# Also runs the libm probe on both (fsw/baremetal/replay.hpp): how often newlib and glibc round the
+# functions fsw/ calls differently, the reason the image cannot be bit-identical to the host.
 # Fails on a mismatch, a QEMU failure or timeout, or an instruction count over the budget.
 # Usage: target_qemu.sh SOURCE_DIR SDINS SDINS_TARGET OUTDIR [DURATION_S]
 set -euo pipefail
@@ -43,6 +45,10 @@ rc=0
 end=$(date +%s%N)
 cat "$out/qemu_console.txt"
 [ $rc -eq 0 ] || { echo "QEMU failed (exit $rc; 124: the time limit)"; exit 1; }
+# The libm probe on both builds (the reason the outputs may differ in the last bits).
+"$sdins_target" libm "$out/libm_host.txt"
+(cd "$out" && timeout 60 "$qemu" "${qemu_args[@]/arg=image.txt,arg=dwt/arg=libm_image.txt,arg=libm}" \
+   > qemu_libm_console.txt 2>&1) || { cat "$out/qemu_libm_console.txt"; echo "QEMU libm probe failed"; exit 1; }
 
 # 4. Compare and report.
 "$(command -v python3)" "$src/tests/e2e/target_compare.py" --out "$out" --elf "$elf" \

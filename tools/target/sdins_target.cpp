@@ -5,6 +5,7 @@
 //                                   (fsw/baremetal/replay.hpp)
 //   sdins_target replay INPUT OUT   the host replay of that input: fsw/baremetal/replay.cpp, the
 //                                   source the image runs, linked with the host's sdins_fsw
+//   sdins_target libm OUT           the libm probe (replay.hpp) with the host's C library
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -92,11 +93,22 @@ int replay(const std::string& in, const std::string& out) {
   return r == sdins_target::ReplayResult::kOk && ok ? 0 : 1;
 }
 
+int libm(const std::string& out) {
+  g_out = std::fopen(out.c_str(), "w");
+  if (g_out == nullptr) {
+    std::fprintf(stderr, "sdins_target: cannot write %s\n", out.c_str());
+    return 1;
+  }
+  sdins_target::run_libm_probe(sdins_target::Board{host_read, host_write, nullptr, 0u});
+  return std::fclose(g_out) == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc == 4 && std::strcmp(argv[1], "record") == 0) return record(argv[2], argv[3]);
   if (argc == 4 && std::strcmp(argv[1], "replay") == 0) return replay(argv[2], argv[3]);
-  std::fprintf(stderr, "usage: sdins_target record LOG INPUT | sdins_target replay INPUT OUTPUT\n");
+  if (argc == 3 && std::strcmp(argv[1], "libm") == 0) return libm(argv[2]);
+  std::fprintf(stderr, "usage: sdins_target record LOG INPUT | replay INPUT OUTPUT | libm OUTPUT\n");
   return 64;
 }

@@ -3,9 +3,10 @@
 // the exit status; the SysTick counter on the processor clock for instruction counts under
 // QEMU -icount; then the target replay (../replay.cpp), the same source the host tool runs.
 //
-// Command line (SYS_GET_CMDLINE, QEMU's semihosting arg=... values): NAME INPUT OUTPUT [dwt]
-// "dwt" first probes the DWT cycle counter (DEMCR.TRCENA, DWT_CTRL.CYCCNTENA, two CYCCNT reads)
-// and reports what QEMU models. The output starts with a "C" line: MVFR0 MVFR1 MVFR2 CPACR (hex),
+// Command line (SYS_GET_CMDLINE, QEMU's semihosting arg=... values): NAME INPUT OUTPUT [dwt|libm]
+// "libm" runs the libm probe (replay.hpp) instead of the replay (INPUT is not read). "dwt" first
+// probes the DWT cycle counter (DEMCR.TRCENA, DWT_CTRL.CYCCNTENA, two CYCCNT reads) and reports what
+// QEMU models. The output starts with a "C" line: MVFR0 MVFR1 MVFR2 CPACR (hex),
 // then the SysTick calibration: instructions of a counted loop and the SysTick ticks it took.
 #include <cstddef>
 #include <cstdint>
@@ -190,10 +191,11 @@ int main() {
   char* words[6] = {};
   const int n_words = semihost(kSysGetCmdline, cl_args) == 0u ? split(g_cmdline, words, 6) : 0;
   if (n_words < 3) {
-    write0("sdins_fsw_mps2: usage (semihosting arguments): NAME INPUT OUTPUT [dwt]\n");
+    write0("sdins_fsw_mps2: usage (semihosting arguments): NAME INPUT OUTPUT [dwt|libm]\n");
     return 64;
   }
-  g_in = open_file(words[1], 1);
+  const bool libm_probe = n_words >= 4 && words[3][0] == 'l';
+  g_in = libm_probe ? 0 : open_file(words[1], 1);
   g_out = open_file(words[2], 5);
   if (g_in < 0 || g_out < 0) {
     write0("sdins_fsw_mps2: cannot open the input or the output file\n");
@@ -217,6 +219,13 @@ int main() {
     emit_words("DWT ctrl cyccnt0 cyccnt1", dwt, 3, nullptr, 0, true);
   }
   const sdins_target::Board board{board_read, board_write, systick, 0x00FFFFFFu};
+  if (libm_probe) {
+    sdins_target::run_libm_probe(board);
+    flush_out();
+    const std::uint32_t close_probe = static_cast<std::uint32_t>(g_out);
+    semihost(kSysClose, &close_probe);
+    return g_out_error ? 10 : 0;
+  }
   const sdins_target::ReplayResult r = sdins_target::run_replay(board);
   flush_out();
   const std::uint32_t end[2] = {static_cast<std::uint32_t>(r), g_out_error ? 1u : 0u};
