@@ -280,7 +280,7 @@ def main():
         "dwt_probe": ({"ctrl": image["DWT"][0], "cyccnt_before": image["DWT"][1], "cyccnt_after": image["DWT"][2],
                        "modelled": image["DWT"][1] != image["DWT"][2]} if image["DWT"] else None),
         "qemu": {"version": a.qemu_version, "args": a.qemu_args, "wall_s": a.qemu_wall_s},
-        "image": {"elf": os.path.relpath(a.elf, d), "size_bytes": os.path.getsize(a.elf)},
+        "image": {"elf": os.path.abspath(a.elf), "size_bytes": os.path.getsize(a.elf)},
         "flags": {"arm_fsw": flags(a.arm_compile_commands, "fsw/src/ekf.cpp"),
                   "host_fsw": flags(a.host_compile_commands, "fsw/src/ekf.cpp")},
         "input": {"bytes": os.path.getsize(f"{d}/input.bin")},

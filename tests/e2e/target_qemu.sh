@@ -51,7 +51,30 @@ cat "$out/qemu_console.txt"
    > qemu_libm_console.txt 2>&1) || { cat "$out/qemu_libm_console.txt"; echo "QEMU libm probe failed"; exit 1; }
 
 # 4. Compare and report.
-"$(command -v python3)" "$src/tests/e2e/target_compare.py" --out "$out" --elf "$elf" \
-  --qemu-version "$("$qemu" --version | head -n 1)" --qemu-args "${qemu_args[*]}" \
-  --qemu-wall-s "$(( (end - start) / 1000000 ))e-3" --arm-compile-commands "$src/build/arm-cortex-m7/compile_commands.json" \
-  --host-compile-commands "$(dirname "$(dirname "$sdins_target")")/compile_commands.json" --json "${SDINS_TARGET_JSON:-$out/target.json}"
+compare() {  # compare DIR JSON
+  "$(command -v python3)" "$src/tests/e2e/target_compare.py" --out "$1" --elf "$elf" \
+    --qemu-version "$("$qemu" --version | head -n 1)" --qemu-args "${qemu_args[*]}" \
+    --qemu-wall-s "$(( (end - start) / 1000000 ))e-3" --arm-compile-commands "$src/build/arm-cortex-m7/compile_commands.json" \
+    --host-compile-commands "$(dirname "$(dirname "$(dirname "$sdins_target")")")/compile_commands.json" --json "$2"
+}
+rc=0
+compare "$out" "${SDINS_TARGET_JSON:-$out/target.json}" || rc=$?
+
+# 5. The comparison must be able to fail: the image's output with one height 1e-5 m off.
+neg="$out/negative" && mkdir -p "$neg"
+for f in host.txt replay24.json replay15.json input.bin libm_host.txt libm_image.txt; do ln -sf "../$f" "$neg/$f"; done
+"$(command -v python3)" - "$out/image.txt" "$neg/image.txt" <<'PY'
+import struct, sys
+lines = open(sys.argv[1]).read().split("\n")
+k = [i for i, l in enumerate(lines) if l.startswith("F24 ")][3000]
+w = lines[k].split()
+h = struct.unpack("<d", struct.pack("<Q", int(w[4], 16)))[0] + 1e-5
+w[4] = "%016x" % struct.unpack("<Q", struct.pack("<d", h))[0]
+lines[k] = " ".join(w)
+open(sys.argv[2], "w").write("\n".join(lines))
+PY
+if compare "$neg" "$neg/target.json" > "$neg/compare.txt" 2>&1 || ! grep -q "beyond the tolerance: \['h_m'\]" "$neg/compare.txt"; then
+  cat "$neg/compare.txt"; echo "the comparison did not catch a 1e-5 m height difference in one frame"; exit 1
+fi
+echo "negative check: a 1e-5 m height difference in one frame fails the comparison"
+exit $rc
