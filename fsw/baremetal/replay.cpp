@@ -194,9 +194,9 @@ fsw::GpsAlmanac g_alm;
 fsw::ImuSample g_imu;
 
 template <class T>
-bool read_payload(const Board& b, std::uint32_t size, T& obj) {
-  if (size != sizeof(T)) return false;
-  return b.read(&obj, sizeof(T));
+ReplayResult read_payload(const Board& b, std::uint32_t size, T& obj) {
+  if (size != sizeof(T)) return ReplayResult::kBadEvent;
+  return b.read(&obj, sizeof(T)) ? ReplayResult::kOk : ReplayResult::kTruncated;
 }
 
 }  // namespace
@@ -242,17 +242,17 @@ ReplayResult run_replay(const Board& b) {
     if (!b.read(head, sizeof head)) break;  // the end of the input
     switch (head[0]) {
       case kTagAlmanac:
-        if (!read_payload(b, head[1], g_alm)) return ReplayResult::kBadEvent;
+        if (const ReplayResult r = read_payload(b, head[1], g_alm); r != ReplayResult::kOk) return r;
         g_m24.almanac(b, g_alm);
         g_m15.almanac(b, g_alm);
         break;
       case kTagGnss:
-        if (!read_payload(b, head[1], g_raw)) return ReplayResult::kBadEvent;
+        if (const ReplayResult r = read_payload(b, head[1], g_raw); r != ReplayResult::kOk) return r;
         g_m24.gnss(b, g_raw);
         g_m15.gnss(b, g_raw);
         break;
       case kTagImu:
-        if (!read_payload(b, head[1], g_imu)) return ReplayResult::kBadEvent;
+        if (const ReplayResult r = read_payload(b, head[1], g_imu); r != ReplayResult::kOk) return r;
         g_m24.imu(b, g_imu);
         g_m15.imu(b, g_imu);
         break;

@@ -44,7 +44,7 @@ def dbl(h):
 
 
 def parse(path):
-    out = {"F": {}, "E": {}, "T": {}, "D": {}, "S": {}, "I": {}, "C": None, "END": None, "DWT": None, "other": []}
+    out = {"F": {}, "E": {}, "T": {}, "D": {}, "S": {}, "I": {}, "C": None, "END": None, "DWT": None, "STACK": None, "other": []}
     with open(path) as f:
         for line in f:
             w = line.split()
@@ -57,6 +57,8 @@ def parse(path):
                 out["END"] = w[-2:]  # result, write error (the image's line names them first)
             elif tag == "DWT":
                 out["DWT"] = w[-3:]
+            elif tag == "STACK":
+                out["STACK"] = [int(x) for x in w[-2:]]
             elif tag[0] in "FETDSI" and tag[1:] in ("24", "15"):
                 out[tag[0]].setdefault(tag[1:], []).append(w[1:])
             else:
@@ -252,6 +254,16 @@ def main():
             pass
         return None
 
+    stack = None
+    if image["STACK"]:
+        used, reserved = image["STACK"]
+        stack = {"used_bytes": used, "reserved_bytes": reserved,
+                 "method": "the stack painted at start, the deepest overwritten word at the end"}
+        # Using all of it means the paint is gone to the bottom: an overflow into .bss is possible.
+        if used >= reserved:
+            problems.append(f"stack: {used} of {reserved} B used (overflow possible)")
+    else:
+        problems.append("no STACK line from the image")
     probe = libm_probe(d)
     if probe is None or "error" in probe:
         problems.append(f"libm probe: {probe}")
@@ -263,6 +275,7 @@ def main():
                                 "in the last bit for some arguments (libm_probe), and the host's Eigen vectorizes "
                                 "(SSE2) where the M7's is scalar; both builds use -ffp-contract=off"},
         "libm_probe": probe,
+        "stack": stack,
         "frames": models["24"]["frames"],
         "max_abs_diff": models["24"]["max_abs_diff"],
         "models": models,
@@ -307,6 +320,8 @@ def main():
     if probe and "error" not in probe:
         print("libm probe (results differing newlib vs glibc):",
               ", ".join(f"{k} {v['differ']}/{v['results']} (max {v['max_ulp']} ulp)" for k, v in probe.items()))
+    if stack:
+        print(f"stack: {stack['used_bytes']} of {stack['reserved_bytes']} B used (high-water mark)")
     print("fpu:", json.dumps(fpu), "| qemu:", a.qemu_version, f"{a.qemu_wall_s:.1f} s")
     for n in notes:
         print("NOTE:", n)

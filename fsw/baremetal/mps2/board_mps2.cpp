@@ -7,7 +7,9 @@
 // "libm" runs the libm probe (replay.hpp) instead of the replay (INPUT is not read). "dwt" first
 // probes the DWT cycle counter (DEMCR.TRCENA, DWT_CTRL.CYCCNTENA, two CYCCNT reads) and reports what
 // QEMU models. The output starts with a "C" line: MVFR0 MVFR1 MVFR2 CPACR (hex),
-// then the SysTick calibration: instructions of a counted loop and the SysTick ticks it took.
+// then the SysTick calibration: instructions of a counted loop and the SysTick ticks it took; it
+// ends with "STACK used reserved" (the high-water mark of the main stack, painted at start) and
+// "END result write_error".
 #include <cstddef>
 #include <cstdint>
 
@@ -170,6 +172,23 @@ int split(char* s, char** words, int max_words) {
 
 char g_cmdline[512];
 
+// Stack high-water mark: the free part of the stack is painted at start; the deepest word that no
+// longer holds the paint at the end is the most the run used.
+extern "C" std::uint32_t _sstack[], _estack[];
+constexpr std::uint32_t kStackPaint = 0x5A5A5A5Au;
+
+__attribute__((noinline)) void paint_stack() {
+  std::uint32_t here = 0;
+  auto* top = reinterpret_cast<std::uint32_t*>(reinterpret_cast<std::uintptr_t>(&here) & ~std::uintptr_t{7}) - 64;
+  for (std::uint32_t* w = _sstack; w < top; ++w) *w = kStackPaint;
+}
+
+std::uint32_t stack_used_bytes() {
+  const std::uint32_t* w = _sstack;
+  while (w < _estack && *w == kStackPaint) ++w;
+  return static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(_estack) - reinterpret_cast<std::uintptr_t>(w));
+}
+
 }  // namespace
 
 extern "C" void sdins_board_exit(int code) {
@@ -187,6 +206,7 @@ extern "C" void sdins_board_fault(std::uint32_t ipsr) {
 }
 
 int main() {
+  paint_stack();
   const std::uint32_t cl_args[2] = {reinterpret_cast<std::uint32_t>(g_cmdline), sizeof g_cmdline - 1};
   char* words[6] = {};
   const int n_words = semihost(kSysGetCmdline, cl_args) == 0u ? split(g_cmdline, words, 6) : 0;
@@ -228,6 +248,10 @@ int main() {
   }
   const sdins_target::ReplayResult r = sdins_target::run_replay(board);
   flush_out();
+  const std::uint32_t stack[2] = {stack_used_bytes(),
+                                  static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(_estack) -
+                                                             reinterpret_cast<std::uintptr_t>(_sstack))};
+  emit_words("STACK used reserved", nullptr, 0, stack, 2, true);
   const std::uint32_t end[2] = {static_cast<std::uint32_t>(r), g_out_error ? 1u : 0u};
   emit_words("END result write_error", nullptr, 0, end, 2, true);
   flush_out();
