@@ -196,8 +196,10 @@ fsw::ImuSample g_imu;
 template <class T>
 ReplayResult read_payload(const Board& b, std::uint32_t size, T& obj) {
   if (size != sizeof(T)) return ReplayResult::kBadEvent;
-  return b.read(&obj, sizeof(T)) ? ReplayResult::kOk : ReplayResult::kTruncated;
+  return b.read(&obj, sizeof(T)) == sizeof(T) ? ReplayResult::kOk : ReplayResult::kTruncated;
 }
+
+bool read_all(const Board& b, void* dst, std::size_t n) { return b.read(dst, n) == n; }
 
 }  // namespace
 
@@ -228,18 +230,20 @@ void layout_fingerprint(std::uint32_t (&out)[kFingerprintWords]) {
 ReplayResult run_replay(const Board& b) {
   char magic[4];
   std::uint32_t version = 0, n_fp = 0;
-  if (!b.read(magic, 4) || std::memcmp(magic, "SDTR", 4) != 0 || !b.read(&version, 4) || version != kFormatVersion ||
-      !b.read(&n_fp, 4) || n_fp != kFingerprintWords)
+  if (!read_all(b, magic, 4) || std::memcmp(magic, "SDTR", 4) != 0 || !read_all(b, &version, 4) ||
+      version != kFormatVersion || !read_all(b, &n_fp, 4) || n_fp != kFingerprintWords)
     return ReplayResult::kBadHeader;
   std::uint32_t want[kFingerprintWords], got[kFingerprintWords];
   layout_fingerprint(want);
-  if (!b.read(got, sizeof got) || std::memcmp(want, got, sizeof got) != 0) return ReplayResult::kBadHeader;
-  if (!b.read(&g_cfg, sizeof g_cfg)) return ReplayResult::kBadHeader;
+  if (!read_all(b, got, sizeof got) || std::memcmp(want, got, sizeof got) != 0) return ReplayResult::kBadHeader;
+  if (!read_all(b, &g_cfg, sizeof g_cfg)) return ReplayResult::kBadHeader;
   if (g_m24.app.init(g_cfg) != fsw::Status::kOk || g_m15.app.init(g_cfg) != fsw::Status::kOk)
     return ReplayResult::kBadConfig;
   for (;;) {
     std::uint32_t head[2];
-    if (!b.read(head, sizeof head)) break;  // the end of the input
+    const std::size_t got_head = b.read(head, sizeof head);
+    if (got_head == 0) break;  // the end of the input
+    if (got_head != sizeof head) return ReplayResult::kTruncated;
     switch (head[0]) {
       case kTagAlmanac:
         if (const ReplayResult r = read_payload(b, head[1], g_alm); r != ReplayResult::kOk) return r;

@@ -37,8 +37,8 @@ inline constexpr int kFingerprintWords = 16;
 void layout_fingerprint(std::uint32_t (&out)[kFingerprintWords]);
 
 struct Board {
-  /// Reads exactly n bytes; false at the end of the input or on an error.
-  bool (*read)(void* dst, std::size_t n);
+  /// Reads up to n bytes; returns how many (fewer only at the end of the input or on an error).
+  std::size_t (*read)(void* dst, std::size_t n);
   /// Writes n bytes of output text.
   void (*write)(const char* s, std::size_t n);
   /// A free-running down-counter (24-bit SysTick under QEMU -icount) or nullptr: no timing lines.

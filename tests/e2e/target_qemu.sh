@@ -36,6 +36,28 @@ for m in 24 15; do "$sdins" replay "$out/sil.lcmlog" --model $m --json "$out/rep
 # 3. The host replay and the image under QEMU (1 instruction = 1 ns of virtual time; SysTick at the
 #    board's 25 MHz processor clock counts every 40 instructions).
 "$sdins_target" replay "$out/input.bin" "$out/host.txt"
+# Bad input gets a clear error: a cut header (2, kBadHeader), an input cut inside an event's
+# payload or its head (5, kTruncated), a wrong payload size (4, kBadEvent).
+size=$(stat -c %s "$out/input.bin")
+head -c 100 "$out/input.bin" > "$out/bad_header.bin"
+head -c $((size - 10)) "$out/input.bin" > "$out/bad_truncated.bin"
+head -c $((size - 64 - 4)) "$out/input.bin" > "$out/bad_head.bin"
+"$(command -v python3)" - "$out/input.bin" "$out/bad_event.bin" <<'PY'
+import struct, sys
+b = bytearray(open(sys.argv[1], "rb").read())
+n_fp = struct.unpack_from("<I", b, 8)[0]
+cfg = struct.unpack_from("<I", b, 12)[0]
+first_event = 12 + 4 * n_fp + cfg
+struct.pack_into("<I", b, first_event + 4, struct.unpack_from("<I", b, first_event + 4)[0] + 8)
+open(sys.argv[2], "wb").write(bytes(b))
+PY
+for bad in header:2 truncated:5 head:5 event:4; do
+  f=${bad%%:*}; want=${bad##*:}
+  if "$sdins_target" replay "$out/bad_$f.bin" "$out/bad_$f.txt" 2> "$out/bad_$f.err"; then
+    echo "sdins_target replay accepted bad_$f.bin"; exit 1
+  fi
+  grep -q "replay result $want" "$out/bad_$f.err" || { cat "$out/bad_$f.err"; echo "bad_$f.bin: expected result $want"; exit 1; }
+done
 qemu_args=(-M mps2-an500 -cpu cortex-m7 -nographic -monitor none -serial none -icount shift=0
            -semihosting-config "enable=on,target=native,arg=sdins_fsw_mps2,arg=input.bin,arg=image.txt,arg=dwt"
            -kernel "$elf")

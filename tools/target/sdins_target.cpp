@@ -19,7 +19,7 @@ namespace {
 std::FILE* g_in = nullptr;
 std::FILE* g_out = nullptr;
 
-bool host_read(void* dst, std::size_t n) { return std::fread(dst, 1, n, g_in) == n; }
+std::size_t host_read(void* dst, std::size_t n) { return std::fread(dst, 1, n, g_in); }
 void host_write(const char* s, std::size_t n) { std::fwrite(s, 1, n, g_out); }
 
 template <class T>

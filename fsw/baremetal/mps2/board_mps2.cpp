@@ -79,24 +79,24 @@ void board_write(const char* s, std::size_t n) {
   }
 }
 
-bool board_read(void* dst, std::size_t n) {
+std::size_t board_read(void* dst, std::size_t n) {
   auto* d = static_cast<unsigned char*>(dst);
-  while (n > 0) {
+  std::size_t done = 0;
+  while (done < n) {
     if (g_in_pos == g_in_len) {
-      if (g_in_eof) return false;
+      if (g_in_eof) return done;
       const std::uint32_t args[3] = {static_cast<std::uint32_t>(g_in), reinterpret_cast<std::uint32_t>(g_in_buf),
                                      static_cast<std::uint32_t>(sizeof g_in_buf)};
       const std::uint32_t not_read = semihost(kSysRead, args);
-      if (not_read > sizeof g_in_buf) return false;  // -1: error
+      if (not_read > sizeof g_in_buf) return done;  // -1: error
       g_in_len = sizeof g_in_buf - not_read;
       g_in_pos = 0;
       if (g_in_len < sizeof g_in_buf) g_in_eof = true;
-      if (g_in_len == 0) return false;
+      if (g_in_len == 0) return done;
     }
-    *d++ = g_in_buf[g_in_pos++];
-    --n;
+    d[done++] = g_in_buf[g_in_pos++];
   }
-  return true;
+  return done;
 }
 
 // ---- Cortex-M system registers ----
