@@ -7,6 +7,8 @@
 //           3 some task over budget or unbounded, 1 the audit itself failed.
 //   timing  flies a scenario through the executive of each layout and times every tick
 //           (tools/timing_audit.hpp).
+//   target  the Cortex-M7 image in QEMU against the host (docs/baremetal-qemu.md): runs
+//           tests/e2e/target_qemu.sh with this sdins and the sdins_target built beside it.
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -40,8 +42,15 @@ struct TimingOptions {
   std::string json;
 } timing_opt;
 
+struct TargetOptions {
+  std::string json;
+  std::string out_dir;
+  double duration_s = 40.0;
+} target_opt;
+
 CLI::App* g_stack = nullptr;
 CLI::App* g_timing = nullptr;
+CLI::App* g_target = nullptr;
 
 /// A directory that holds this project's sources (its CMakePresets.json with the stack-audit preset).
 bool is_project_source(const std::filesystem::path& d) {
@@ -377,10 +386,30 @@ int run_audit_timing() {
   return 0;
 }
 
+/// sdins audit target: the script does the work (it builds the arm-cortex-m7 preset, runs QEMU with a
+/// time limit, the host replay and the comparison); this front end finds the programs it needs.
+int run_audit_target() {
+  namespace fs = std::filesystem;
+  const fs::path exe = fs::read_symlink("/proc/self/exe");
+  const fs::path tool = exe.parent_path() / "target" / "sdins_target";
+  if (!fs::exists(tool))
+    throw std::runtime_error("sdins_target not found beside sdins (" + tool.string() +
+                             "): audit target runs from a build tree (cmake --build --preset release)");
+  const std::string dir = target_opt.out_dir.empty() ? std::string(SDINS_SOURCE_DIR) + "/build/target-audit" : target_opt.out_dir;
+  std::string cmd;
+  if (!target_opt.json.empty()) cmd = "SDINS_TARGET_JSON=" + shell_quote(fs::absolute(target_opt.json).string()) + " ";
+  cmd += shell_quote(std::string(SDINS_SOURCE_DIR) + "/tests/e2e/target_qemu.sh") + " " + shell_quote(SDINS_SOURCE_DIR) +
+         " " + shell_quote(exe.string()) + " " + shell_quote(tool.string()) + " " + shell_quote(dir) + " " +
+         std::to_string(target_opt.duration_s);
+  const int rc = std::system(cmd.c_str());
+  return rc == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 void register_audit(CLI::App& app) {
-  CLI::App* audit = app.add_subcommand("audit", "Flight-software audits: worst-case stack (stack) and execution time (timing).");
+  CLI::App* audit = app.add_subcommand("audit", "Flight-software audits: worst-case stack (stack), execution time (timing), the Cortex-M7 "
+                                      "image in QEMU against the host (target).");
   audit->require_subcommand(1);
   g_stack = audit->add_subcommand(
       "stack",
@@ -405,11 +434,23 @@ void register_audit(CLI::App& app) {
   g_timing->add_option("--layouts", timing_opt.layouts, "comma-separated: Layout15, Layout24, Layout15Full, Layout24Full")
       ->capture_default_str();
   g_timing->add_option("--json", timing_opt.json, "write the report as JSON");
+  g_target = audit->add_subcommand(
+      "target",
+      "Builds the Cortex-M7 image for QEMU's mps2-an500 (preset arm-cortex-m7), runs FlightApp on a recorded "
+      "simulated flight under qemu-system-arm -icount with a time limit, compares its navigation output with the "
+      "host replay of the same input (matches_host, max_abs_diff per field) and reports instruction counts of the "
+      "worst 200 Hz frame and 1 Hz epoch against an estimated budget (docs/baremetal-qemu.md). Exit status 1 on a "
+      "mismatch, an overrun or a failure.");
+  g_target->add_option("--json", target_opt.json, "write the report as JSON (default: OUT_DIR/target.json)");
+  g_target->add_option("--out-dir", target_opt.out_dir, "work directory (default: <source>/build/target-audit)");
+  g_target->add_option("--duration", target_opt.duration_s, "simulated flight [s]")->check(CLI::Range(5.0, 600.0))
+      ->capture_default_str();
 }
 
 int run_audit() {
   if (g_stack != nullptr && g_stack->parsed()) return run_audit_stack();
   if (g_timing != nullptr && g_timing->parsed()) return run_audit_timing();
+  if (g_target != nullptr && g_target->parsed()) return run_audit_target();
   return 1;
 }
 

@@ -1,0 +1,309 @@
+// The target replay (see replay.hpp): the same file in the QEMU image and in the host tool.
+#include "replay.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "fsw/flight_app.hpp"
+
+namespace sdins_target {
+namespace {
+
+std::uint32_t offset_of(const void* base, const void* member) {
+  return static_cast<std::uint32_t>(static_cast<const unsigned char*>(member) - static_cast<const unsigned char*>(base));
+}
+
+constexpr std::uint64_t kFnvOffset = 1469598103934665603ull;  // as hal::FswNode's digest
+constexpr std::uint64_t kFnvPrime = 1099511628211ull;
+
+void fnv(std::uint64_t& h, const void* p, std::size_t n) {
+  const auto* b = static_cast<const unsigned char*>(p);
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= b[i];
+    h *= kFnvPrime;
+  }
+}
+
+/// One output line, built in place (no formatting library: the image has no printf).
+class Line {
+ public:
+  explicit Line(const char* tag) { text(tag); }
+  void text(const char* s) {
+    while (*s != '\0' && n_ < kCap - 1) buf_[n_++] = *s++;
+  }
+  void hex(double v) {
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &v, sizeof bits);
+    hex64(bits);
+  }
+  void hex64(std::uint64_t bits) {
+    if (n_ + 17 >= kCap) return;
+    buf_[n_++] = ' ';
+    for (int k = 15; k >= 0; --k) buf_[n_++] = "0123456789abcdef"[(bits >> (4 * k)) & 0xFu];
+  }
+  void dec(std::uint32_t v) {
+    char tmp[10];
+    int k = 0;
+    do {
+      tmp[k++] = static_cast<char>('0' + v % 10u);
+      v /= 10u;
+    } while (v != 0u && k < 10);
+    if (n_ + k + 1 >= kCap) return;
+    buf_[n_++] = ' ';
+    while (k > 0) buf_[n_++] = tmp[--k];
+  }
+  void emit(const Board& b) {
+    buf_[n_++] = '\n';
+    b.write(buf_, static_cast<std::size_t>(n_));
+  }
+
+ private:
+  static constexpr int kCap = 2048;
+  char buf_[kCap];
+  int n_ = 0;
+};
+
+/// One flight application with its output and timing bookkeeping.
+template <class Layout>
+struct Model {
+  const char* name;
+  fsw::FlightApp<Layout> app{};
+  fsw::FrameOutput out{};
+  std::uint64_t digest = kFnvOffset;
+  std::uint32_t frames = 0, epochs = 0;
+  std::uint32_t imu_ticks = 0, gnss_ticks = 0;  // since the last completed frame
+  std::uint32_t errors = 0;                     // calls that returned neither kOk nor a counted rejection
+  // Before initialisation there are no frames: the worst single call (levelling, the single-point
+  // fix that initialises) is kept apart.
+  std::uint32_t pre_init_imu_worst = 0, pre_init_gnss_worst = 0;
+
+  explicit Model(const char* n) : name(n) {}
+
+  std::uint32_t elapsed(const Board& b, std::uint32_t t0) const { return (t0 - b.ticks()) & b.tick_mask; }
+
+  void almanac(const Board&, const fsw::GpsAlmanac& a) { app.on_almanac(a); }
+  void gnss(const Board& b, const fsw::GnssRawEpoch& e) {
+    const bool was_initialised = app.initialised();
+    const std::uint32_t t0 = b.ticks != nullptr ? b.ticks() : 0u;
+    app.on_gnss(e);
+    if (b.ticks == nullptr) return;
+    const std::uint32_t dt = elapsed(b, t0);
+    if (was_initialised)
+      gnss_ticks += dt;
+    else if (dt > pre_init_gnss_worst)
+      pre_init_gnss_worst = dt;
+  }
+  void imu(const Board& b, const fsw::ImuSample& s) {
+    const bool was_initialised = app.initialised();
+    const std::uint32_t t0 = b.ticks != nullptr ? b.ticks() : 0u;
+    out.nav_valid = false;
+    const fsw::Status st = app.on_imu(s, out);
+    if (b.ticks != nullptr) {
+      const std::uint32_t dt = elapsed(b, t0);
+      if (was_initialised)
+        imu_ticks += dt;
+      else if (dt > pre_init_imu_worst)
+        pre_init_imu_worst = dt;
+    }
+    if (st != fsw::Status::kOk && st != fsw::Status::kBadInput) ++errors;
+    if (out.nav_valid) frame(b);
+  }
+  void frame(const Board& b) {
+    const fsw::NavState& n = out.nav;
+    fnv(digest, &n.t_s, sizeof n.t_s);
+    fnv(digest, n.llh.data(), 3 * sizeof(double));
+    fnv(digest, n.vel_enu_mps.data(), 3 * sizeof(double));
+    fnv(digest, n.q_b_n.coeffs().data(), 4 * sizeof(double));
+    Line f("F");
+    f.text(name);
+    f.hex(n.t_s);
+    for (int k = 0; k < 3; ++k) f.hex(n.llh[k]);
+    for (int k = 0; k < 3; ++k) f.hex(n.vel_enu_mps[k]);
+    f.hex(n.q_b_n.w());
+    f.hex(n.q_b_n.x());
+    f.hex(n.q_b_n.y());
+    f.hex(n.q_b_n.z());
+    f.emit(b);
+    if (out.ekf_ran) {
+      const auto& ekf = app.executive().ekf();
+      Line e("E");
+      e.text(name);
+      e.hex(n.t_s);
+      e.hex(ekf.clock_bias_m());
+      e.hex(ekf.clock_drift_mps());
+      e.hex(out.report.nis_sum);
+      e.dec(static_cast<std::uint32_t>(out.report.pr_used));
+      e.dec(static_cast<std::uint32_t>(out.report.prr_used));
+      for (int k = 0; k < ekf.P().rows(); ++k) e.hex(ekf.P()(k, k));
+      e.emit(b);
+      ++epochs;
+    }
+    if (b.ticks != nullptr) {
+      Line t("T");
+      t.text(name);
+      t.dec(frames);
+      t.dec(imu_ticks);
+      t.dec(gnss_ticks);
+      t.dec(out.ekf_ran ? 1u : 0u);
+      t.emit(b);
+    }
+    imu_ticks = 0;
+    gnss_ticks = 0;
+    ++frames;
+  }
+  void finish(const Board& b) {
+    Line d("D");
+    d.text(name);
+    d.hex64(digest);
+    d.dec(frames);
+    d.dec(epochs);
+    d.emit(b);
+    const fsw::FlightAppHealth& h = app.health();
+    const fsw::ExecutiveHealth& x = app.executive().health();
+    Line s("S");
+    s.text(name);
+    s.dec(h.initialised ? 1u : 0u);
+    s.hex(h.init_t_s);
+    s.dec(h.imu_received);
+    s.dec(h.gnss_received);
+    s.dec(h.almanac_received);
+    s.dec(h.almanac_rejected + h.gnss_rejected + h.imu_rejected);
+    s.dec(x.ekf_runs);
+    s.dec(x.ekf_updates);
+    s.dec(x.pr_used);
+    s.dec(x.prr_used);
+    s.dec(x.fsw_errors);
+    s.dec(errors);
+    s.emit(b);
+    if (b.ticks != nullptr) {
+      Line i("I");
+      i.text(name);
+      i.dec(pre_init_imu_worst);
+      i.dec(pre_init_gnss_worst);
+      i.emit(b);
+    }
+  }
+};
+
+// Statically allocated, as on the target: both paper models of HIL.
+Model<fsw::Layout24Full> g_m24("24");
+Model<fsw::Layout15Full> g_m15("15");
+fsw::FlightAppConfig g_cfg;
+fsw::GnssRawEpoch g_raw;
+fsw::GpsAlmanac g_alm;
+fsw::ImuSample g_imu;
+
+template <class T>
+ReplayResult read_payload(const Board& b, std::uint32_t size, T& obj) {
+  if (size != sizeof(T)) return ReplayResult::kBadEvent;
+  return b.read(&obj, sizeof(T)) == sizeof(T) ? ReplayResult::kOk : ReplayResult::kTruncated;
+}
+
+bool read_all(const Board& b, void* dst, std::size_t n) { return b.read(dst, n) == n; }
+
+}  // namespace
+
+void layout_fingerprint(std::uint32_t (&out)[kFingerprintWords]) {
+  static const fsw::FlightAppConfig c{};
+  static const fsw::GnssRawEpoch e{};
+  static const fsw::ImuSample s{};
+  static const fsw::GpsAlmanac a{};
+  int k = 0;
+  out[k++] = sizeof(fsw::FlightAppConfig);
+  out[k++] = offset_of(&c, &c.exec.ekf);
+  out[k++] = offset_of(&c, &c.exec.ekf.frozen_states);
+  out[k++] = offset_of(&c, &c.exec.ekf.lever_arm_b_m);
+  out[k++] = offset_of(&c, &c.exec.ekf.runaway_epochs);
+  out[k++] = offset_of(&c, &c.init_att_sigma_rad);
+  out[k++] = offset_of(&c, &c.init_mode);
+  out[k++] = offset_of(&c, &c.vm_rest_min_s);
+  out[k++] = sizeof(fsw::GnssRawEpoch);
+  out[k++] = offset_of(&e, &e.meas[1]);
+  out[k++] = offset_of(&e, &e.meas[0].cn0_dbhz);
+  out[k++] = sizeof(fsw::ImuSample);
+  out[k++] = offset_of(&s, &s.dv_mps);
+  out[k++] = sizeof(fsw::GpsAlmanac);
+  out[k++] = offset_of(&a, &a.week_mod_1024);
+  out[k++] = sizeof(fsw::Vec3) | static_cast<std::uint32_t>(alignof(fsw::FlightAppConfig)) << 16;
+}
+
+ReplayResult run_replay(const Board& b) {
+  char magic[4];
+  std::uint32_t version = 0, n_fp = 0;
+  if (!read_all(b, magic, 4) || std::memcmp(magic, "SDTR", 4) != 0 || !read_all(b, &version, 4) ||
+      version != kFormatVersion || !read_all(b, &n_fp, 4) || n_fp != kFingerprintWords)
+    return ReplayResult::kBadHeader;
+  std::uint32_t want[kFingerprintWords], got[kFingerprintWords];
+  layout_fingerprint(want);
+  if (!read_all(b, got, sizeof got) || std::memcmp(want, got, sizeof got) != 0) return ReplayResult::kBadHeader;
+  if (!read_all(b, &g_cfg, sizeof g_cfg)) return ReplayResult::kBadHeader;
+  if (g_m24.app.init(g_cfg) != fsw::Status::kOk || g_m15.app.init(g_cfg) != fsw::Status::kOk)
+    return ReplayResult::kBadConfig;
+  for (;;) {
+    std::uint32_t head[2];
+    const std::size_t got_head = b.read(head, sizeof head);
+    if (got_head == 0) break;  // the end of the input
+    if (got_head != sizeof head) return ReplayResult::kTruncated;
+    switch (head[0]) {
+      case kTagAlmanac:
+        if (const ReplayResult r = read_payload(b, head[1], g_alm); r != ReplayResult::kOk) return r;
+        g_m24.almanac(b, g_alm);
+        g_m15.almanac(b, g_alm);
+        break;
+      case kTagGnss:
+        if (const ReplayResult r = read_payload(b, head[1], g_raw); r != ReplayResult::kOk) return r;
+        g_m24.gnss(b, g_raw);
+        g_m15.gnss(b, g_raw);
+        break;
+      case kTagImu:
+        if (const ReplayResult r = read_payload(b, head[1], g_imu); r != ReplayResult::kOk) return r;
+        g_m24.imu(b, g_imu);
+        g_m15.imu(b, g_imu);
+        break;
+      default:
+        return ReplayResult::kBadEvent;
+    }
+  }
+  g_m24.finish(b);
+  g_m15.finish(b);
+  return ReplayResult::kOk;
+}
+
+namespace {
+
+/// Uniform in [0, 1) from a 64-bit LCG (integer arithmetic: identical on both builds).
+double u01(std::uint64_t& state) {
+  state = state * 6364136223846793005ull + 1442695040888963407ull;
+  return static_cast<double>(state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+void probe_line(const Board& b, const char* name, double v) {
+  Line l("L");
+  l.text(name);
+  l.hex(v);
+  l.emit(b);
+}
+
+}  // namespace
+
+void run_libm_probe(const Board& b) {
+  std::uint64_t st = 88172645463325252ull;
+  for (int i = 0; i < kLibmProbeArgs; ++i) {
+    // Ranges as the flight code uses them: angles, ECEF coordinates [m], sines, exponents.
+    const double angle = (2.0 * u01(st) - 1.0) * 20.0;
+    const double y = (2.0 * u01(st) - 1.0) * 3e7, x = (2.0 * u01(st) - 1.0) * 3e7;
+    const double s = 2.0 * u01(st) - 1.0;
+    const double e = -5.0 * u01(st);
+    const double p = 2e7 * u01(st) + 1.0;
+    probe_line(b, "sin", std::sin(angle));
+    probe_line(b, "cos", std::cos(angle));
+    probe_line(b, "tan", std::tan(1.5 * s));
+    probe_line(b, "asin", std::asin(s));
+    probe_line(b, "atan2", std::atan2(y, x));
+    probe_line(b, "exp", std::exp(e));
+    probe_line(b, "hypot", std::hypot(y, x));
+    probe_line(b, "pow", std::pow(p, 1.5));
+  }
+}
+
+}  // namespace sdins_target
