@@ -102,19 +102,6 @@ bool truth_at(const std::vector<TruthPoint>& truth, double t, TruthPoint& out) {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
-double chi2_1_survival(double x) { return x <= 0.0 ? 1.0 : std::erfc(std::sqrt(0.5 * x)); }
-
-double chi2_1_upper_quantile(double p) {
-  if (!(p > 0.0)) return INFINITY;
-  if (p >= 1.0) return 0.0;
-  double lo = 0.0, hi = 1.0;
-  while (chi2_1_survival(hi) > p) hi *= 2.0;
-  for (int i = 0; i < 200; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (chi2_1_survival(mid) > p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
 
 const std::vector<Candidate>& diagnosis_candidates() {
   static const std::vector<Candidate> list = [] {
@@ -315,7 +302,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
   e.lever_arm_sigma_m = prior_si(cfg, Effect::kAntennaLeverArm);
   e.tropo_scale_sigma = prior_si(cfg, Effect::kTroposphericDelay);
   e.iono_scale_sigma = prior_si(cfg, Effect::kIonosphericDelay);
-  e.time_drift_sigma = prior_si(cfg, Effect::kImuClockDrift);
+  e.time_drift_sigma_sps = prior_si(cfg, Effect::kImuClockDrift);
   e.frozen_states = 0;
   for (std::size_t i = 0; i < cands.size(); ++i)
     if (std::find(active.begin(), active.end(), static_cast<int>(i)) == active.end())
@@ -463,7 +450,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
         await_reacquisition = false;
       }
     }
-    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * 200.0));
+    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * fsw::kNavRate_hz));
     double epr = 0.0, eprr = 0.0, epos = 0.0, evel = 0.0;
     int npr = 0, nprr = 0, npos = 0, nvel = 0;
     if (rep.pvt) {

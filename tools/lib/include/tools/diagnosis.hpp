@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "fsw/chi_square.hpp"
 #include "fsw/effect_catalogue.hpp"
 #include "fsw/error_state.hpp"
 #include "fsw/flight_app.hpp"
@@ -226,9 +227,8 @@ struct DiagnosisResult {
 DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
                          const std::function<void(const std::string&)>& progress = {});
 
-/// Upper quantile of chi-square with 1 degree of freedom: P(X > q) = p.
-double chi2_1_upper_quantile(double p);
-/// P(X > x) for chi-square with 1 degree of freedom.
-double chi2_1_survival(double x);
+/// Chi-square with 1 degree of freedom: the one definition in fsw/chi_square.hpp.
+using fsw::chi2_1_survival;
+using fsw::chi2_1_upper_quantile;
 
 }  // namespace tools
