@@ -20,6 +20,7 @@
 #include "sim/imu_model.hpp"
 #include "sim/rng.hpp"
 #include "tools/free_inertial.hpp"
+#include "tools/run_sensors.hpp"
 
 namespace tools {
 namespace {
@@ -257,9 +258,8 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   res.run = run;
   res.seed = sc.seed + static_cast<std::uint64_t>(run);
   const std::uint64_t seed = res.seed;
-  const sim::ImuErrors errors = sim::draw_imu_errors(sc.imu, sc.effects, seed);
-  sim::ImuModel imu(errors, seed);
-  sim::GpsModel gps(sc.gps, almanac, sc.effects, seed);
+  RunSensors sensors(sc, truth, almanac, seed);
+  const sim::ImuErrors& errors = sensors.errors();
   const fsw::NavState init = initial_nav_state(truth, errors, mc, seed);
 
   const fsw::FlightAppConfig app_cfg = flight_app_config(sc, mc);
@@ -279,7 +279,7 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
                              : std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout24>));
     res.epochs[m].reserve(truth.epochs.size());
     runners[m]->records = &res.epochs[m];
-    if (runners[m]->init(app_cfg, gps.almanac(), init) != fsw::Status::kOk)
+    if (runners[m]->init(app_cfg, sensors.almanac(), init) != fsw::Status::kOk)
       throw std::runtime_error(std::string("flight application init failed for model ") + model_name(mc.models[m]));
   }
 
@@ -293,27 +293,14 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   std::array<fsw::ImuSample, kMaxSpf> frame{};
   std::array<fsw::GnssRawEpoch, kMaxSpf> raw{};
   std::array<const sim::TruthSample*, kMaxSpf> truth_at{};  ///< the epoch's truth, or nullptr
-  sim::TruthSample ts;  // carries the fields the IMU model reads
-  fsw::GnssEpoch epoch;
   Clock::duration d_sim{}, d_mech{}, d_ekf{};
-  const std::size_t spe = static_cast<std::size_t>(truth.samples_per_epoch);
   for (std::size_t j0 = 0; j0 < truth.imu.size(); j0 += static_cast<std::size_t>(spf)) {
     const auto c0 = Clock::now();
     const int nf = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(spf), truth.imu.size() - j0));
     for (int k = 0; k < nf; ++k) {
-      const std::size_t j = j0 + static_cast<std::size_t>(k);
-      const TruthTrack::Increment& inc = truth.imu[j];
-      ts.t_s = inc.t_s;
-      ts.dt_s = inc.dt_s;
-      ts.dtheta_rad = inc.dtheta_rad;
-      ts.dv_mps = inc.dv_mps;
-      frame[static_cast<std::size_t>(k)] = imu.measure(ts);
-      const bool is_epoch = (j + 1) % spe == 0;
-      truth_at[static_cast<std::size_t>(k)] = is_epoch ? &truth.epochs[(j + 1) / spe] : nullptr;
-      if (is_epoch) {
-        gps.measure(*truth_at[static_cast<std::size_t>(k)], epoch);
-        gps.raw(epoch, raw[static_cast<std::size_t>(k)]);
-      }
+      const std::size_t kk = static_cast<std::size_t>(k);
+      truth_at[kk] = sensors.measure(j0 + kk, frame[kk]);
+      if (truth_at[kk]) raw[kk] = sensors.raw();
     }
     const auto c1 = Clock::now();
     d_sim += c1 - c0;

@@ -15,6 +15,7 @@
 #include "sim/gps_model.hpp"
 #include "sim/imu_model.hpp"
 #include "tools/montecarlo.hpp"
+#include "tools/run_sensors.hpp"
 
 namespace tools {
 namespace {
@@ -79,7 +80,8 @@ std::string frame_work(const fsw::FrameOutput& out, bool had_epoch, int epoch_sa
     w += " + 1 Hz group: propagate";
     if (out.ekf_updated)
       w += ", update (" + std::to_string(out.report.pr_used + out.report.pr_rejected) + " pseudoranges, " +
-           std::to_string(out.report.prr_used + out.report.prr_rejected) + " rates), feedback";
+           std::to_string(out.report.prr_used + out.report.prr_rejected) + " rates" +
+           (out.report.clock_initialised ? "; receiver clock set from the epoch" : "") + "), feedback";
     else
       w += " only (no epoch)";
   }
@@ -93,15 +95,13 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
          const MonteCarloConfig& mc, const TimingAuditConfig& cfg, double overhead_s) {
   const auto w0 = Clock::now();
   const std::uint64_t seed = sc.seed + static_cast<std::uint64_t>(cfg.run);
-  const sim::ImuErrors errors = sim::draw_imu_errors(sc.imu, sc.effects, seed);
-  sim::ImuModel imu(errors, seed);
-  sim::GpsModel gps(sc.gps, almanac, sc.effects, seed);
+  RunSensors sensors(sc, truth, almanac, seed);
   const fsw::FlightAppConfig acfg = flight_app_config(sc, mc);
   auto app = std::make_unique<fsw::FlightApp<Layout>>();  // the 56-state executives are ~100 KB
   fsw::Status st0 = app->init(acfg);
   if (st0 == fsw::Status::kOk) {
-    for (const sim::AlmanacEntry& a : gps.almanac()) (void)app->on_almanac(a);  // a rejected element is counted
-    st0 = app->start_given(initial_nav_state(truth, errors, mc, seed));
+    for (const sim::AlmanacEntry& a : sensors.almanac()) (void)app->on_almanac(a);  // a rejected element is counted
+    st0 = app->start_given(initial_nav_state(truth, sensors.errors(), mc, seed));
   }
   if (st0 != fsw::Status::kOk) throw std::runtime_error("timing audit: flight application init failed");
 
@@ -119,29 +119,19 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
 
   std::array<fsw::ImuSample, fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
   int n_in_frame = 0;
-  sim::TruthSample ts;
-  fsw::GnssEpoch epoch;
-  fsw::GnssRawEpoch raw;
   fsw::FrameOutput out;
   bool frame_has_epoch = false;
   double frame_s = 0.0;
   unsigned char frame_pre = 0;
   fsw::Status status = fsw::Status::kOk;
   for (std::size_t j = 0; j < truth.imu.size(); ++j) {
-    const TruthTrack::Increment& inc = truth.imu[j];
-    ts.t_s = inc.t_s;
-    ts.dt_s = inc.dt_s;
-    ts.dtheta_rad = inc.dtheta_rad;
-    ts.dv_mps = inc.dv_mps;
-    const fsw::ImuSample sample = imu.measure(ts);
+    fsw::ImuSample sample;
+    const bool is_epoch = sensors.measure(j, sample) != nullptr;
     frame[static_cast<std::size_t>(n_in_frame++)] = sample;
-    const bool is_epoch = (j + 1) % static_cast<std::size_t>(truth.samples_per_epoch) == 0;
     unsigned char pre = 0;
     if (is_epoch) {  // delivered before the IMU sample of its time, as the Monte Carlo does
-      gps.measure(truth.epochs[(j + 1) / static_cast<std::size_t>(truth.samples_per_epoch)], epoch);
-      gps.raw(epoch, raw);
       frame_has_epoch = true;
-      frame_s += timed([&] { status = app->on_gnss(raw); }, overhead_s, pre);
+      frame_s += timed([&] { status = app->on_gnss(sensors.raw()); }, overhead_s, pre);
       frame_pre |= pre;
       if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_gnss failed");
     }
@@ -149,7 +139,7 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
       fsw::FrameInput in;
       in.imu = frame.data();
       in.n_imu = n_in_frame;
-      in.gnss = frame_has_epoch ? &epoch : nullptr;
+      in.gnss = frame_has_epoch ? &sensors.epoch() : nullptr;
       for (std::size_t s = 0; s < cfg.frame_stages.size(); ++s) {
         const FrameStage& stg = cfg.frame_stages[s];
         if (stg.prepare) stg.prepare(in);
@@ -167,8 +157,9 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
     p.tick_pre.push_back(frame_pre);
     p.ekf_ran.push_back(out.ekf_ran ? 1 : 0);
     p.t_s.push_back(out.nav.t_s);
-    p.work.push_back(out.ekf_ran || frame_has_epoch ? frame_work(out, frame_has_epoch, epoch.n_obs) : std::string());
-    if (out.ekf_updated) p.sats.push_back(epoch.n_obs);
+    p.work.push_back(out.ekf_ran || frame_has_epoch ? frame_work(out, frame_has_epoch, sensors.epoch().n_obs)
+                                                    : std::string());
+    if (out.ekf_updated) p.sats.push_back(sensors.epoch().n_obs);
     n_in_frame = 0;
     frame_has_epoch = false;
     frame_s = 0.0;
