@@ -41,15 +41,27 @@ SDINS_STACK_ENTRIES(Layout24)
 SDINS_STACK_ENTRIES(Layout15Full)
 SDINS_STACK_ENTRIES(Layout24Full)
 
-// The flight application's solution input (validation, and the initialisation from a solution).
-extern "C" fsw::Status sdins_stack_entry_on_gnss_pvt_Layout15Full(fsw::FlightApp<fsw::Layout15Full>& a,
-                                                                   const fsw::GnssPvtMeasurement& m) {
-  return a.on_gnss_pvt(m);
-}
-extern "C" fsw::Status sdins_stack_entry_on_gnss_pvt_Layout24Full(fsw::FlightApp<fsw::Layout24Full>& a,
-                                                                   const fsw::GnssPvtMeasurement& m) {
-  return a.on_gnss_pvt(m);
-}
+// The flight application's entries, as HIL, SIL, replay, the Monte Carlo and the bare-metal image
+// call them: the IMU sample (levelling and alignment before initialisation; after it the batching
+// and, on a frame's last sample, Executive::tick with the 200 Hz group and, when due, the 1 Hz
+// group), the raw GNSS epoch (satellite positions from the almanac; before initialisation the
+// single-point solution and the initialisation it may complete), the solution input (validation,
+// initialisation from a solution).
+#define SDINS_STACK_APP_ENTRIES(L)                                                                                \
+  extern "C" fsw::Status sdins_stack_entry_on_imu_##L(fsw::FlightApp<fsw::L>& a, const fsw::ImuSample& s,          \
+                                                      fsw::FrameOutput& out) {                                     \
+    return a.on_imu(s, out);                                                                                      \
+  }                                                                                                               \
+  extern "C" fsw::Status sdins_stack_entry_on_gnss_##L(fsw::FlightApp<fsw::L>& a, const fsw::GnssRawEpoch& e) {   \
+    return a.on_gnss(e);                                                                                          \
+  }                                                                                                               \
+  extern "C" fsw::Status sdins_stack_entry_on_gnss_pvt_##L(fsw::FlightApp<fsw::L>& a,                             \
+                                                           const fsw::GnssPvtMeasurement& m) {                    \
+    return a.on_gnss_pvt(m);                                                                                      \
+  }
+
+SDINS_STACK_APP_ENTRIES(Layout15Full)
+SDINS_STACK_APP_ENTRIES(Layout24Full)
 
 extern "C" fsw::Status sdins_stack_entry_strapdown_step(fsw::Strapdown& s, const fsw::FrameIncrement& inc) {
   return s.step(inc);

@@ -132,9 +132,9 @@ void VelocityMatchAlignment::reset() {
   accel_bias_.setZero();
 }
 
-Status VelocityMatchAlignment::add(const Vec3& alpha_b0_mps, const Vec3& beta_n_mps, double weight, const Mat3& G,
+Status VelocityMatchAlignment::add(const Vec3& alpha_b0_mps, const Vec3& beta_enu_mps, double weight, const Mat3& G,
                                    const Mat3& Theta) {
-  if (!alpha_b0_mps.allFinite() || !beta_n_mps.allFinite() || !G.allFinite() || !Theta.allFinite() ||
+  if (!alpha_b0_mps.allFinite() || !beta_enu_mps.allFinite() || !G.allFinite() || !Theta.allFinite() ||
       !std::isfinite(weight) || !(weight > 0.0))
     return Status::kBadInput;
   Eigen::Matrix<double, 3, 12> H;
@@ -146,13 +146,13 @@ Status VelocityMatchAlignment::add(const Vec3& alpha_b0_mps, const Vec3& beta_n_
   info_.noalias() += weight * Ht.lazyProduct(H);  // coefficient-wise: no GEMM temporaries
   h_alpha_.noalias() += weight * Ht.lazyProduct(alpha_b0_mps);
   for (int j = 0; j < 3; ++j)
-    for (int m = 0; m < 3; ++m) h_beta_.col(3 * j + m) += (weight * beta_n_mps(m)) * Ht.col(j);
-  sum_w_alpha_beta_.noalias() += weight * alpha_b0_mps.lazyProduct(beta_n_mps.transpose());
-  sum_w_beta2_ += weight * beta_n_mps.squaredNorm();
+    for (int m = 0; m < 3; ++m) h_beta_.col(3 * j + m) += (weight * beta_enu_mps(m)) * Ht.col(j);
+  sum_w_alpha_beta_.noalias() += weight * alpha_b0_mps.lazyProduct(beta_enu_mps.transpose());
+  sum_w_beta2_ += weight * beta_enu_mps.squaredNorm();
   sum_w_ += weight;
   sum_w_alpha_ += weight * alpha_b0_mps;
-  sum_w_beta_ += weight * beta_n_mps;
-  sum_w_beta_alpha_ += weight * beta_n_mps * alpha_b0_mps.transpose();
+  sum_w_beta_ += weight * beta_enu_mps;
+  sum_w_beta_alpha_ += weight * beta_enu_mps * alpha_b0_mps.transpose();
   sum_w_alpha2_ += weight * alpha_b0_mps.squaredNorm();
   ++n_;
   return Status::kOk;
@@ -258,12 +258,12 @@ Status VelocityMatchAlignment::solve(Mat3& C_b0_n, Vec3& att_sigma_enu_rad, doub
   return Status::kOk;
 }
 
-Vec3 predicted_alignment_error(const Vec3& accel_bias_n_mps2, const Vec3& gyro_bias_n_radps, double lat_rad,
+Vec3 predicted_alignment_error(const Vec3& accel_bias_enu_mps2, const Vec3& gyro_bias_enu_radps, double lat_rad,
                                double g_mps2) {
-  const double phi_e = -accel_bias_n_mps2.y() / g_mps2;
-  const double phi_n = accel_bias_n_mps2.x() / g_mps2;
+  const double phi_e = -accel_bias_enu_mps2.y() / g_mps2;
+  const double phi_n = accel_bias_enu_mps2.x() / g_mps2;
   const double phi_u =
-      -gyro_bias_n_radps.x() / (wgs84::omega_ie_radps * std::cos(lat_rad)) + phi_n * std::tan(lat_rad);
+      -gyro_bias_enu_radps.x() / (wgs84::omega_ie_radps * std::cos(lat_rad)) + phi_n * std::tan(lat_rad);
   return Vec3(phi_e, phi_n, phi_u);
 }
 

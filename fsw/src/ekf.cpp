@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fsw/chi_square.hpp"
 #include "fsw/effect_catalogue.hpp"
 
 namespace fsw {
@@ -11,7 +12,7 @@ namespace {
 using Mat9 = Eigen::Matrix<double, 9, 9>;
 
 /// Navigation-block dynamics matrix (9 x 9) at the given solution and mean specific force.
-Mat9 navigation_dynamics(const NavState& nav, const Vec3& f_n_mps2) {
+Mat9 navigation_dynamics(const NavState& nav, const Vec3& f_enu_mps2) {
   const double lat = nav.llh.x(), h = nav.llh.z();
   const double rm = meridian_radius_m(lat) + h;
   const double rn = normal_radius_m(lat) + h;
@@ -41,7 +42,7 @@ Mat9 navigation_dynamics(const NavState& nav, const Vec3& f_n_mps2) {
   F.block<3, 3>(3, 0) = skew(v) * (2.0 * Mp_ie + Mp_en);
   F(5, 2) += 2.0 * g / (rm > rn ? rm : rn);
   F.block<3, 3>(3, 3) = skew(v) * Mv - skew(2.0 * w_ie + w_en);
-  F.block<3, 3>(3, 6) = skew(f_n_mps2);
+  F.block<3, 3>(3, 6) = skew(f_enu_mps2);
   F.block<3, 3>(6, 0) = Mp_ie + Mp_en;
   F.block<3, 3>(6, 3) = Mv;
   F.block<3, 3>(6, 6) = -skew(w_ie + w_en);
@@ -51,18 +52,10 @@ Mat9 navigation_dynamics(const NavState& nav, const Vec3& f_n_mps2) {
 /// Standard-normal quantile of the NIS test: P(Z > 3.090) = 0.001.
 constexpr double kNisTestZ = 3.090232;
 
-/// Upper chi-square quantile with k degrees of freedom at the standard-normal quantile z
-/// (Wilson-Hilferty; within 1% for k >= 10, which a 10-epoch window always has).
-double chi2_upper_quantile(int k, double z) {
-  const double a = 2.0 / (9.0 * k);
-  const double c = 1.0 - a + z * std::sqrt(a);
-  return k * c * c * c;
-}
-
 }  // namespace
 
 PvtModel pvt_measurement_model(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
-                               const Vec3& lever_arm_b_m, double time_offset_s, const Vec3& accel_n_mps2) {
+                               const Vec3& lever_arm_b_m, double time_offset_s, const Vec3& accel_enu_mps2) {
   PvtModel o;
   const Mat3 C = nav.C_b_n();
   const Vec3 l_n = C * lever_arm_b_m;
@@ -74,7 +67,7 @@ PvtModel pvt_measurement_model(const GnssPvtMeasurement& m, const NavState& nav,
   const Vec3 v_ant = nav.vel_enu_mps + lw_n;
   const Vec3 d_ant = l_n + v_ant * dt_ins;  // antenna relative to the INS solution, ENU
   o.llh_ant = nav.llh + llh_delta_from_enu(nav.llh, d_ant);
-  o.vel_ant_enu_mps = v_ant + accel_n_mps2 * time_offset_s;
+  o.vel_ant_enu_mps = v_ant + accel_enu_mps2 * time_offset_s;
   // The measured antenna relative to the INS solution in ENU metres at the solution's point (the
   // exact inverse of llh_delta_from_enu there), so no rounded llh sum enters the innovation.
   o.pos_innovation_m = d_ant - enu_difference_m(m.llh, nav.llh);
@@ -90,7 +83,7 @@ PvtModel pvt_measurement_model(const GnssPvtMeasurement& m, const NavState& nav,
   o.H.block<3, 3>(3, 3).setIdentity();
   o.H.block<3, 3>(3, 6) = vel_att;
   o.H.block<3, 3>(3, 9) = vel_lever;
-  o.H.block<3, 1>(3, 12) = accel_n_mps2;
+  o.H.block<3, 1>(3, 12) = accel_enu_mps2;
   return o;
 }
 
@@ -99,7 +92,7 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   if (cfg.propagation_substep_frames < 1 || !(cfg.pseudorange_sigma_m > 0.0) ||
       !(cfg.pseudorange_rate_sigma_mps > 0.0) || !(cfg.gate_chi2 > 0.0) || !cfg.att_sigma_rad.allFinite() ||
       !cfg.lever_arm_b_m.allFinite() || !(cfg.gyro_g_sens_sigma_radps_per_mps2 >= 0.0) ||
-      !(cfg.time_offset_sigma_s >= 0.0) || !(cfg.time_drift_sigma >= 0.0) || !(cfg.lever_arm_sigma_m >= 0.0) || !(cfg.tropo_scale_sigma >= 0.0) ||
+      !(cfg.time_offset_sigma_s >= 0.0) || !(cfg.time_drift_sigma_sps >= 0.0) || !(cfg.lever_arm_sigma_m >= 0.0) || !(cfg.tropo_scale_sigma >= 0.0) ||
       !(cfg.iono_scale_sigma >= 0.0) || !(cfg.pvt_pos_sigma_floor_m >= 0.0) || !std::isfinite(cfg.pvt_pos_sigma_floor_m) ||
       !(cfg.pvt_vel_sigma_floor_mps >= 0.0) || !std::isfinite(cfg.pvt_vel_sigma_floor_mps) ||
       !(cfg.pvt_sigma_scale > 0.0) || !std::isfinite(cfg.pvt_sigma_scale) || cfg.nis_window < 1 || cfg.nis_window > kMaxNisWindow ||
@@ -124,7 +117,7 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   fill(Block::kGyroScale, cfg.gyro_scale_sigma);
   fill(Block::kGyroGSens, cfg.gyro_g_sens_sigma_radps_per_mps2);
   fill(Block::kTimeOffset, cfg.time_offset_sigma_s);
-  fill(Block::kTimeDrift, cfg.time_drift_sigma);
+  fill(Block::kTimeDrift, cfg.time_drift_sigma_sps);
   fill(Block::kLeverArm, cfg.lever_arm_sigma_m);
   fill(Block::kTropoScale, cfg.tropo_scale_sigma);
   fill(Block::kIonoScale, cfg.iono_scale_sigma);
@@ -179,7 +172,7 @@ Status Ekf<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
   const Mat3 C = nav.C_b_n();
   sum_C_dt_ += C * inc.dt_s;
   sum_dv_n_ += C * inc.dv_sum_mps;
-  last_f_n_mps2_ = C * inc.dv_sum_mps / inc.dt_s;
+  last_f_enu_mps2_ = C * inc.dv_sum_mps / inc.dt_s;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
       sum_C_dv_.col(3 * i + j) += C.col(i) * inc.dv_sum_mps(j);
@@ -405,7 +398,7 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   const Vec3 w_rel_b = omega_ib_b_radps - w_ie_b;
   // The frame's kinematic acceleration (specific force plus gravity; Coriolis left out), for the
   // time-offset terms.
-  const Vec3 a_n = last_f_n_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
+  const Vec3 a_n = last_f_enu_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
   // INS time tag of the epoch: its GNSS time plus the estimated IMU-GNSS offset at that time.
   if (!std::isfinite(drift_t_ref_s_)) drift_t_ref_s_ = epoch.t_s;
   const double offset_s = time_offset_at(epoch.t_s);
@@ -569,7 +562,7 @@ Status Ekf<Layout>::update_pvt(const GnssPvtMeasurement& m, const NavState& nav,
   if (pos_ok || vel_ok) {
     const double lat = nav.llh.x();
     // The frame's kinematic acceleration, exactly as update() forms it for the time-offset terms.
-    const Vec3 a_n = last_f_n_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
+    const Vec3 a_n = last_f_enu_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
     if (!std::isfinite(drift_t_ref_s_)) drift_t_ref_s_ = m.t_s;
     const double drift_lever_s = m.t_s - drift_t_ref_s_;  // d offset / d drift
     const PvtModel mdl =
@@ -707,7 +700,7 @@ void Ekf<Layout>::track_consistency(const EkfUpdateReport& report) {
   }
   health_.nis_window_sum = sum;
   health_.nis_window_dof = dof;
-  health_.nis_window_bound = dof > 0 ? chi2_upper_quantile(dof, kNisTestZ) : 0.0;
+  health_.nis_window_bound = dof > 0 ? chi2_quantile_wilson_hilferty(dof, kNisTestZ) : 0.0;
   health_.diverging = nis_count_ == w && dof > 0 && sum > health_.nis_window_bound;
   if (health_.diverging) ++health_.divergence_windows;
 

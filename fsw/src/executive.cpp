@@ -23,7 +23,7 @@ Status Executive<Layout>::init(const ExecutiveConfig& cfg, const NavState& initi
   have_pending_pvt_ = false;
   frames_since_ekf_ = 0;
   have_last_sample_ = false;
-  last_accel_n_mps2_.setZero();
+  last_accel_enu_mps2_.setZero();
   initialised_ = true;
   return Status::kOk;
 }
@@ -83,7 +83,7 @@ Status Executive<Layout>::tick(const FrameInput& in, FrameOutput& out) {
       ++health_.fsw_errors;
       continue;
     }
-    last_accel_n_mps2_ = (ins_.state().vel_enu_mps - v_before) / inc.dt_s;
+    last_accel_enu_mps2_ = (ins_.state().vel_enu_mps - v_before) / inc.dt_s;
     ++health_.nav_frames;
     ++frames_since_ekf_;
     out.nav_valid = true;
@@ -160,7 +160,7 @@ NavState Executive<Layout>::aligned(double t_s) const {
   NavState at = nav;
   at.t_s = t_s;
   at.llh += llh_rate(nav.llh, nav.vel_enu_mps) * dt;
-  at.vel_enu_mps += last_accel_n_mps2_ * dt;
+  at.vel_enu_mps += last_accel_enu_mps2_ * dt;
   return at;
 }
 

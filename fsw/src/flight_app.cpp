@@ -16,7 +16,7 @@ Status FlightApp<Layout>::init(const FlightAppConfig& cfg) {
       !std::isfinite(cfg.init_heading_offset_rad) || cfg.pvt_max_quality < 1)
     return Status::kBadConfig;
   const bool mode_ok = cfg.init_mode == InitMode::kTrack || cfg.init_mode == InitMode::kStatic ||
-                       cfg.init_mode == InitMode::kVelocityMatching;
+                       cfg.init_mode == InitMode::kVelocityMatching || cfg.init_mode == InitMode::kGiven;
   if (!mode_ok || !(cfg.alignment_s > 0.0) || !std::isfinite(cfg.alignment_s) || !(cfg.static_max_speed_mps >= 0.0) ||
       !std::isfinite(cfg.static_max_speed_mps) || !(cfg.static_max_rate_dev_radps > 0.0) ||
       !(cfg.static_max_accel_dev_mps2 > 0.0) || !(cfg.vm_min_s >= 0.0) || !(cfg.vm_max_s > cfg.vm_min_s) ||
@@ -55,6 +55,7 @@ const char* to_string(InitMode m) {
     case InitMode::kTrack: return "track";
     case InitMode::kStatic: return "static";
     case InitMode::kVelocityMatching: return "velocity_matching";
+    case InitMode::kGiven: return "given";
   }
   return "unknown";
 }
@@ -87,6 +88,7 @@ Status FlightApp<Layout>::on_gnss(const GnssRawEpoch& raw) {
 template <class Layout>
 Status FlightApp<Layout>::try_initialise(const GnssEpoch& epoch) {
   ++health_.gnss_before_init;
+  if (cfg_.init_mode == InitMode::kGiven) return Status::kOk;  // waits for start_given()
   if (cfg_.init_mode == InitMode::kTrack && level_count_ < cfg_.levelling_samples) {
     ++health_.init_not_level;
     return Status::kOk;
@@ -129,6 +131,15 @@ Status FlightApp<Layout>::try_initialise(const GnssEpoch& epoch) {
   if (st != Status::kOk) return st;
   health_.init_fix = fix;
   return Status::kOk;
+}
+
+template <class Layout>
+Status FlightApp<Layout>::start_given(const NavState& nav) {
+  if (!configured_ || cfg_.init_mode != InitMode::kGiven) return Status::kBadConfig;
+  if (health_.initialised || !std::isfinite(nav.t_s) || !nav.llh.allFinite() || !nav.vel_enu_mps.allFinite() ||
+      !nav.q_b_n.coeffs().allFinite())
+    return Status::kBadInput;
+  return start(nav, cfg_.init_att_sigma_rad, 0.0);
 }
 
 template <class Layout>
@@ -387,6 +398,7 @@ Status FlightApp<Layout>::on_gnss_pvt(const GnssPvtMeasurement& m) {
 template <class Layout>
 Status FlightApp<Layout>::try_initialise_pvt(const GnssPvtMeasurement& m) {
   ++health_.pvt_before_init;
+  if (cfg_.init_mode == InitMode::kGiven) return Status::kOk;  // waits for start_given()
   if (cfg_.init_mode == InitMode::kTrack && level_count_ < cfg_.levelling_samples) {
     ++health_.init_not_level;
     return Status::kOk;
@@ -485,6 +497,9 @@ Status FlightApp<Layout>::on_imu(const ImuSample& s, FrameOutput& out) {
   return exec_.tick(in, out);
 }
 
+template class FlightApp<Layout15>;
+template class FlightApp<Layout24>;
+template class FlightApp<Layout15Conv>;
 template class FlightApp<Layout15Full>;
 template class FlightApp<Layout24Full>;
 template class FlightApp<LayoutDiag>;

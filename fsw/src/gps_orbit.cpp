@@ -46,6 +46,18 @@ double time_from_applicability_s(const GpsAlmanac& sat, int full_gps_week, doubl
   return static_cast<double>(full_gps_week - alm_week) * kSecondsPerWeek + (tow_s - sat.toa_s);
 }
 
+double eccentric_anomaly_rad(double mean_anomaly_rad, double eccentricity) {
+  // Kepler's equation M = E - e sin E by Newton iteration (bounded).
+  double ecc_anom = mean_anomaly_rad;
+  for (int it = 0; it < kKeplerIterations; ++it) {
+    const double d = (ecc_anom - eccentricity * std::sin(ecc_anom) - mean_anomaly_rad) /
+                     (1.0 - eccentricity * std::cos(ecc_anom));
+    ecc_anom -= d;
+    if (std::abs(d) < 1e-13) break;
+  }
+  return ecc_anom;
+}
+
 void satellite_pv_ecef(const GpsAlmanac& sat, int full_gps_week, double tow_s, Vec3& r_ecef_m, Vec3& v_ecef_mps) {
   const double tk = time_from_applicability_s(sat, full_gps_week, tow_s);
   const double a = sat.sqrt_a_sqrtm * sat.sqrt_a_sqrtm;
@@ -53,13 +65,7 @@ void satellite_pv_ecef(const GpsAlmanac& sat, int full_gps_week, double tow_s, V
   const double n = std::sqrt(kGpsGM_m3ps2 / (a * a * a));
   const double m = sat.mean_anomaly_rad + n * tk;
 
-  // Kepler's equation M = E - e sin E by Newton iteration (bounded).
-  double ecc_anom = m;
-  for (int it = 0; it < kKeplerIterations; ++it) {
-    const double d = (ecc_anom - e * std::sin(ecc_anom) - m) / (1.0 - e * std::cos(ecc_anom));
-    ecc_anom -= d;
-    if (std::abs(d) < 1e-13) break;
-  }
+  const double ecc_anom = eccentric_anomaly_rad(m, e);
   const double sin_e = std::sin(ecc_anom), cos_e = std::cos(ecc_anom);
   const double one_m_ecos = 1.0 - e * cos_e;
   const double root = std::sqrt(1.0 - e * e);

@@ -117,7 +117,7 @@ Status Strapdown::step(const FrameIncrement& inc) {
   k.q_b_n = q_nn * k1.q_b_n * q_bb;
   k.q_b_n.normalize();
 
-  f_n_mps2_ = dv_sf_n / T;
+  f_enu_mps2_ = dv_sf_n / T;
   omega_ib_b_radps_ = inc.dtheta_sum_rad / T;
   prev_ = k1;
   have_prev_ = true;

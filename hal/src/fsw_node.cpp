@@ -64,9 +64,8 @@ fsw::FlightAppConfig default_flight_config() {
   fsw::EkfConfig& e = c.exec.ekf;
   // The simulated receiver class (sim::GpsConfig defaults): TCXO h0 = 2e-19, h-2 = 2e-20; GPS
   // errors 8 m / 60 s and 0.2 m/s / 10 s Gauss-Markov, with a small white floor.
-  const double c2 = fsw::kSpeedOfLight_mps * fsw::kSpeedOfLight_mps;
-  e.clock_bias_psd_m2ps = 2e-19 / 2.0 * c2;
-  e.clock_drift_psd_m2ps3 = 2.0 * fsw::kPi * fsw::kPi * 2e-20 * c2;
+  e.clock_bias_psd_m2ps = fsw::clock_bias_psd_m2ps(2e-19);
+  e.clock_drift_psd_m2ps3 = fsw::clock_drift_psd_m2ps3(2e-20);
   e.clock_bias_sigma_m = 10.0;
   e.clock_drift_sigma_mps = 0.5;
   e.range_gm_sigma_m = 8.0;

@@ -214,10 +214,9 @@ LcmInputStatus from_msg(const sdins::gnss_pvt_t& in, GnssPvtSample& out, const G
   if (!std::isfinite(in.t_s) || !std::isfinite(in.gps_tow_s) || !finite3(in.llh) || !finite3(in.vel_enu_mps) ||
       !finite3(in.pos_sigma_enu_m) || !finite3(in.vel_sigma_enu_mps))
     return LcmInputStatus::kNonFinite;
-  constexpr double kPi = 3.14159265358979323846;
   if (in.gps_week < 0 || in.gps_tow_s < 0.0 || in.gps_tow_s >= fsw::kSecondsPerWeek)
     return LcmInputStatus::kOutOfRange;
-  if (std::abs(in.llh[0]) > 0.5 * kPi || std::abs(in.llh[1]) > kPi || in.llh[2] < limits.min_height_m ||
+  if (std::abs(in.llh[0]) > 0.5 * fsw::kPi || std::abs(in.llh[1]) > fsw::kPi || in.llh[2] < limits.min_height_m ||
       in.llh[2] > limits.max_height_m)
     return LcmInputStatus::kOutOfRange;
   if (norm3(in.vel_enu_mps) > limits.max_speed_mps) return LcmInputStatus::kOutOfRange;
@@ -308,40 +307,15 @@ void to_msg(double t_s, const fsw::ExecutiveHealth& h, const fsw::GnssConversion
   out = sdins::filter_health_t{};
   out.utime = utime_from_t_s(t_s);
   out.t_s = t_s;
-  out.ticks = h.ticks;
-  out.nav_frames = h.nav_frames;
-  out.ekf_runs = h.ekf_runs;
-  out.ekf_updates = h.ekf_updates;
-  out.ekf_without_gnss = h.ekf_without_gnss;
-  out.imu_samples = h.imu_samples;
-  out.imu_rejected = h.imu_rejected;
-  out.imu_short_ticks = h.imu_short_ticks;
-  out.imu_time_gaps = h.imu_time_gaps;
-  out.gnss_epochs = h.gnss_epochs;
-  out.gnss_stale = h.gnss_stale;
-  out.gnss_replaced = h.gnss_replaced;
-  out.gnss_invalid = h.gnss_invalid;
-  out.pr_used = h.pr_used;
-  out.prr_used = h.prr_used;
-  out.pr_rejected = h.pr_rejected;
-  out.prr_rejected = h.prr_rejected;
-  out.obs_invalid = h.obs_invalid;
-  out.overruns = h.overruns;
-  out.worst_tick_s = h.worst_tick_s;
-  out.fsw_errors = h.fsw_errors;
-  out.conv_no_almanac = conv.no_almanac;
-  out.conv_unhealthy = conv.unhealthy;
-  out.conv_invalid = conv.invalid;
-  out.conv_duplicate_prn = conv.duplicate_prn;
-  out.pvt_received = h.pvt_received;
-  out.pvt_stale = h.pvt_stale;
-  out.pvt_replaced = h.pvt_replaced;
-  out.pvt_invalid = h.pvt_invalid;
-  out.pvt_unused = h.pvt_unused;
-  out.pos_used = h.pos_used;
-  out.vel_used = h.vel_used;
-  out.pos_rejected = h.pos_rejected;
-  out.vel_rejected = h.vel_rejected;
+  // The message carries every counter of the lists (fsw/executive.hpp, fsw/gps_orbit.hpp), in
+  // the message's order: a counter added to a list and not to filter_health_t.lcm fails to compile.
+#define SDINS_COPY_COUNTER(type, name, doc) out.name = h.name;
+#define SDINS_COPY_CONVERSION(type, name, doc) out.conv_##name = conv.name;
+  FSW_EXECUTIVE_HEALTH_COUNTERS(SDINS_COPY_COUNTER)
+  FSW_GNSS_CONVERSION_COUNTERS(SDINS_COPY_CONVERSION)
+  FSW_EXECUTIVE_PVT_COUNTERS(SDINS_COPY_COUNTER)
+#undef SDINS_COPY_COUNTER
+#undef SDINS_COPY_CONVERSION
 
   const fsw::EkfUpdateReport& r = frame.report;
   out.ekf_updated = frame.ekf_updated ? 1 : 0;

@@ -4,6 +4,8 @@
 #include <cstdio>
 
 #include "fsw/error_state.hpp"
+#include "fsw/executive.hpp"
+#include "fsw/gps_orbit.hpp"
 #include "hal/lcm_channels.hpp"
 
 namespace hal {
@@ -207,40 +209,13 @@ template <>
 struct LcmFields<sdins::filter_health_t> {
   static void visit(const sdins::filter_health_t& m, LcmRow& r) {
     add_time(m.utime, m.t_s, r);
-    r.add("ticks", m.ticks);
-    r.add("nav_frames", m.nav_frames);
-    r.add("ekf_runs", m.ekf_runs);
-    r.add("ekf_updates", m.ekf_updates);
-    r.add("ekf_without_gnss", m.ekf_without_gnss);
-    r.add("imu_samples", m.imu_samples);
-    r.add("imu_rejected", m.imu_rejected);
-    r.add("imu_short_ticks", m.imu_short_ticks);
-    r.add("imu_time_gaps", m.imu_time_gaps);
-    r.add("gnss_epochs", m.gnss_epochs);
-    r.add("gnss_stale", m.gnss_stale);
-    r.add("gnss_replaced", m.gnss_replaced);
-    r.add("gnss_invalid", m.gnss_invalid);
-    r.add("pr_used", m.pr_used);
-    r.add("prr_used", m.prr_used);
-    r.add("pr_rejected", m.pr_rejected);
-    r.add("prr_rejected", m.prr_rejected);
-    r.add("obs_invalid", m.obs_invalid);
-    r.add("overruns", m.overruns);
-    r.add("worst_tick_s", m.worst_tick_s);
-    r.add("fsw_errors", m.fsw_errors);
-    r.add("conv_no_almanac", m.conv_no_almanac);
-    r.add("conv_unhealthy", m.conv_unhealthy);
-    r.add("conv_invalid", m.conv_invalid);
-    r.add("conv_duplicate_prn", m.conv_duplicate_prn);
-    r.add("pvt_received", m.pvt_received);
-    r.add("pvt_stale", m.pvt_stale);
-    r.add("pvt_replaced", m.pvt_replaced);
-    r.add("pvt_invalid", m.pvt_invalid);
-    r.add("pvt_unused", m.pvt_unused);
-    r.add("pos_used", m.pos_used);
-    r.add("vel_used", m.vel_used);
-    r.add("pos_rejected", m.pos_rejected);
-    r.add("vel_rejected", m.vel_rejected);
+#define SDINS_ADD_COUNTER(type, name, doc) r.add(#name, m.name);
+#define SDINS_ADD_CONVERSION(type, name, doc) r.add("conv_" #name, m.conv_##name);
+    FSW_EXECUTIVE_HEALTH_COUNTERS(SDINS_ADD_COUNTER)
+    FSW_GNSS_CONVERSION_COUNTERS(SDINS_ADD_CONVERSION)
+    FSW_EXECUTIVE_PVT_COUNTERS(SDINS_ADD_COUNTER)
+#undef SDINS_ADD_COUNTER
+#undef SDINS_ADD_CONVERSION
     r.add("ekf_updated", m.ekf_updated);
     r.add("clock_initialised", m.clock_initialised);
     r.add("gate_chi2", m.gate_chi2);

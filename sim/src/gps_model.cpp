@@ -128,9 +128,8 @@ void GpsModel::propagate(double dt_s) {
     gm_prr_mps_[i] = a_prr * gm_prr_mps_[i] + q_prr * rng_gm_.normal();
   }
   // Two-state clock: exact discretisation, process noise drawn through the Cholesky factor of Q.
-  const double c2 = kSpeedOfLight_mps * kSpeedOfLight_mps;
-  const double s_bias = 0.5 * cfg_.clock_h0 * c2;                          // [m^2/s]
-  const double s_drift = 2.0 * fsw::kPi * fsw::kPi * cfg_.clock_h_minus2 * c2;  // [m^2/s^3]
+  const double s_bias = fsw::clock_bias_psd_m2ps(cfg_.clock_h0);          // [m^2/s]
+  const double s_drift = fsw::clock_drift_psd_m2ps3(cfg_.clock_h_minus2);  // [m^2/s^3]
   const double T = dt_s;
   const double q11 = s_bias * T + s_drift * T * T * T / 3.0;
   const double q12 = s_drift * T * T / 2.0;

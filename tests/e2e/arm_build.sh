@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Bare-metal build gate (docs/baremetal.md): configures and builds the arm-cortex-m7 preset
 # (fsw/ only, gcc-arm-none-eabi, newlib-nano) and checks the image: Cortex-M7 hard-float
-# attributes, the executive of both paper layouts linked, the vector table at the start of flash,
+# attributes, the flight application (and its executive) of both paper layouts linked, the vector table at the start of flash,
 # no heap allocator; prints flash and RAM from arm-none-eabi-size.
 set -euo pipefail
 src=${1:?usage: arm_build.sh SOURCE_DIR}
@@ -21,7 +21,9 @@ syms=$(arm-none-eabi-nm -C "$elf")
 need=("T main" "T Reset_Handler"
       "fsw::Executive<fsw::ErrorStateLayout<(fsw::Block)0, (fsw::Block)1, (fsw::Block)2, (fsw::Block)3, (fsw::Block)4, (fsw::Block)9> >::tick("
       "fsw::Executive<fsw::ErrorStateLayout<(fsw::Block)0, (fsw::Block)1, (fsw::Block)2, (fsw::Block)3, (fsw::Block)4, (fsw::Block)5, (fsw::Block)6, (fsw::Block)9> >::tick("
-      "::propagate()" "::update(fsw::GnssEpoch const&" "::feedback(fsw::Strapdown&" "fsw::Strapdown::step(")
+      "::propagate()" "::update(fsw::GnssEpoch const&" "::feedback(fsw::Strapdown&" "fsw::Strapdown::step("
+      "::on_imu(fsw::ImuSample const&" "::on_gnss(fsw::GnssRawEpoch const&" "::on_almanac(fsw::GpsAlmanac const&"
+      "fsw::gnss_epoch_from_raw(" "fsw::gnss_pvt(")
 for s in "${need[@]}"; do
   grep -qF -- "$s" <<< "$syms" || { echo "symbol not linked: $s"; exit 1; }
 done
@@ -46,4 +48,4 @@ arm-none-eabi-size -A "$elf" | awk '
   $1 == ".stack" { stack = $2 }
   END { printf "sdins_fsw_m7.elf: flash %d B, static RAM %d B (.data + .bss), stack reserved %d B\n", flash, ram, stack }'
 arm-none-eabi-size -t "$build/fsw/libsdins_fsw.a" | awk '/\(TOTALS\)/ { printf "libsdins_fsw.a (Cortex-M7): text %d B, static RAM %d B (.data %d + .bss %d)\n", $1, $2 + $3, $2, $3 }'
-arm-none-eabi-nm -S -C --radix=d "$elf" | awk '/g_exec(24|15)$/ { n = $NF; sub(/^.*::/, "", n); printf "  %s (static): %d B\n", n, $2 + 0 }'
+arm-none-eabi-nm -S -C --radix=d "$elf" | awk '/g_app(24|15)$/ { n = $NF; sub(/^.*::/, "", n); printf "  %s (static): %d B\n", n, $2 + 0 }'

@@ -24,7 +24,7 @@ j = json.load(open(sys.argv[1]))
 rc = int(sys.argv[2])
 layouts = ["Layout15", "Layout24", "Layout15Full", "Layout24Full"]
 names = [t["name"] for t in j["tasks"]]
-want = [f"{k}/{l}" for l in layouts for k in ("mech_200hz", "ekf_1hz")] + [f"pvt_input/{l}" for l in layouts[2:]]
+want = [f"{k}/{l}" for l in layouts for k in ("mech_200hz", "ekf_1hz")] + [f"{k}/{l}" for l in layouts[2:] for k in ("imu_input", "gnss_input", "pvt_input")]
 assert names == want, names
 assert isinstance(j["static_ram_bytes"], int) and j["static_ram_bytes"] >= 0
 assert j["static_ram_bytes"] == j["static_ram"]["data"] + j["static_ram"]["bss"]

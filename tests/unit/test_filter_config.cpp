@@ -9,7 +9,9 @@
 
 namespace {
 
-const std::filesystem::path kConfigDir = std::filesystem::path(__FILE__).parent_path() / "../../config/datasets";
+// The source tree from CMake (absolute): __FILE__ is relative under ccache's CCACHE_BASEDIR, and CTest
+// runs the tests from build/<preset>/tests.
+const std::filesystem::path kConfigDir = std::filesystem::path(SDINS_TEST_SOURCE_DIR) / "config/datasets";
 
 sim::FilterConfig defaults() {
   sim::FilterConfig f;

@@ -144,8 +144,8 @@ TEST(ImportPos, ReadsSolutionsAndRejectsBadLines) {
   const hal::GnssPvtSample& a = f.samples[0];
   EXPECT_EQ(a.gps_week, 2374);
   EXPECT_NEAR(a.gps_tow_s, 243258.499, 1e-9);
-  EXPECT_DOUBLE_EQ(a.llh.x(), 40.0966268 * M_PI / 180.0);
-  EXPECT_DOUBLE_EQ(a.llh.y(), -105.1474483 * M_PI / 180.0);
+  EXPECT_DOUBLE_EQ(a.llh.x(), 40.0966268 * fsw::kDegToRad);
+  EXPECT_DOUBLE_EQ(a.llh.y(), -105.1474483 * fsw::kDegToRad);
   EXPECT_EQ(a.llh.z(), 1601.474);
   EXPECT_EQ(a.quality, 1);
   EXPECT_EQ(a.n_sat, 21);

@@ -23,7 +23,7 @@ using fsw::Effect;
 using fsw::Mat3;
 using fsw::Vec3;
 
-constexpr double kPi = 3.14159265358979323846;
+using fsw::kPi;
 // Unit conversions written out from their definitions (not the library's constants).
 constexpr double kArcsec = kPi / 180.0 / 3600.0;     // 4.8481368e-6 rad
 constexpr double kDegPerHour = kPi / 180.0 / 3600.0; // rad/s

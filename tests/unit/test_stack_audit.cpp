@@ -373,6 +373,7 @@ const Library kLibrary[] = {
     {"pow", [](double x) { g_sink = std::pow(x, 1.3) + std::pow(1.3, x); }},
     {"hypot", [](double x) { g_sink = std::hypot(x, 2.0); }},
     {"fmod", [](double x) { g_sink = std::fmod(x, 2.0); }},
+    {"lround", [](double x) { g_sink = static_cast<double>(std::lround(x)); }},
     {"memset", [](double x) { std::memset(g_buf_a, static_cast<int>(x) & 0xff, sizeof g_buf_a); }},
     {"memcpy", [](double x) { std::memcpy(g_buf_b, g_buf_a, sizeof g_buf_b); g_sink = g_buf_b[7] + x; }},
     {"memmove", [](double x) { std::memmove(g_buf_a + 1, g_buf_a, 4000); g_sink = g_buf_a[9] + x; }},

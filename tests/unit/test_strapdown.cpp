@@ -30,7 +30,7 @@ using fsw::Status;
 using fsw::Strapdown;
 using fsw::Vec3;
 
-constexpr double kPi = 3.14159265358979323846;
+using fsw::kPi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -441,7 +441,7 @@ TEST(Strapdown, BadIncrementLeavesStateUnchanged) {
   good.dv_sum_mps = good.dv_sf_b_mps;
   ASSERT_EQ(sd.step(good), Status::kOk);
   const NavState before = sd.state();
-  const Vec3 f_before = sd.f_n_mps2(), w_before = sd.omega_ib_b_radps();
+  const Vec3 f_before = sd.f_enu_mps2(), w_before = sd.omega_ib_b_radps();
   FrameIncrement bad = good;
   bad.t_s = 10e-3;
   bad.rotvec_rad.y() = kNaN;
@@ -455,7 +455,7 @@ TEST(Strapdown, BadIncrementLeavesStateUnchanged) {
   bad.dt_s = kNaN;
   EXPECT_EQ(sd.step(bad), Status::kBadInput);
   expect_same_state(sd.state(), before);
-  EXPECT_EQ(sd.f_n_mps2(), f_before);
+  EXPECT_EQ(sd.f_enu_mps2(), f_before);
   EXPECT_EQ(sd.omega_ib_b_radps(), w_before);
   EXPECT_EQ(sd.correct(Vec3(kNaN, 0, 0), Vec3::Zero(), Vec3::Zero()), Status::kBadInput);
   EXPECT_EQ(sd.correct(Vec3::Zero(), Vec3::Zero(), Vec3(0, kInf, 0)), Status::kBadInput);
@@ -499,7 +499,7 @@ TEST(Strapdown, StationaryImuStaysPutFor600s) {
   EXPECT_LT(max_vel, 1e-5);
   EXPECT_LT(max_att, 1e-10);
   // Frame-average outputs: the specific force in n is the reaction to gravity (Up), the body rate Earth rate.
-  EXPECT_NEAR((sd.f_n_mps2() - Vec3(0.0, 0.0, g)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((sd.f_enu_mps2() - Vec3(0.0, 0.0, g)).norm(), 0.0, 1e-9);
   EXPECT_NEAR((sd.omega_ib_b_radps() - w_b).norm(), 0.0, 1e-15);
 }
 

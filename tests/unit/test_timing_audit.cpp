@@ -76,6 +76,12 @@ TEST(TimingAudit, FliesEveryLayoutAndTimesRegisteredStages) {
     EXPECT_EQ(l.ekf_updates, 5) << l.layout;
     EXPECT_EQ(l.fsw_errors, 0) << l.layout;
     EXPECT_GT(l.sats_min, 3) << l.layout;
+    // The worst unpreempted minor frame, and what it did: one of the flight's frames, named work.
+    EXPECT_GE(l.worst_frame_index, 0) << l.layout;
+    EXPECT_LT(l.worst_frame_index, 1000) << l.layout;
+    EXPECT_GT(l.worst_frame_us, 0.0) << l.layout;
+    EXPECT_GT(l.worst_frame_t_s, 0.0) << l.layout;
+    EXPECT_NE(l.worst_frame_work.find("200 Hz group"), std::string::npos) << l.worst_frame_work;
   }
   // The layout's share includes the stage: more than its two executive tasks alone.
   EXPECT_GE(r.layouts[0].fsw_cpu_share, r.tasks[0].cpu_share + r.tasks[1].cpu_share);

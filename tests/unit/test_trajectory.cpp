@@ -30,7 +30,7 @@ using fsw::Mat3;
 using fsw::Vec3;
 using sim::FlightPhase;
 
-constexpr double kPi = 3.14159265358979323846;
+using fsw::kPi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kOmegaEarth = 7.292115e-5;
 // Normal gravity at 35 deg, 5000 m (the default start), from the closed-form WGS-84 expression

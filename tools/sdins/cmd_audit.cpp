@@ -334,6 +334,9 @@ int run_audit_timing() {
   std::printf("\nStatistics leave out the samples during which the thread was switched out (preempted); jitter is the "
               "start delay on one core at real time with these execution times (SIL releases are exact in virtual "
               "time); see docs/audits.md.\n");
+  for (const auto& l : r.layouts)
+    std::printf("worst frame %-14s %9.2f us at t=%.3f s (frame %ld): %s\n", l.layout.c_str(), l.worst_frame_us,
+                l.worst_frame_t_s, l.worst_frame_index, l.worst_frame_work.c_str());
 
   if (!timing_opt.json.empty()) {
     nlohmann::json j;
@@ -377,7 +380,11 @@ int run_audit_timing() {
                     {"ekf_updates", l.ekf_updates},
                     {"fsw_errors", l.fsw_errors},
                     {"satellites", {{"min", l.sats_min}, {"median", l.sats_median}, {"max", l.sats_max}}},
-                    {"wall_s", l.wall_s}});
+                    {"wall_s", l.wall_s},
+                    {"worst_frame", {{"us", l.worst_frame_us},
+                                     {"index", l.worst_frame_index},
+                                     {"t_s", l.worst_frame_t_s},
+                                     {"work", l.worst_frame_work}}}});
     j["layouts"] = jl;
     std::ofstream out(timing_opt.json);
     if (!out) throw std::runtime_error("cannot write " + timing_opt.json);

@@ -69,7 +69,7 @@ int run_fsw() {
   else
     std::printf("end of run %08x received\n", r.run.run_id);
   const fsw::NavState& n = r.summary.last_nav;
-  const double deg = 180.0 / 3.14159265358979323846;
+  const double deg = fsw::kRadToDeg;
   std::printf("initialised: %s", r.summary.initialised ? "yes" : "no");
   if (r.summary.initialised) std::printf(" at t=%.3f s", r.summary.init_t_s);
   std::printf("\nnav frames: %llu  digest: %s\n", static_cast<unsigned long long>(r.summary.nav_frames),

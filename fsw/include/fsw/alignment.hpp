@@ -84,7 +84,7 @@ class VelocityMatchAlignment {
   /// One pair: alpha_b0 (b0 frame) and beta_n (ENU) [m/s], weight w > 0 [1/(m/s)^2], and the
   /// sensitivities of alpha to a gyro bias error, G [m/s per rad/s], and to an accelerometer bias
   /// error, Theta [s] (zero: that error not modelled).
-  Status add(const Vec3& alpha_b0_mps, const Vec3& beta_n_mps, double weight, const Mat3& G = Mat3::Zero(),
+  Status add(const Vec3& alpha_b0_mps, const Vec3& beta_enu_mps, double weight, const Mat3& G = Mat3::Zero(),
              const Mat3& Theta = Mat3::Zero());
   /// C_b0^n and the 1-sigma attitude uncertainty phi_E, phi_N, phi_U [rad] for bias errors of
   /// gyro_bias_sigma_radps and accel_bias_sigma_mps2 per axis. kNotConverged with fewer than 3
@@ -125,7 +125,7 @@ class VelocityMatchAlignment {
 Status davenport_q(const Mat3& B, Mat3& C_b_n, double& lambda_max);
 
 /// First-order prediction of the alignment attitude error for biases resolved in n.
-Vec3 predicted_alignment_error(const Vec3& accel_bias_n_mps2, const Vec3& gyro_bias_n_radps, double lat_rad,
+Vec3 predicted_alignment_error(const Vec3& accel_bias_enu_mps2, const Vec3& gyro_bias_enu_radps, double lat_rad,
                                double g_mps2);
 
 }  // namespace fsw

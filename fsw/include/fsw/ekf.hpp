@@ -95,7 +95,7 @@ struct EkfConfig {
   // Extension blocks (LayoutDiag); zero switches a block off.
   double gyro_g_sens_sigma_radps_per_mps2 = 0.0;
   double time_offset_sigma_s = 0.0;
-  double time_drift_sigma = 0.0;  ///< s/s
+  double time_drift_sigma_sps = 0.0;  ///< s/s
   double lever_arm_sigma_m = 0.0;
   double tropo_scale_sigma = 0.0;
   double iono_scale_sigma = 0.0;
@@ -113,7 +113,7 @@ struct EkfConfig {
   double clock_bias_psd_m2ps = 0.0;        ///< S_b  (h0/2 c^2)
   double clock_drift_psd_m2ps3 = 0.0;      ///< S_d  (2 pi^2 h_-2 c^2)
 
-  // Measurements. With the channel error blocks (Layout15Full/24Gm) these are the white part only.
+  // Measurements. With the channel error blocks (Layout15Full/24Full) these are the white part only.
   double pseudorange_sigma_m = 8.0;
   double pseudorange_rate_sigma_mps = 0.2;
   // Time-correlated (first-order Gauss-Markov) channel errors, for layouts with kRangeError /
@@ -197,7 +197,7 @@ struct EkfUpdateReport {
 
 /// The loosely coupled measurement model at one solution (see the file comment): the predicted
 /// antenna, the innovations (predicted minus measured) and the exact Jacobian of the predicted
-/// measurement. lever_arm_b_m and time_offset_s are the filter's estimates, accel_n_mps2 the
+/// measurement. lever_arm_b_m and time_offset_s are the filter's estimates, accel_enu_mps2 the
 /// frame's kinematic acceleration (ENU).
 struct PvtModel {
   Vec3 llh_ant = Vec3::Zero();         ///< predicted antenna position
@@ -209,7 +209,7 @@ struct PvtModel {
   Eigen::Matrix<double, 6, 13> H = Eigen::Matrix<double, 6, 13>::Zero();
 };
 PvtModel pvt_measurement_model(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
-                               const Vec3& lever_arm_b_m, double time_offset_s, const Vec3& accel_n_mps2);
+                               const Vec3& lever_arm_b_m, double time_offset_s, const Vec3& accel_enu_mps2);
 
 /// Numerical and statistical health of the filter (F Prime style counters, never asserts).
 struct EkfHealth {
@@ -334,7 +334,7 @@ class Ekf {
   double sub_T_ = 0.0;
   Mat3 sum_C_dt_ = Mat3::Zero();                          ///< sum C_b_n dt
   Vec3 sum_dv_n_ = Vec3::Zero();                          ///< sum C_b_n dv (f_n dt)
-  Vec3 last_f_n_mps2_ = Vec3::Zero();                     ///< specific force of the last frame, ENU
+  Vec3 last_f_enu_mps2_ = Vec3::Zero();                     ///< specific force of the last frame, ENU
   Eigen::Matrix<double, 3, 9> sum_C_dv_ = Eigen::Matrix<double, 3, 9>::Zero();   ///< col 3i+j: sum C(:,i) dv_j
   Eigen::Matrix<double, 3, 9> sum_C_dth_ = Eigen::Matrix<double, 3, 9>::Zero();  ///< col 3i+j: sum C(:,i) dtheta_j
   NavState last_nav_{};

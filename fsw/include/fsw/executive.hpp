@@ -34,44 +34,79 @@
 
 namespace fsw {
 
+/// The rate groups' nominal rates: the one place that says 200 Hz and 1 Hz.
+inline constexpr double kNavRate_hz = 200.0;  ///< 200 Hz group (navigation frames)
+inline constexpr double kEkfRate_hz = 1.0;    ///< 1 Hz group (EKF) with a 1 Hz receiver
+
 struct ExecutiveConfig {
   int imu_samples_per_frame = 5;    ///< IMU rate / navigation rate (1000 / 200)
-  double nav_rate_hz = 200.0;
-  int frames_per_ekf = 200;         ///< 200 Hz / 1 Hz
+  double nav_rate_hz = kNavRate_hz;
+  int frames_per_ekf = static_cast<int>(kNavRate_hz / kEkfRate_hz);  ///< 200 Hz / 1 Hz
   int gnss_wait_frames = 40;        ///< how long a due EKF step waits for its epoch (0.2 s)
   double max_gnss_age_s = 0.25;     ///< epochs older than this at use are stale
   double frame_budget_s = 0.005;    ///< a tick that took longer is an overrun
   EkfConfig ekf{};
 };
 
-/// Health counters, F Prime style telemetry rather than asserts.
+/// The executive's health counters, declared once: X(type, name, description). The struct below,
+/// the FILTER_HEALTH message conversion and CSV export (hal), the JSON summaries and the Monte
+/// Carlo's sums (tools) are generated from these lists, in the message's order (hal/lcm/
+/// filter_health_t.lcm, which carries FSW_GNSS_CONVERSION_COUNTERS between the two lists); a
+/// counter added here and not to the message fails to compile, and tests/unit/
+/// test_health_counters.cpp checks the message definition against the lists both ways.
+#define FSW_EXECUTIVE_HEALTH_COUNTERS(X)                                                            \
+  X(std::uint32_t, ticks, "minor frames ticked")                                                    \
+  X(std::uint32_t, nav_frames, "navigation frames completed")                                       \
+  X(std::uint32_t, ekf_runs, "runs of the 1 Hz group")                                              \
+  X(std::uint32_t, ekf_updates, "EKF runs with a measurement update")                               \
+  X(std::uint32_t, ekf_without_gnss, "EKF runs that had to propagate only")                         \
+  X(std::uint32_t, imu_samples, "IMU samples received")                                             \
+  X(std::uint32_t, imu_rejected, "non-finite or non-positive dt samples, not used")                 \
+  X(std::uint32_t, imu_short_ticks, "ticks with fewer samples than imu_samples_per_frame")          \
+  X(std::uint32_t, imu_time_gaps, "consecutive samples further apart than 1.5 dt")                  \
+  X(std::uint32_t, gnss_epochs, "raw-converted GNSS epochs received")                               \
+  X(std::uint32_t, gnss_stale, "epochs too old when the EKF could use them")                        \
+  X(std::uint32_t, gnss_replaced, "epochs overwritten by a newer one before use")                   \
+  X(std::uint32_t, gnss_invalid, "malformed epochs (n_obs out of range, non-finite time)")          \
+  X(std::uint32_t, pr_used, "pseudorange scalars used")                                             \
+  X(std::uint32_t, prr_used, "pseudorange-rate scalars used")                                       \
+  X(std::uint32_t, pr_rejected, "pseudorange scalars gated")                                        \
+  X(std::uint32_t, prr_rejected, "pseudorange-rate scalars gated")                                  \
+  X(std::uint32_t, obs_invalid, "observations with invalid values")                                 \
+  X(std::uint32_t, overruns, "ticks that took longer than frame_budget_s")                          \
+  X(double, worst_tick_s, "longest measured tick [s]")                                              \
+  X(std::uint32_t, fsw_errors, "fsw calls that returned an unexpected status")
+/// GNSS position/velocity solutions (loosely coupled update).
+#define FSW_EXECUTIVE_PVT_COUNTERS(X)                                                               \
+  X(std::uint32_t, pvt_received, "solutions received")                                              \
+  X(std::uint32_t, pvt_stale, "too old when the EKF could use them")                                \
+  X(std::uint32_t, pvt_replaced, "overwritten by a newer solution before use")                      \
+  X(std::uint32_t, pvt_invalid, "non-finite time")                                                  \
+  X(std::uint32_t, pvt_unused, "ready together with a raw epoch, which was used instead")           \
+  X(std::uint32_t, pos_used, "position scalars used")                                               \
+  X(std::uint32_t, vel_used, "velocity scalars used")                                               \
+  X(std::uint32_t, pos_rejected, "position scalars gated")                                          \
+  X(std::uint32_t, vel_rejected, "velocity scalars gated")
+
+/// Health counters, F Prime style telemetry rather than asserts (the lists above).
 struct ExecutiveHealth {
-  std::uint32_t ticks = 0;
-  std::uint32_t nav_frames = 0;
-  std::uint32_t ekf_runs = 0;
-  std::uint32_t ekf_updates = 0;         ///< EKF runs with a measurement update
-  std::uint32_t ekf_without_gnss = 0;    ///< EKF runs that had to propagate only
-  std::uint32_t imu_samples = 0;
-  std::uint32_t imu_rejected = 0;        ///< non-finite or non-positive dt samples, not used
-  std::uint32_t imu_short_ticks = 0;     ///< ticks with fewer samples than imu_samples_per_frame
-  std::uint32_t imu_time_gaps = 0;       ///< consecutive samples further apart than 1.5 dt
-  std::uint32_t gnss_epochs = 0;         ///< received
-  std::uint32_t gnss_stale = 0;          ///< too old when the EKF could use them
-  std::uint32_t gnss_replaced = 0;       ///< overwritten by a newer epoch before use
-  std::uint32_t gnss_invalid = 0;        ///< malformed epochs (n_obs out of range, non-finite time)
-  std::uint32_t pr_used = 0, prr_used = 0, pr_rejected = 0, prr_rejected = 0, obs_invalid = 0;
-  // GNSS position/velocity solutions (loosely coupled update).
-  std::uint32_t pvt_received = 0;
-  std::uint32_t pvt_stale = 0;     ///< too old when the EKF could use them
-  std::uint32_t pvt_replaced = 0;  ///< overwritten by a newer solution before use
-  std::uint32_t pvt_invalid = 0;   ///< non-finite time
-  std::uint32_t pvt_unused = 0;    ///< ready together with a raw epoch, which was used instead
-  std::uint32_t pos_used = 0, vel_used = 0, pos_rejected = 0, vel_rejected = 0;  ///< PVT scalars
-  std::uint32_t overruns = 0;
-  double worst_tick_s = 0.0;
-  std::uint32_t fsw_errors = 0;          ///< fsw calls that returned an unexpected status
-  EkfHealth ekf{};                       ///< the filter's numerical/statistical health after the last EKF run
+#define FSW_DECLARE_HEALTH_FIELD(type, name, doc) type name = 0;
+  FSW_EXECUTIVE_HEALTH_COUNTERS(FSW_DECLARE_HEALTH_FIELD)
+  FSW_EXECUTIVE_PVT_COUNTERS(FSW_DECLARE_HEALTH_FIELD)
+#undef FSW_DECLARE_HEALTH_FIELD
+  EkfHealth ekf{};  ///< the filter's numerical/statistical health after the last EKF run
 };
+
+inline std::uint32_t merge_health_field(std::uint32_t a, std::uint32_t b) { return a + b; }
+inline double merge_health_field(double a, double b) { return a > b ? a : b; }
+
+/// Sum of two runs' counters (worst_tick_s: the larger); the EKF's health is not summed.
+inline void add_health_counters(ExecutiveHealth& sum, const ExecutiveHealth& h) {
+#define FSW_ADD_HEALTH_FIELD(type, name, doc) sum.name = merge_health_field(sum.name, h.name);
+  FSW_EXECUTIVE_HEALTH_COUNTERS(FSW_ADD_HEALTH_FIELD)
+  FSW_EXECUTIVE_PVT_COUNTERS(FSW_ADD_HEALTH_FIELD)
+#undef FSW_ADD_HEALTH_FIELD
+}
 
 struct FrameInput {
   const ImuSample* imu = nullptr;  ///< the raw IMU samples that arrived during this minor frame
@@ -120,7 +155,7 @@ class Executive {
   int frames_since_ekf_ = 0;
   bool have_last_sample_ = false;
   double last_sample_t_s_ = 0.0;
-  Vec3 last_accel_n_mps2_ = Vec3::Zero();
+  Vec3 last_accel_enu_mps2_ = Vec3::Zero();
 };
 
 extern template class Executive<Layout15>;

@@ -85,6 +85,12 @@
 // (FlightAppHealth reports them); it starts from zero bias as before. Each restart re-bases the
 // integration on the newest sample (alpha and the history are rotated into the re-based b0), so
 // the numbers stay small.
+//
+// InitMode::kGiven: the harness that knows the truth gives the initial state (the Monte Carlo, the
+// paper and the timing audit: the scenario's truth at t = 0 with the run's drawn errors) through
+// start_given(); the EKF starts with init_pos_sigma_m, init_vel_sigma_mps and init_att_sigma_rad.
+// GNSS inputs before it count in gnss_before_init / pvt_before_init and never initialise; after
+// it every input goes the same way as after any other initialisation.
 #pragma once
 
 #include <array>
@@ -102,6 +108,7 @@ enum class InitMode : std::uint8_t {
   kTrack,             ///< in motion: heading = GNSS track + init_heading_offset_rad, levelling
   kStatic,            ///< at rest: levelling + gyrocompassing over alignment_s
   kVelocityMatching,  ///< in motion: IMU-integrated velocity matched to GNSS velocities (Wahba)
+  kGiven,             ///< the harness gives the initial state: start_given() (see the file header)
 };
 const char* to_string(InitMode m);
 
@@ -178,6 +185,9 @@ class FlightApp {
   Status on_gnss_pvt(const GnssPvtMeasurement& m);
   /// One IMU sample. out.nav_valid is set when the sample completed a minor frame.
   Status on_imu(const ImuSample& s, FrameOutput& out);
+  /// InitMode::kGiven: starts navigation from nav (t_s, llh, vel_enu_mps, q_b_n). kBadConfig in any
+  /// other mode or before init(), kBadInput for a non-finite state or when already initialised.
+  Status start_given(const NavState& nav);
   /// Measured execution time of the previous tick, passed to the executive (real-time mode).
   void set_prev_tick_exec_s(double s) { prev_tick_exec_s_ = s; }
 
@@ -256,6 +266,9 @@ class FlightApp {
   VelocityMatchAlignment vm_{};
 };
 
+extern template class FlightApp<Layout15>;
+extern template class FlightApp<Layout24>;
+extern template class FlightApp<Layout15Conv>;
 extern template class FlightApp<Layout15Full>;
 extern template class FlightApp<Layout24Full>;
 extern template class FlightApp<LayoutDiag>;

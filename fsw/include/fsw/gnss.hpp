@@ -28,6 +28,15 @@ inline constexpr double kSpeedOfLight_mps = 299792458.0;
 inline constexpr double kGpsEarthRate_radps = 7.2921151467e-5;
 inline constexpr int kMaxGnssChannels = 16;
 
+/// Receiver-clock process noise of the two-state clock model (bias, drift) from the oscillator's
+/// Allan-variance coefficients: the one formula the simulated receiver draws with and the filter
+/// configurations assume. Bias PSD h0 / 2 c^2 [m^2/s] (h0: white frequency [s]); drift PSD
+/// 2 pi^2 h_-2 c^2 [m^2/s^3] (h_-2: random-walk frequency [1/s]).
+inline double clock_bias_psd_m2ps(double h0_s) { return h0_s / 2.0 * (kSpeedOfLight_mps * kSpeedOfLight_mps); }
+inline double clock_drift_psd_m2ps3(double h_minus2_per_s) {
+  return 2.0 * kPi * kPi * h_minus2_per_s * (kSpeedOfLight_mps * kSpeedOfLight_mps);
+}
+
 struct GnssObservation {
   std::uint8_t prn = 0;
   Vec3 sat_pos_ecef_m = Vec3::Zero();   ///< at transmit time, transmit-time ECEF

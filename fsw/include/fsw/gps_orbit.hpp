@@ -52,6 +52,10 @@ int full_week(int week_mod_1024, int reference_full_week);
 /// is resolved with full_week(sat.week_mod_1024, full_gps_week), so week crossovers are exact.
 double time_from_applicability_s(const GpsAlmanac& sat, int full_gps_week, double tow_s);
 
+/// Eccentric anomaly E [rad] from Kepler's equation M = E - e sin E (Newton, at most 50
+/// iterations, |step| < 1e-13): the one solver for almanac and ephemeris orbits.
+double eccentric_anomaly_rad(double mean_anomaly_rad, double eccentricity);
+
 /// Satellite ECEF position and velocity (velocity analytic: derivative of the same equations,
 /// including the Earth-rotation term of the node longitude).
 void satellite_pv_ecef(const GpsAlmanac& sat, int full_gps_week, double tow_s, Vec3& r_ecef_m, Vec3& v_ecef_mps);
@@ -94,11 +98,18 @@ struct GnssRawEpoch {
 };
 
 /// Why raw measurements did not make it into the epoch (counted, never silent).
+/// Raw measurements left out by gnss_epoch_from_raw, X(type, name, description); the message
+/// field is conv_<name> (see FSW_EXECUTIVE_HEALTH_COUNTERS in fsw/executive.hpp).
+#define FSW_GNSS_CONVERSION_COUNTERS(X)                                                             \
+  X(std::uint32_t, no_almanac, "PRN without elements in the table")                                 \
+  X(std::uint32_t, unhealthy, "almanac health != 0")                                                \
+  X(std::uint32_t, invalid, "non-finite or out-of-range values, PRN outside 1..32")                 \
+  X(std::uint32_t, duplicate_prn, "second measurement of a PRN in the same epoch")
+
 struct GnssConversionStats {
-  std::uint32_t no_almanac = 0;     ///< PRN without elements in the table
-  std::uint32_t unhealthy = 0;      ///< almanac health != 0
-  std::uint32_t invalid = 0;        ///< non-finite or out-of-range values, PRN outside 1..32
-  std::uint32_t duplicate_prn = 0;  ///< second measurement of a PRN in the same epoch
+#define FSW_DECLARE_CONVERSION_FIELD(type, name, doc) type name = 0;
+  FSW_GNSS_CONVERSION_COUNTERS(FSW_DECLARE_CONVERSION_FIELD)
+#undef FSW_DECLARE_CONVERSION_FIELD
 };
 
 /// Raw epoch -> GnssEpoch: transmit time tow - rho / c, satellite position and velocity from the

@@ -84,7 +84,7 @@ class Strapdown {
   const NavState& state() const { return cur_; }
   bool initialised() const { return initialised_; }
   /// Specific force in n of the last frame (average over the frame) [m/s^2].
-  const Vec3& f_n_mps2() const { return f_n_mps2_; }
+  const Vec3& f_enu_mps2() const { return f_enu_mps2_; }
   /// Body angular rate of the last frame (average over the frame) [rad/s].
   const Vec3& omega_ib_b_radps() const { return omega_ib_b_radps_; }
 
@@ -93,7 +93,7 @@ class Strapdown {
   bool have_prev_ = false;
   NavState cur_{};
   NavState prev_{};
-  Vec3 f_n_mps2_ = Vec3::Zero();
+  Vec3 f_enu_mps2_ = Vec3::Zero();
   Vec3 omega_ib_b_radps_ = Vec3::Zero();
 };
 

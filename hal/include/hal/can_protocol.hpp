@@ -94,7 +94,7 @@ inline constexpr double kAlmOmegaDotLsb_scps = 0x1p-56;     ///< int40, semicirc
 inline constexpr double kAlmSqrtALsb = 0x1p-27;             ///< uint40, m^0.5, [0, 8192)
 inline constexpr double kAlmAf0Lsb_s = 0x1p-39;             ///< int40, [-1, 1) s
 inline constexpr double kAlmAf1Lsb_sps = 0x1p-55;           ///< int40, [-1.5e-5, 1.5e-5)
-inline constexpr double kSemicircle_rad = 3.141592653589793238462643383279502884;  ///< IS-GPS-200 pi
+inline constexpr double kSemicircle_rad = fsw::kPi;  ///< IS-GPS-200 pi
 
 // ---- status bits -----------------------------------------------------------------------------
 /// IMU_SAMPLE ImuStatus (16 bits; the others are reserved and sent as 0).

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "fsw/frames.hpp"
+
 namespace sim {
 
 inline std::uint64_t splitmix64(std::uint64_t& x) {
@@ -42,9 +44,9 @@ class Rng {
     }
     const double u1 = uniform(), u2 = uniform();
     const double r = std::sqrt(-2.0 * std::log(u1));
-    spare_ = r * std::sin(2.0 * 3.14159265358979323846 * u2);
+    spare_ = r * std::sin(2.0 * fsw::kPi * u2);
     have_spare_ = true;
-    return r * std::cos(2.0 * 3.14159265358979323846 * u2);
+    return r * std::cos(2.0 * fsw::kPi * u2);
   }
 
  private:

@@ -104,54 +104,6 @@ bool truth_at(const std::vector<TruthPoint>& truth, double t, TruthPoint& out) {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
-double chi2_1_survival(double x) { return x <= 0.0 ? 1.0 : std::erfc(std::sqrt(0.5 * x)); }
-
-double chi2_1_upper_quantile(double p) {
-  if (!(p > 0.0)) return INFINITY;
-  if (p >= 1.0) return 0.0;
-  double lo = 0.0, hi = 1.0;
-  while (chi2_1_survival(hi) > p) hi *= 2.0;
-  for (int i = 0; i < 200; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (chi2_1_survival(mid) > p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
-double chi2_survival(double x, int k) {
-  if (k <= 1) return chi2_1_survival(x);
-  if (x <= 0.0) return 1.0;
-  // Exact for integer k: Q(k/2, x/2) by the finite sums of the incomplete gamma function.
-  const double h = 0.5 * x;
-  double sum = 0.0, term = 0.0;
-  if (k % 2 == 0) {
-    term = 1.0;  // h^0 / 0!
-    for (int i = 0; i < k / 2; ++i) {
-      sum += term;
-      term *= h / (i + 1);
-    }
-    return std::exp(-h) * sum;
-  }
-  term = std::sqrt(h) / std::tgamma(1.5);  // h^(1/2) / Gamma(3/2)
-  for (int i = 0; i < (k - 1) / 2; ++i) {
-    sum += term;
-    term *= h / (i + 1.5);
-  }
-  return chi2_1_survival(x) + std::exp(-h) * sum;
-}
-
-double chi2_upper_quantile(double p, int k) {
-  if (k <= 1) return chi2_1_upper_quantile(p);
-  if (!(p > 0.0)) return INFINITY;
-  if (p >= 1.0) return 0.0;
-  double lo = 0.0, hi = static_cast<double>(k);
-  while (chi2_survival(hi, k) > p) hi *= 2.0;
-  for (int i = 0; i < 200; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (chi2_survival(mid, k) > p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
 
 double joint_wald_z2(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const Eigen::VectorXd& s0, double max_ratio,
                      int& dof) {
@@ -379,7 +331,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
   e.lever_arm_sigma_m = prior_si(cfg, Effect::kAntennaLeverArm);
   e.tropo_scale_sigma = prior_si(cfg, Effect::kTroposphericDelay);
   e.iono_scale_sigma = prior_si(cfg, Effect::kIonosphericDelay);
-  e.time_drift_sigma = prior_si(cfg, Effect::kImuClockDrift);
+  e.time_drift_sigma_sps = prior_si(cfg, Effect::kImuClockDrift);
   e.frozen_states = 0;
   for (std::size_t i = 0; i < cands.size(); ++i)
     if (std::find(active.begin(), active.end(), static_cast<int>(i)) == active.end())
@@ -527,7 +479,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
         await_reacquisition = false;
       }
     }
-    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * 200.0));
+    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * fsw::kNavRate_hz));
     double epr = 0.0, eprr = 0.0, epos = 0.0, evel = 0.0;
     int npr = 0, nprr = 0, npos = 0, nvel = 0;
     if (rep.pvt) {

@@ -55,40 +55,16 @@ json app_json(const fsw::FlightAppHealth& a) {
 }
 
 json executive_json(const fsw::ExecutiveHealth& e) {
-  return {{"ticks", e.ticks},
-          {"nav_frames", e.nav_frames},
-          {"ekf_runs", e.ekf_runs},
-          {"ekf_updates", e.ekf_updates},
-          {"ekf_without_gnss", e.ekf_without_gnss},
-          {"imu_samples", e.imu_samples},
-          {"imu_rejected", e.imu_rejected},
-          {"imu_short_ticks", e.imu_short_ticks},
-          {"imu_time_gaps", e.imu_time_gaps},
-          {"gnss_epochs", e.gnss_epochs},
-          {"gnss_stale", e.gnss_stale},
-          {"gnss_replaced", e.gnss_replaced},
-          {"gnss_invalid", e.gnss_invalid},
-          {"pr_used", e.pr_used},
-          {"prr_used", e.prr_used},
-          {"pr_rejected", e.pr_rejected},
-          {"prr_rejected", e.prr_rejected},
-          {"obs_invalid", e.obs_invalid},
-          {"pvt_received", e.pvt_received},
-          {"pvt_stale", e.pvt_stale},
-          {"pvt_replaced", e.pvt_replaced},
-          {"pvt_invalid", e.pvt_invalid},
-          {"pvt_unused", e.pvt_unused},
-          {"pos_used", e.pos_used},
-          {"vel_used", e.vel_used},
-          {"pos_rejected", e.pos_rejected},
-          {"vel_rejected", e.vel_rejected},
-          {"overruns", e.overruns},
-          {"worst_tick_s", e.worst_tick_s},
-          {"fsw_errors", e.fsw_errors},
-          {"cov_repairs", e.ekf.cov_repairs},
-          {"nonfinite_rejected", e.ekf.nonfinite_rejected},
-          {"nis_divergence_windows", e.ekf.divergence_windows},
-          {"filter_resets", e.ekf.resets}};
+  json j;
+#define SDINS_JSON_COUNTER(type, name, doc) j[#name] = e.name;
+  FSW_EXECUTIVE_HEALTH_COUNTERS(SDINS_JSON_COUNTER)
+  FSW_EXECUTIVE_PVT_COUNTERS(SDINS_JSON_COUNTER)
+#undef SDINS_JSON_COUNTER
+  j["cov_repairs"] = e.ekf.cov_repairs;
+  j["nonfinite_rejected"] = e.ekf.nonfinite_rejected;
+  j["nis_divergence_windows"] = e.ekf.divergence_windows;
+  j["filter_resets"] = e.ekf.resets;
+  return j;
 }
 
 json fsw_summary_json(const hal::FswNode& node) {

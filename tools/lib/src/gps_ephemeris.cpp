@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "fsw/gnss.hpp"
+#include "fsw/gps_orbit.hpp"
 
 namespace tools {
 namespace {
@@ -63,12 +64,7 @@ void ephemeris_position_clock(const GpsEphemeris& eph, int week, double tow_s, f
   const double n = std::sqrt(kGM / (a * a * a)) + eph.delta_n_radps;
   const double m = eph.m0_rad + n * tk;
   const double e = eph.eccentricity;
-  double ea = m;
-  for (int it = 0; it < 50; ++it) {
-    const double d = (ea - e * std::sin(ea) - m) / (1.0 - e * std::cos(ea));
-    ea -= d;
-    if (std::abs(d) < 1e-14) break;
-  }
+  const double ea = fsw::eccentric_anomaly_rad(m, e);
   const double nu = std::atan2(std::sqrt(1.0 - e * e) * std::sin(ea), std::cos(ea) - e);
   const double phi = nu + eph.arg_perigee_rad;
   const double s2 = std::sin(2.0 * phi), c2 = std::cos(2.0 * phi);

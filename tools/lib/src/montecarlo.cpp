@@ -13,11 +13,14 @@
 #include <thread>
 
 #include "fsw/alignment.hpp"
+#include "fsw/chi_square.hpp"
 #include "fsw/effect_catalogue.hpp"
+#include "fsw/flight_app.hpp"
 #include "sim/gps_model.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/rng.hpp"
 #include "tools/free_inertial.hpp"
+#include "tools/run_sensors.hpp"
 
 namespace tools {
 namespace {
@@ -30,11 +33,13 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 constexpr std::uint64_t kStreamInitialErrors = 20;
 
-/// One model's executive plus what the run records from it.
+/// One model's flight application plus what the run records from it.
 struct ModelRunner {
   virtual ~ModelRunner() = default;
-  virtual fsw::Status init(const fsw::ExecutiveConfig& cfg, const fsw::NavState& nav) = 0;
-  virtual bool tick(const fsw::FrameInput& in) = 0;  ///< returns whether the EKF ran
+  virtual fsw::Status init(const fsw::FlightAppConfig& cfg, const std::vector<sim::AlmanacEntry>& almanac,
+                           const fsw::NavState& nav) = 0;
+  virtual bool on_imu(const fsw::ImuSample& s) = 0;  ///< returns whether the EKF ran
+  virtual void on_gnss(const fsw::GnssRawEpoch& raw) = 0;
   virtual void record(const sim::TruthSample& truth) = 0;
   virtual std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg,
                                               std::vector<double>& cov) const = 0;
@@ -42,21 +47,30 @@ struct ModelRunner {
   std::vector<EpochRecord>* records = nullptr;
 };
 
+/// The flight application of one layout, as SIL/HIL/replay fly it (fsw::FlightApp), started from
+/// the run's given initial state (InitMode::kGiven).
 template <class Layout>
-struct ModelRun final : ModelRunner {
-  fsw::Executive<Layout> exec;
+struct FlightAppRunner final : ModelRunner {
+  fsw::FlightApp<Layout> app;
   fsw::FrameOutput out;
 
-  fsw::Status init(const fsw::ExecutiveConfig& cfg, const fsw::NavState& nav) override { return exec.init(cfg, nav); }
-  bool tick(const fsw::FrameInput& in) override {
-    exec.tick(in, out);
+  fsw::Status init(const fsw::FlightAppConfig& cfg, const std::vector<sim::AlmanacEntry>& almanac,
+                   const fsw::NavState& nav) override {
+    const fsw::Status st = app.init(cfg);
+    if (st != fsw::Status::kOk) return st;
+    for (const sim::AlmanacEntry& a : almanac) (void)app.on_almanac(a);  // a rejected element is counted
+    return app.start_given(nav);
+  }
+  bool on_imu(const fsw::ImuSample& s) override {
+    app.on_imu(s, out);
     return out.ekf_ran;
   }
-  fsw::ExecutiveHealth health() const override { return exec.health(); }
+  void on_gnss(const fsw::GnssRawEpoch& raw) override { app.on_gnss(raw); }
+  fsw::ExecutiveHealth health() const override { return app.executive().health(); }
 
   void record(const sim::TruthSample& truth) override {
     const NavErrors e = nav_errors(out.nav, truth);
-    const auto& P = exec.ekf().P();
+    const auto& P = app.executive().ekf().P();
     EpochRecord r{};
     Eigen::Matrix<double, 9, 1> err;
     err << e.pos_enu_m, e.vel_enu_mps, e.att_phi_enu_rad;
@@ -79,8 +93,8 @@ struct ModelRun final : ModelRunner {
                                       std::vector<double>& cov) const override {
     std::vector<SensorResidual> out_s;
     std::vector<std::pair<int, double>> state_scale;
-    const auto& P = exec.ekf().P();
-    const fsw::ImuCompensation& c = exec.compensation();
+    const auto& P = app.executive().ekf().P();
+    const fsw::ImuCompensation& c = app.executive().compensation();
     auto add = [&](const std::string& name, int state, double truth_v, double est, double sigma0, const char* unit,
                    double scale) {
       bool estimated = true;
@@ -161,9 +175,9 @@ TruthTrack TruthTrack::generate(const sim::Scenario& sc) {
 
 fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloConfig& mc) {
   fsw::ExecutiveConfig cfg;
-  cfg.imu_samples_per_frame = sc.imu.rate_hz / 200;
-  cfg.nav_rate_hz = 200.0;
-  cfg.frames_per_ekf = static_cast<int>(std::lround(200.0 / sc.gps.rate_hz));
+  cfg.imu_samples_per_frame = static_cast<int>(sc.imu.rate_hz / fsw::kNavRate_hz);
+  cfg.nav_rate_hz = fsw::kNavRate_hz;
+  cfg.frames_per_ekf = static_cast<int>(std::lround(fsw::kNavRate_hz / sc.gps.rate_hz));
   const sim::ImuErrorSigmas& s = sc.imu.sigmas;
   fsw::EkfConfig& e = cfg.ekf;
   e.pos_sigma_m = std::max(mc.init_pos_sigma_m, 1.0);
@@ -185,9 +199,8 @@ fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloC
   e.gyro_scale_sigma = paper ? std::max(s.gyro_scale_factor_ppm * 1e-6, 1e-9) : 1e-9;
   e.clock_bias_sigma_m = 10.0;
   e.clock_drift_sigma_mps = 0.5;
-  const double c2 = fsw::kSpeedOfLight_mps * fsw::kSpeedOfLight_mps;
-  e.clock_bias_psd_m2ps = std::max(sc.gps.clock_h0 / 2.0 * c2, 1e-4);
-  e.clock_drift_psd_m2ps3 = std::max(2.0 * fsw::kPi * fsw::kPi * sc.gps.clock_h_minus2 * c2, 1e-4);
+  e.clock_bias_psd_m2ps = std::max(fsw::clock_bias_psd_m2ps(sc.gps.clock_h0), 1e-4);
+  e.clock_drift_psd_m2ps3 = std::max(fsw::clock_drift_psd_m2ps3(sc.gps.clock_h_minus2), 1e-4);
   if (mc.model_gps_errors) {
     // Correlated part as channel states; the white part (with a floor that keeps P well
     // conditioned when the simulator adds none) as measurement noise.
@@ -206,6 +219,16 @@ fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloC
   e.arw_rad_per_rts = mc.arw_rad_per_rts;
   e.gate_chi2 = mc.gate_chi2;
   return cfg;
+}
+
+fsw::FlightAppConfig flight_app_config(const sim::Scenario& sc, const MonteCarloConfig& mc) {
+  fsw::FlightAppConfig c;
+  c.exec = executive_config(sc, mc);
+  c.init_mode = fsw::InitMode::kGiven;
+  c.init_pos_sigma_m = c.exec.ekf.pos_sigma_m;
+  c.init_vel_sigma_mps = c.exec.ekf.vel_sigma_mps;
+  c.init_att_sigma_rad = c.exec.ekf.att_sigma_rad;
+  return c;
 }
 
 fsw::NavState initial_nav_state(const TruthTrack& truth, const sim::ImuErrors& errors, const MonteCarloConfig& mc,
@@ -235,62 +258,63 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   res.run = run;
   res.seed = sc.seed + static_cast<std::uint64_t>(run);
   const std::uint64_t seed = res.seed;
-  const sim::ImuErrors errors = sim::draw_imu_errors(sc.imu, sc.effects, seed);
-  sim::ImuModel imu(errors, seed);
-  sim::GpsModel gps(sc.gps, almanac, sc.effects, seed);
+  RunSensors sensors(sc, truth, almanac, seed);
+  const sim::ImuErrors& errors = sensors.errors();
   const fsw::NavState init = initial_nav_state(truth, errors, mc, seed);
 
-  const fsw::ExecutiveConfig cfg = executive_config(sc, mc);
+  const fsw::FlightAppConfig app_cfg = flight_app_config(sc, mc);
+  const fsw::ExecutiveConfig& cfg = app_cfg.exec;
   const std::size_t n_models = mc.models.size();
   res.epochs.assign(n_models, {});
   std::vector<std::unique_ptr<ModelRunner>> runners;
   for (std::size_t m = 0; m < n_models; ++m) {
     const bool is15 = mc.models[m] == Model::k15;
     if (mc.models[m] == Model::k15c)
-      runners.push_back(std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout15Conv>));
+      runners.push_back(std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout15Conv>));
     else if (mc.model_gps_errors)
-      runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout15Full>)
-                             : std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout24Full>));
+      runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout15Full>)
+                             : std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout24Full>));
     else
-      runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout15>)
-                             : std::unique_ptr<ModelRunner>(new ModelRun<fsw::Layout24>));
+      runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout15>)
+                             : std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout24>));
     res.epochs[m].reserve(truth.epochs.size());
     runners[m]->records = &res.epochs[m];
-    if (runners[m]->init(cfg, init) != fsw::Status::kOk)
-      throw std::runtime_error(std::string("executive init failed for model ") + model_name(mc.models[m]));
+    if (runners[m]->init(app_cfg, sensors.almanac(), init) != fsw::Status::kOk)
+      throw std::runtime_error(std::string("flight application init failed for model ") + model_name(mc.models[m]));
   }
 
+  // The flight application batches the samples into its minor frames; the receiver's raw epoch
+  // of time t is delivered just before the IMU sample of time t, so the frame that ends at t
+  // carries it (the EKF runs and feeds back at the epoch) and the record compares with truth at t.
+  // The sensor models run a minor frame of samples ahead of the flight software (they do not
+  // depend on it), so the clock is read three times per frame.
   const int spf = cfg.imu_samples_per_frame;
-  std::array<fsw::ImuSample, fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
-  int n_in_frame = 0;
-  sim::TruthSample ts;  // carries the fields the IMU model reads
-  fsw::GnssEpoch epoch;
+  constexpr int kMaxSpf = fsw::FrameBuilder::kMaxSamplesPerFrame;
+  std::array<fsw::ImuSample, kMaxSpf> frame{};
+  std::array<fsw::GnssRawEpoch, kMaxSpf> raw{};
+  std::array<const sim::TruthSample*, kMaxSpf> truth_at{};  ///< the epoch's truth, or nullptr
   Clock::duration d_sim{}, d_mech{}, d_ekf{};
-  for (std::size_t j = 0; j < truth.imu.size(); ++j) {
-    auto c0 = Clock::now();
-    const TruthTrack::Increment& inc = truth.imu[j];
-    ts.t_s = inc.t_s;
-    ts.dt_s = inc.dt_s;
-    ts.dtheta_rad = inc.dtheta_rad;
-    ts.dv_mps = inc.dv_mps;
-    frame[static_cast<std::size_t>(n_in_frame++)] = imu.measure(ts);
-    const bool is_epoch = (j + 1) % static_cast<std::size_t>(truth.samples_per_epoch) == 0;
-    const sim::TruthSample* te = is_epoch ? &truth.epochs[(j + 1) / static_cast<std::size_t>(truth.samples_per_epoch)] : nullptr;
-    if (is_epoch) gps.measure(*te, epoch);
-    auto c1 = Clock::now();
+  for (std::size_t j0 = 0; j0 < truth.imu.size(); j0 += static_cast<std::size_t>(spf)) {
+    const auto c0 = Clock::now();
+    const int nf = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(spf), truth.imu.size() - j0));
+    for (int k = 0; k < nf; ++k) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      truth_at[kk] = sensors.measure(j0 + kk, frame[kk]);
+      if (truth_at[kk]) raw[kk] = sensors.raw();
+    }
+    const auto c1 = Clock::now();
     d_sim += c1 - c0;
-    if (n_in_frame < spf) continue;
-    fsw::FrameInput in;
-    in.imu = frame.data();
-    in.n_imu = n_in_frame;
-    in.gnss = is_epoch ? &epoch : nullptr;
-    n_in_frame = 0;
     bool ekf_ran = false;
-    for (auto& r : runners) ekf_ran |= r->tick(in);
-    const auto c2 = Clock::now();
-    (ekf_ran ? d_ekf : d_mech) += c2 - c1;
-    if (is_epoch)
-      for (auto& r : runners) r->record(*te);
+    for (int k = 0; k < nf; ++k) {
+      const sim::TruthSample* te = truth_at[static_cast<std::size_t>(k)];
+      for (auto& r : runners) {
+        if (te) r->on_gnss(raw[static_cast<std::size_t>(k)]);
+        ekf_ran |= r->on_imu(frame[static_cast<std::size_t>(k)]);
+      }
+      if (te)
+        for (auto& r : runners) r->record(*te);
+    }
+    (ekf_ran ? d_ekf : d_mech) += Clock::now() - c1;
   }
   res.sensors.assign(n_models, {});
   res.sensor_cov.assign(n_models, {});
@@ -335,14 +359,10 @@ std::vector<RunResult> run_many(const sim::Scenario& sc, const TruthTrack& truth
 }
 
 std::array<double, 2> chi2_mean_bounds(int dof, int runs) {
-  // Wilson-Hilferty: chi2_k quantile ~ k (1 - 2/(9k) + z sqrt(2/(9k)))^3, z = -/+1.959964.
+  // The sum of runs chi2(dof) variables is chi2(dof runs); its 2.5% and 97.5% quantiles / runs.
   const double k = static_cast<double>(dof) * runs;
-  auto q = [k](double z) {
-    const double a = 2.0 / (9.0 * k);
-    const double c = 1.0 - a + z * std::sqrt(a);
-    return k * c * c * c;
-  };
-  return {q(-1.959963985) / runs, q(1.959963985) / runs};
+  return {fsw::chi2_quantile_wilson_hilferty(k, -1.959963985) / runs,
+          fsw::chi2_quantile_wilson_hilferty(k, 1.959963985) / runs};
 }
 
 ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, Model model, const TruthTrack& truth) {
@@ -433,21 +453,7 @@ ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, Model m
   for (const RunResult& r : results) {
     const fsw::ExecutiveHealth& h = r.health[mi];
     fsw::ExecutiveHealth& a = s.health;
-    a.ticks += h.ticks;
-    a.nav_frames += h.nav_frames;
-    a.ekf_runs += h.ekf_runs;
-    a.ekf_updates += h.ekf_updates;
-    a.ekf_without_gnss += h.ekf_without_gnss;
-    a.imu_samples += h.imu_samples;
-    a.imu_rejected += h.imu_rejected;
-    a.gnss_epochs += h.gnss_epochs;
-    a.gnss_stale += h.gnss_stale;
-    a.pr_used += h.pr_used;
-    a.prr_used += h.prr_used;
-    a.pr_rejected += h.pr_rejected;
-    a.prr_rejected += h.prr_rejected;
-    a.obs_invalid += h.obs_invalid;
-    a.fsw_errors += h.fsw_errors;
+    fsw::add_health_counters(a, h);
     a.ekf.cov_checks += h.ekf.cov_checks;
     a.ekf.cov_repairs += h.ekf.cov_repairs;
     a.ekf.nonfinite_rejected += h.ekf.nonfinite_rejected;

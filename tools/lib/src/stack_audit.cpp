@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <tuple>
 #include <stdexcept>
 
 namespace tools::stack {
@@ -295,7 +296,7 @@ const std::vector<ExternalCost>& external_costs() {
     std::vector<ExternalCost> v;
     const char* libm_basis = "assumed: glibc libm leaf, measured <= 176 B on a painted stack (test_stack_audit)";
     for (const char* f : {"sin", "cos", "tan", "sincos", "exp", "log", "sqrt", "atan", "atan2", "asin", "acos", "pow",
-                          "hypot", "fmod", "sinh", "cosh", "tanh", "log10", "exp2", "cbrt"})
+                          "hypot", "fmod", "sinh", "cosh", "tanh", "log10", "exp2", "cbrt", "lround"})
       v.push_back({f, 512, libm_basis});
     const char* mem_basis = "assumed: glibc string routine (assembly, no frame), measured <= 8 B (test_stack_audit)";
     for (const char* f : {"memset", "memcpy", "memmove", "memcmp"}) v.push_back({f, 64, mem_basis});
@@ -591,15 +592,27 @@ void fsw_task_specs(const CallGraph& g, long budget_bytes, long red_zone_bytes, 
       functions.push_back(f);
     }
   }
-  // The flight application's solution input: validation, or the initialisation from a solution.
+  // The flight application's entries for the layouts that fly (HIL, SIL, replay): every path the
+  // flight code takes from an input event, the initialisation included.
   for (const std::string l : {"Layout15Full", "Layout24Full"}) {
-    TaskSpec app;
-    app.name = "pvt_input/" + l;
-    app.root = single_callee(g, w + "on_gnss_pvt_" + l);
-    app.budget_bytes = budget_bytes;
-    app.red_zone_bytes = red_zone_bytes;
-    app.description = "FlightApp<" + l + ">::on_gnss_pvt (validation; initialisation from a solution)";
-    tasks.push_back(app);
+    const std::string app = "FlightApp<" + l + ">::";
+    for (const auto& [task, entry, what] :
+         {std::tuple<std::string, std::string, std::string>{
+              "imu_input", "on_imu_",
+              "on_imu (levelling / alignment before initialisation; batching and, on a frame's last sample, "
+              "Executive::tick with the 200 Hz group and the 1 Hz group when due)"},
+          {"gnss_input", "on_gnss_",
+           "on_gnss (raw epoch -> satellite positions from the almanac; before initialisation the single-point "
+           "solution and the initialisation it may complete)"},
+          {"pvt_input", "on_gnss_pvt_", "on_gnss_pvt (validation; initialisation from a solution)"}}) {
+      TaskSpec t;
+      t.name = task + "/" + l;
+      t.root = single_callee(g, w + entry + l);
+      t.budget_bytes = budget_bytes;
+      t.red_zone_bytes = red_zone_bytes;
+      t.description = app + what;
+      tasks.push_back(t);
+    }
   }
   for (const auto& [name, wrapper] : {std::pair<std::string, std::string>{"Strapdown::step", "strapdown_step"},
                                       {"FrameBuilder::add", "frame_builder_add"}}) {

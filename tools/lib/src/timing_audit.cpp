@@ -8,11 +8,14 @@
 #include <cmath>
 #include <memory>
 #include <stdexcept>
+#include <string>
 
+#include "fsw/flight_app.hpp"
 #include "sim/almanac.hpp"
 #include "sim/gps_model.hpp"
 #include "sim/imu_model.hpp"
 #include "tools/montecarlo.hpp"
+#include "tools/run_sensors.hpp"
 
 namespace tools {
 namespace {
@@ -53,11 +56,13 @@ double timed(F&& f, double overhead_s, unsigned char& preempted) {
   return std::max(0.0, to_s(b - a) - overhead_s);
 }
 
-/// Everything one layout's pass records, per tick.
+/// Everything one layout's pass records, per minor frame.
 struct Pass {
-  std::vector<double> tick_s;               ///< executive tick
-  std::vector<unsigned char> tick_pre;      ///< the tick was preempted
-  std::vector<unsigned char> ekf_ran;       ///< the 1 Hz group ran in this tick
+  std::vector<double> tick_s;               ///< the frame's flight-application calls (on_gnss, on_imu)
+  std::vector<unsigned char> tick_pre;
+  std::vector<unsigned char> ekf_ran;       ///< the 1 Hz group ran in this frame
+  std::vector<std::string> work;            ///< what the frame did (filled for the EKF frames only)
+  std::vector<double> t_s;                  ///< navigation time at the frame's end
   std::vector<std::vector<double>> stage_s; ///< [stage][tick]
   std::vector<std::vector<unsigned char>> stage_pre;
   std::vector<int> sats;                    ///< satellites of each epoch the EKF used
@@ -66,71 +71,102 @@ struct Pass {
   double wall_s = 0;
 };
 
+/// One line on what a minor frame did, from its output.
+std::string frame_work(const fsw::FrameOutput& out, bool had_epoch, int epoch_sats) {
+  std::string w;
+  if (had_epoch) w = "FlightApp::on_gnss (raw epoch, " + std::to_string(epoch_sats) + " satellites from the almanac); ";
+  w += "200 Hz group";
+  if (out.ekf_ran) {
+    w += " + 1 Hz group: propagate";
+    if (out.ekf_updated)
+      w += ", update (" + std::to_string(out.report.pr_used + out.report.pr_rejected) + " pseudoranges, " +
+           std::to_string(out.report.prr_used + out.report.prr_rejected) + " rates" +
+           (out.report.clock_initialised ? "; receiver clock set from the epoch" : "") + "), feedback";
+    else
+      w += " only (no epoch)";
+  }
+  return w;
+}
+
+/// Flies the scenario through the flight application (as the Monte Carlo does: FlightApp started
+/// from the run's given state, raw receiver epochs, IMU samples) and times every call it makes.
 template <class Layout>
 Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
          const MonteCarloConfig& mc, const TimingAuditConfig& cfg, double overhead_s) {
   const auto w0 = Clock::now();
   const std::uint64_t seed = sc.seed + static_cast<std::uint64_t>(cfg.run);
-  const sim::ImuErrors errors = sim::draw_imu_errors(sc.imu, sc.effects, seed);
-  sim::ImuModel imu(errors, seed);
-  sim::GpsModel gps(sc.gps, almanac, sc.effects, seed);
-  const fsw::ExecutiveConfig ecfg = executive_config(sc, mc);
-  auto exec = std::make_unique<fsw::Executive<Layout>>();  // the 56-state executives are ~100 KB
-  if (exec->init(ecfg, initial_nav_state(truth, errors, mc, seed)) != fsw::Status::kOk)
-    throw std::runtime_error("timing audit: executive init failed");
+  RunSensors sensors(sc, truth, almanac, seed);
+  const fsw::FlightAppConfig acfg = flight_app_config(sc, mc);
+  auto app = std::make_unique<fsw::FlightApp<Layout>>();  // the 56-state executives are ~100 KB
+  fsw::Status st0 = app->init(acfg);
+  if (st0 == fsw::Status::kOk) {
+    for (const sim::AlmanacEntry& a : sensors.almanac()) (void)app->on_almanac(a);  // a rejected element is counted
+    st0 = app->start_given(initial_nav_state(truth, sensors.errors(), mc, seed));
+  }
+  if (st0 != fsw::Status::kOk) throw std::runtime_error("timing audit: flight application init failed");
 
   Pass p;
-  const std::size_t n_frames = truth.imu.size() / static_cast<std::size_t>(ecfg.imu_samples_per_frame);
+  const std::size_t n_frames = truth.imu.size() / static_cast<std::size_t>(acfg.exec.imu_samples_per_frame);
   p.tick_s.reserve(n_frames);
   p.ekf_ran.reserve(n_frames);
   p.tick_pre.reserve(n_frames);
+  p.work.reserve(n_frames);
+  p.t_s.reserve(n_frames);
   p.stage_s.assign(cfg.frame_stages.size(), {});
   p.stage_pre.assign(cfg.frame_stages.size(), {});
   for (auto& s : p.stage_s) s.reserve(n_frames);
   for (auto& s : p.stage_pre) s.reserve(n_frames);
 
-  const int spf = ecfg.imu_samples_per_frame;
   std::array<fsw::ImuSample, fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
   int n_in_frame = 0;
-  sim::TruthSample ts;
-  fsw::GnssEpoch epoch;
   fsw::FrameOutput out;
-  int last_sats = 0;
+  bool frame_has_epoch = false;
+  double frame_s = 0.0;
+  unsigned char frame_pre = 0;
+  fsw::Status status = fsw::Status::kOk;
   for (std::size_t j = 0; j < truth.imu.size(); ++j) {
-    const TruthTrack::Increment& inc = truth.imu[j];
-    ts.t_s = inc.t_s;
-    ts.dt_s = inc.dt_s;
-    ts.dtheta_rad = inc.dtheta_rad;
-    ts.dv_mps = inc.dv_mps;
-    frame[static_cast<std::size_t>(n_in_frame++)] = imu.measure(ts);
-    const bool is_epoch = (j + 1) % static_cast<std::size_t>(truth.samples_per_epoch) == 0;
-    if (is_epoch) {
-      gps.measure(truth.epochs[(j + 1) / static_cast<std::size_t>(truth.samples_per_epoch)], epoch);
-      last_sats = epoch.n_obs;
-    }
-    if (n_in_frame < spf) continue;
-    fsw::FrameInput in;
-    in.imu = frame.data();
-    in.n_imu = n_in_frame;
-    in.gnss = is_epoch ? &epoch : nullptr;
-    n_in_frame = 0;
-    for (std::size_t s = 0; s < cfg.frame_stages.size(); ++s) {
-      const FrameStage& st = cfg.frame_stages[s];
-      if (st.prepare) st.prepare(in);
-      unsigned char pre = 0;
-      p.stage_s[s].push_back(timed([&st] { st.run(); }, overhead_s, pre));
-      p.stage_pre[s].push_back(pre);
-    }
-    fsw::Status status = fsw::Status::kOk;
+    fsw::ImuSample sample;
+    const bool is_epoch = sensors.measure(j, sample) != nullptr;
+    frame[static_cast<std::size_t>(n_in_frame++)] = sample;
     unsigned char pre = 0;
-    p.tick_s.push_back(timed([&] { status = exec->tick(in, out); }, overhead_s, pre));
-    p.tick_pre.push_back(pre);
-    if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: Executive::tick failed");
+    if (is_epoch) {  // delivered before the IMU sample of its time, as the Monte Carlo does
+      frame_has_epoch = true;
+      frame_s += timed([&] { status = app->on_gnss(sensors.raw()); }, overhead_s, pre);
+      frame_pre |= pre;
+      if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_gnss failed");
+    }
+    if (n_in_frame == acfg.exec.imu_samples_per_frame) {  // the frame's stages see its input first
+      fsw::FrameInput in;
+      in.imu = frame.data();
+      in.n_imu = n_in_frame;
+      in.gnss = frame_has_epoch ? &sensors.epoch() : nullptr;
+      for (std::size_t s = 0; s < cfg.frame_stages.size(); ++s) {
+        const FrameStage& stg = cfg.frame_stages[s];
+        if (stg.prepare) stg.prepare(in);
+        unsigned char spre = 0;
+        p.stage_s[s].push_back(timed([&stg] { stg.run(); }, overhead_s, spre));
+        p.stage_pre[s].push_back(spre);
+      }
+    }
+    frame_s += timed([&] { status = app->on_imu(sample, out); }, overhead_s, pre);
+    frame_pre |= pre;
+    if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_imu failed");
+    if (n_in_frame < acfg.exec.imu_samples_per_frame) continue;
+    if (!out.nav_valid) throw std::runtime_error("timing audit: a full minor frame produced no solution");
+    p.tick_s.push_back(frame_s);
+    p.tick_pre.push_back(frame_pre);
     p.ekf_ran.push_back(out.ekf_ran ? 1 : 0);
-    if (out.ekf_updated) p.sats.push_back(last_sats);
+    p.t_s.push_back(out.nav.t_s);
+    p.work.push_back(out.ekf_ran || frame_has_epoch ? frame_work(out, frame_has_epoch, sensors.epoch().n_obs)
+                                                    : std::string());
+    if (out.ekf_updated) p.sats.push_back(sensors.epoch().n_obs);
+    n_in_frame = 0;
+    frame_has_epoch = false;
+    frame_s = 0.0;
+    frame_pre = 0;
   }
-  p.ekf_updates = exec->health().ekf_updates;
-  p.fsw_errors = exec->health().fsw_errors;
+  p.ekf_updates = app->executive().health().ekf_updates;
+  p.fsw_errors = app->executive().health().fsw_errors;
   p.wall_s = to_s(Clock::now() - w0);
   return p;
 }
@@ -241,7 +277,7 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
     MonteCarloConfig mc;
     mc.model_gps_errors = l == "Layout15Full" || l == "Layout24Full";
     mc.models = {l == "Layout15" || l == "Layout15Full" ? Model::k15 : Model::k24};
-    const fsw::ExecutiveConfig ecfg = executive_config(sc, mc);
+    const fsw::ExecutiveConfig ecfg = flight_app_config(sc, mc).exec;
     Pass p;
     if (l == "Layout15") p = fly<fsw::Layout15>(sc, truth, *alm.almanac, mc, cfg, overhead_s);
     if (l == "Layout24") p = fly<fsw::Layout24>(sc, truth, *alm.almanac, mc, cfg, overhead_s);
@@ -281,8 +317,9 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
     TaskTiming tm;
     tm.name = "mech_200hz/" + l;
     tm.layout = l;
-    tm.description = "Executive::tick without the 1 Hz group: IMU compensation, coning/sculling, strapdown step, "
-                     "Ekf::accumulate (every 10th frame a transition-matrix sub-step)";
+    tm.description = "FlightApp::on_imu calls of a minor frame without the 1 Hz group (batching; on the frame's last "
+                     "sample Executive::tick: IMU compensation, coning/sculling, strapdown step, Ekf::accumulate, every "
+                     "10th frame a transition-matrix sub-step)";
     tm.nominal_rate_hz = ecfg.nav_rate_hz;
     fill_stats(tm, p.tick_s, p.tick_pre, mech_k);
     // Share of one core: the mean unpreempted time at the task's rate (preempted samples say
@@ -292,7 +329,8 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
     TaskTiming te;
     te.name = "ekf_1hz/" + l;
     te.layout = l;
-    te.description = "Executive::tick of the minor frame that runs the 1 Hz group: that frame's 200 Hz work, then "
+    te.description = "FlightApp calls of the minor frame that runs the 1 Hz group: on_gnss with the raw epoch "
+                     "(satellite positions from the almanac), the frame's on_imu calls with its 200 Hz work, then "
                      "Ekf::propagate, update with the epoch (pseudorange and rate per satellite) and feedback";
     te.nominal_rate_hz = ecfg.nav_rate_hz / ecfg.frames_per_ekf;
     fill_stats(te, p.tick_s, p.tick_pre, ekf_k);
@@ -325,6 +363,14 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
       lt.sats_median = s[(s.size() - 1) / 2];
     }
     lt.wall_s = p.wall_s;
+    // The worst minor frame that was not preempted, and what it did.
+    for (std::size_t k = 0; k < p.tick_s.size(); ++k)
+      if (!p.tick_pre[k] && p.tick_s[k] * 1e6 > lt.worst_frame_us) {
+        lt.worst_frame_us = p.tick_s[k] * 1e6;
+        lt.worst_frame_index = static_cast<long>(k);
+        lt.worst_frame_t_s = p.t_s[k];
+        lt.worst_frame_work = p.work[k].empty() ? "200 Hz group only" : p.work[k];
+      }
     r.layouts.push_back(lt);
   }
   for (std::size_t s = 0; s < cfg.frame_stages.size(); ++s) {

@@ -40,6 +40,7 @@
 #include <string>
 #include <vector>
 
+#include "fsw/chi_square.hpp"
 #include "fsw/effect_catalogue.hpp"
 #include "fsw/error_state.hpp"
 #include "fsw/flight_app.hpp"
@@ -270,14 +271,10 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
 /// (at least the best-observed one). Returns z^2 and sets dof to the number of directions.
 double joint_wald_z2(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const Eigen::VectorXd& s0, double max_ratio,
                      int& dof);
-/// P(X > x) and the upper quantile (P(X > q) = p) of chi-square with k degrees of freedom (exact
-/// for integer k: the incomplete gamma function's finite sums).
-double chi2_survival(double x, int k);
-double chi2_upper_quantile(double p, int k);
-
-/// Upper quantile of chi-square with 1 degree of freedom: P(X > q) = p.
-double chi2_1_upper_quantile(double p);
-/// P(X > x) for chi-square with 1 degree of freedom.
-double chi2_1_survival(double x);
+/// Chi-square: the one definition in fsw/chi_square.hpp.
+using fsw::chi2_1_survival;
+using fsw::chi2_1_upper_quantile;
+using fsw::chi2_survival;
+using fsw::chi2_upper_quantile;
 
 }  // namespace tools

@@ -1,5 +1,6 @@
 // Software-in-the-loop Monte Carlo of the tightly coupled filters: truth simulator -> IMU and GPS
-// error models -> fsw executive (15- and/or 24-state model, the same inputs for both), with the
+// error models -> raw receiver epochs and IMU samples -> fsw::FlightApp (15- and/or 24-state
+// model, the same inputs for both; the flight application SIL, HIL and replay fly), with the
 // statistics across runs that the paper's figures show.
 //
 // The truth trajectory does not depend on the seed, so it is generated once (TruthTrack) and
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "fsw/executive.hpp"
+#include "fsw/flight_app.hpp"
 #include "sim/almanac.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/scenario.hpp"
@@ -54,7 +56,7 @@ struct MonteCarloConfig {
   double vrw_mps_per_rts = 1e-4;
   double arw_rad_per_rts = 2e-7;
   double gate_chi2 = 10.83;
-  /// Carry the GPS model's time-correlated errors as per-channel states (Layout15Gm/24Gm); false:
+  /// Carry the GPS model's time-correlated errors as per-channel states (Layout15Full/24Full); false:
   /// the paper's plain layouts with the total error as white measurement noise.
   bool model_gps_errors = true;
 };
@@ -62,6 +64,12 @@ struct MonteCarloConfig {
 /// The executive configuration a scenario implies for a model (rates, initial sigmas from the
 /// scenario's sensor sigmas and the alignment formulas, measurement noise from the GPS model).
 fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloConfig& mc);
+
+/// The flight application's configuration for the Monte Carlo (and the paper and the timing
+/// audit): executive_config's executive, InitMode::kGiven with its initial sigmas, so every run
+/// starts from initial_nav_state through FlightApp::start_given and then flies the same flight
+/// application as SIL, HIL and replay.
+fsw::FlightAppConfig flight_app_config(const sim::Scenario& sc, const MonteCarloConfig& mc);
 
 /// The executive's initial solution for a run: truth at t = 0 with the attitude error that
 /// self-alignment leaves for the run's IMU biases and drawn position / velocity errors (seed: the

@@ -1,7 +1,10 @@
-// Timing audit of the flight-software tasks (`sdins audit timing`, docs/audits.md): the fsw
-// executive flies a whole scenario on the SIL wiring of the Monte Carlo (truth simulator -> IMU and
-// GPS error models -> Executive<Layout>::tick, run 0's seed) and every tick is timed with the
-// steady clock.
+// Timing audit of the flight-software tasks (`sdins audit timing`, docs/audits.md): the flight
+// application flies a whole scenario on the wiring of the Monte Carlo (truth simulator -> IMU and
+// GPS error models -> raw receiver epochs and IMU samples -> fsw::FlightApp<Layout>, started from
+// run 0's given state) and every call into it is timed with the steady clock; a minor frame's time
+// is the sum of its calls (FlightApp::on_gnss when an epoch arrived in it, and its on_imu calls,
+// the last of which runs Executive::tick). The worst unpreempted frame of each layout is reported
+// with the work it did (LayoutTiming::worst_frame_*).
 //
 // Tasks, per layout:
 //   mech_200hz/<L>  ticks that do not run the 1 Hz group: IMU compensation, coning/sculling,
@@ -94,6 +97,10 @@ struct LayoutTiming {
   long fsw_errors = 0;
   int sats_min = 0, sats_median = 0, sats_max = 0;  ///< satellites in the epochs the EKF used
   double wall_s = 0;
+  double worst_frame_us = 0;       ///< the longest minor frame without a context switch
+  long worst_frame_index = -1;     ///< its index (0: the first frame)
+  double worst_frame_t_s = 0;      ///< its navigation time at the frame end
+  std::string worst_frame_work;    ///< what it did (raw-epoch conversion, 200 Hz group, 1 Hz group with counts)
 };
 
 struct TimingAuditResult {
