@@ -58,6 +58,9 @@ struct ImportTimeScale {
 // ---------------------------------------------------------------------------------------------
 // Line accounting
 
+/// Lines a time jump must hold for to be taken as a new time base (hal::TimeTagGate).
+inline constexpr int kTimeBaseConfirmLines = 5;
+
 /// Lines of one input file: how many were read, used and rejected, by reason, with the first few
 /// rejected line numbers (1-based) as examples.
 struct LineStats {
@@ -68,6 +71,11 @@ struct LineStats {
   std::vector<std::pair<std::uint64_t, std::string>> examples;  ///< at most kMaxExamples
   /// Lines that are fine but not used (other GNSS systems, absent satellites, ...), by reason.
   std::map<std::string, std::uint64_t> skipped;
+  /// Time tags (hal::TimeTagGate, docs/faults.md): sustained jumps taken as a new time base, the
+  /// last one's size (in the file's time unit) and line. Single outliers are rejected lines.
+  std::uint64_t time_base_changes = 0;
+  double last_time_jump = 0.0;
+  std::uint64_t last_time_jump_line = 0;
   static constexpr std::size_t kMaxExamples = 10;
 
   void reject(std::uint64_t line, const std::string& reason);
@@ -158,6 +166,9 @@ struct TickToGps {
   /// Seconds after start of a tick.
   double offset_s(std::int64_t tick_ms) const { return seconds_per_tick * static_cast<double>(tick_ms - tick0_ms); }
 };
+/// How far (relative) the tag's span may differ from the IMU's own tick span (1 ms per tick)
+/// before the importer refuses the mapping (docs/faults.md): a crystal drifts by 1e-4, not 1e-2.
+inline constexpr double kMaxTagClockDeviation = 0.01;
 /// Throws std::runtime_error with fewer than two samples or no tag records.
 TickToGps tick_to_gps(const TimeTag& tag, const std::vector<ImuCsvSample>& samples);
 
