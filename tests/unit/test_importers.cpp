@@ -202,7 +202,7 @@ TEST(ImportImuCsv, ReadsLinesAndCountsEveryBadOne) {
   EXPECT_EQ(st.by_reason.at("non-finite value"), 1u);
   EXPECT_EQ(st.by_reason.at("unparsable number"), 1u);
   EXPECT_EQ(st.by_reason.at("value beyond the sensor range"), 1u);
-  EXPECT_EQ(st.by_reason.at("tick not increasing"), 1u);
+  EXPECT_EQ(st.by_reason.at("time not increasing"), 1u);
   EXPECT_EQ(st.by_reason.at("empty line"), 1u);
   EXPECT_EQ(st.by_reason.at("partial last line (no newline)"), 1u);
   ASSERT_EQ(s.size(), 2u);
