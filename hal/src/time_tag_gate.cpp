@@ -60,6 +60,13 @@ TimeTagGate::Verdict TimeTagGate::feed(double t) {
       reason_ = TimeTagRejection::kNotIncreasing;
       return Verdict::kReject;
     }
+    if (!have_base_ && held_ >= 2) {
+      // No base yet, and tags that agree with each other are held: the one that agrees with
+      // neither them nor anything else is the outlier (the first tags of a stream are kept).
+      ++stats_.outliers;
+      reason_ = TimeTagRejection::kOutlier;
+      return Verdict::kReject;
+    }
     dropped_ = held_;
     stats_.outliers += static_cast<std::uint64_t>(held_);
     held_ = 0;

@@ -24,6 +24,27 @@ signal_after() {
   cases=$((cases + 1))
 }
 
+# signal_when GLOB SIGNAL NAME -- CMD...: as signal_after, but signals 50 ms after a file matching
+# GLOB appears (the run's temporary output: the run is past its setup and polling), so a fast
+# machine cannot finish first.
+signal_when() {
+  local glob=$1 sig=$2 name=$3
+  shift 4
+  "$@" > "$out/$name.log" 2>&1 &
+  local pid=$!
+  local n=0
+  until compgen -G "$glob" > /dev/null; do
+    kill -0 "$pid" 2> /dev/null || fail "$name: finished before its temporary output appeared"
+    n=$((n + 1))
+    [ $n -lt 20000 ] || { kill -KILL "$pid"; fail "$name: no temporary output appeared"; }
+  done
+  sleep 0.05
+  kill "-$sig" "$pid" 2> /dev/null || fail "$name: finished before the signal"
+  wait "$pid"
+  rc=$?
+  cases=$((cases + 1))
+}
+
 # montecarlo: a previous complete run in the directory, then an interrupted one.
 mc="$out/mc"
 "$sdins" montecarlo --duration 30 --runs 2 --models 15 --out "$mc" > /dev/null 2>&1 || fail "montecarlo setup"
@@ -57,7 +78,7 @@ python3 -c 'import json,sys; json.load(open(sys.argv[1]))' "$out/bus.json" || fa
 # replay: SIGINT in the middle of a 600 s log: the summary so far, no log, no JSON.
 "$sdins" sim --seed 1 --duration 600 --log "$out/long.lcmlog" > /dev/null 2>&1 || fail "sim setup"
 echo "previous" > "$out/replay_out.lcmlog"
-signal_after 0.5 INT replay_int -- "$sdins" replay "$out/long.lcmlog" --log "$out/replay_out.lcmlog" --json "$out/replay.json"
+signal_when "$out/.replay_out.lcmlog.sdins-tmp.*" INT replay_int -- "$sdins" replay "$out/long.lcmlog" --log "$out/replay_out.lcmlog" --json "$out/replay.json"
 [ "$rc" = 130 ] || { cat "$out/replay_int.log"; fail "replay SIGINT: exit $rc, expected 130"; }
 says replay_int "replay stopped after"; says replay_int "navigation frames"
 [ "$(cat "$out/replay_out.lcmlog")" = previous ] || fail "replay: the previous --log was replaced by a partial one"
@@ -65,7 +86,7 @@ absent "$out/replay.json"
 no_temporaries "$out"
 
 # diagnose: SIGTERM during the candidate runs: no --json, no report directory marker.
-signal_after 3 TERM diagnose_term -- "$sdins" diagnose --log "$out/long.lcmlog" --json "$out/diag.json" --report "$out/diag"
+signal_after 0.3 TERM diagnose_term -- "$sdins" diagnose --log "$out/long.lcmlog" --json "$out/diag.json" --report "$out/diag"
 [ "$rc" = 143 ] || { cat "$out/diagnose_term.log"; fail "diagnose SIGTERM: exit $rc, expected 143"; }
 absent "$out/diag.json"; absent "$out/diag/summary.json"
 

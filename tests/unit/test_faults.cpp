@@ -240,6 +240,23 @@ TEST(TimeTagGate, OutlierAtTheStartOrTheEnd) {
   EXPECT_EQ(r.rejected.size(), 1u);
 }
 
+TEST(TimeTagGate, OutlierAmongTheFirstTagsKeepsTheFirstTags) {
+  std::vector<double> t = ramp(0.0, 3);
+  t.push_back(-1e6);  // before any base: the three agreeing tags win
+  for (double x : ramp(0.03, 10)) t.push_back(x);
+  const GateRun r = run_gate(t, {});
+  EXPECT_EQ(r.accepted.size(), 13u);
+  ASSERT_EQ(r.rejected.size(), 1u);
+  EXPECT_EQ(r.rejected[0], -1e6);
+  // A stream shorter than confirm_samples with a backward step at the end keeps its first tags.
+  hal::TimeTagGateConfig strict;
+  strict.strictly_increasing = true;
+  strict.max_backward_s = 0.0;
+  const GateRun s = run_gate({10.0, 11.0, 12.0, 9.0}, strict);
+  EXPECT_EQ(s.accepted.size(), 3u);
+  EXPECT_EQ(s.rejected.size(), 1u);
+}
+
 TEST(TimeTagGate, SustainedJumpIsANewTimeBaseAndLosesNothing) {
   std::vector<double> t = ramp(0.0, 30);
   for (double x : ramp(1000.0, 30)) t.push_back(x);

@@ -11,7 +11,8 @@
 //    with the old base: a sustained jump, taken as a new time base (counted and reported with its
 //    size); the held tags are accepted, nothing is lost.
 // Until the first confirm_samples tags agree with each other there is no base (the first tag of a
-// stream may be the wild one): they are held. At the end of the stream (finish()) tags still held
+// stream may be the wild one): they are held; once two or more of them agree, a tag that agrees
+// with neither them is the outlier. At the end of the stream (finish()) tags still held
 // are accepted if no base was ever established (a stream shorter than confirm_samples) and
 // rejected as unconfirmed otherwise. A tag within the band but not after the base when
 // strictly_increasing is set (a repeated or slightly earlier tick) is rejected on its own.

@@ -671,6 +671,8 @@ std::vector<PsinsImuRow> read_psins_imu(std::istream& in, LineStats& stats) {
 
 std::vector<PsinsObsRow> read_psins_obs(std::istream& in, LineStats& stats) {
   std::vector<PsinsObsRow> out;
+  // Several rows per epoch (equal times); a step of more than 600 s or any step back is a jump.
+  LineTimeGate<PsinsObsRow> gate(stats, out, gate_config(600.0, 0.0, false));
   std::string header;
   read_csv_rows(in, stats, header, [&](std::uint64_t ln, const std::vector<std::string_view>& f) {
     double v[6];
@@ -693,10 +695,6 @@ std::vector<PsinsObsRow> read_psins_obs(std::istream& in, LineStats& stats) {
       stats.reject(ln, "time of week out of range");
       return;
     }
-    if (!out.empty() && v[0] < out.back().tow_s) {
-      stats.reject(ln, "time going backwards");
-      return;
-    }
     PsinsObsRow r;
     r.tow_s = v[0];
     r.prn = static_cast<int>(v[1]);
@@ -704,9 +702,9 @@ std::vector<PsinsObsRow> read_psins_obs(std::istream& in, LineStats& stats) {
     r.carrier_m = v[3];
     r.doppler_mps = v[5];
     r.line = ln;
-    ++stats.accepted;
-    out.push_back(r);
+    gate.push(r.tow_s, r);
   });
+  gate.finish();
   require_header(header, "PSINS GPS observation CSV");
   return out;
 }
@@ -797,6 +795,16 @@ std::string_view field(std::string_view line, std::size_t pos, std::size_t len) 
 
 std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) {
   std::vector<RinexObsEpoch> out;
+  // Epoch times through the time-tag gate (docs/faults.md): more than 600 s ahead or any step
+  // back is a jump; a lone one costs its epoch only.
+  struct ObsRow {
+    std::uint64_t line;
+    RinexObsEpoch ep;
+  };
+  std::vector<ObsRow> rows;
+  LineTimeGate<ObsRow> gate(st.lines, rows, gate_config(600.0, 0.0, true));
+  bool have_week0 = false;
+  int week0 = 0;
   std::string line;
   bool terminated = true;
   std::uint64_t ln = 0;
@@ -905,14 +913,14 @@ std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) 
       continue;
     }
     if (!epoch_ok) continue;
-    if (!out.empty() && !(static_cast<double>(ep.time.week - out.back().time.week) * fsw::kSecondsPerWeek +
-                              (ep.time.tow_s - out.back().time.tow_s) > 0.0)) {
-      st.lines.reject(epoch_line, "epoch time not increasing");
-      continue;
-    }
-    ++st.lines.accepted;
-    out.push_back(std::move(ep));
+    if (!have_week0) week0 = ep.time.week;
+    have_week0 = true;
+    const double t = static_cast<double>(ep.time.week - week0) * fsw::kSecondsPerWeek + ep.time.tow_s;
+    gate.push(t, ObsRow{epoch_line, std::move(ep)});
   }
+  gate.finish();
+  out.reserve(rows.size());
+  for (ObsRow& r : rows) out.push_back(std::move(r.ep));
   return out;
 }
 

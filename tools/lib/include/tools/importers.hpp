@@ -232,7 +232,8 @@ struct PsinsObsRow {
 };
 /// gps_obs.csv: header, then GPS tow [s], PRN, C/A pseudorange [m], L1 carrier [m], an
 /// undocumented column, Doppler [m/s] (= -range rate). Rejected: field count, unparsable or
-/// non-finite number, PRN outside 1..32, pseudorange outside 1e7..5e7 m, time going backwards.
+/// non-finite number, PRN outside 1..32, pseudorange outside 1e7..5e7 m, a time going backwards or
+/// jumping alone (hal::TimeTagGate).
 std::vector<PsinsObsRow> read_psins_obs(std::istream& in, LineStats& stats);
 
 /// gps_eph.csv: a header naming the columns (PRN,Toc,af0,...), one row per PRN; rows with health
