@@ -97,9 +97,13 @@ int run_replay() {
               static_cast<unsigned long long>(st.other_events), static_cast<unsigned long long>(ls.events),
               static_cast<unsigned long long>(ls.total_rejections()));
   if (st.time_tag_rejected > 0 || st.time_base_changes > 0)
-    std::printf("time tags: %llu rejected as outliers, %llu new time bases (last: a jump of %.6f s at t = %.6f s)\n",
-                static_cast<unsigned long long>(st.time_tag_rejected),
-                static_cast<unsigned long long>(st.time_base_changes), st.last_time_base_jump_s, st.last_time_base_at_s);
+  {
+    std::printf("time tags: %llu rejected as outliers, %llu new time bases", static_cast<unsigned long long>(st.time_tag_rejected),
+                static_cast<unsigned long long>(st.time_base_changes));
+    if (st.time_base_changes > 0)
+      std::printf(" (last: a jump of %.6f s at t = %.6f s)", st.last_time_base_jump_s, st.last_time_base_at_s);
+    std::printf("\n");
+  }
   if (opt.outages.size() == 3)
     std::printf("GNSS outages: %.1f s every %.1f s from %.1f s after initialisation, %llu inputs withheld\n",
                 opt.outages[0], opt.outages[1], opt.outages[2], static_cast<unsigned long long>(withheld));
