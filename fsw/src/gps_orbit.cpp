@@ -21,19 +21,23 @@ bool finite_and_within(double v, double lo, double hi) { return std::isfinite(v)
 
 }  // namespace
 
-bool almanac_valid(const GpsAlmanac& sat) {
-  return sat.prn >= 1 && sat.prn <= kMaxGpsPrn && finite_and_within(sat.eccentricity, 0.0, 0.999) &&
-         finite_and_within(sat.toa_s, 0.0, kSecondsPerWeek) &&
-         finite_and_within(sat.inclination_rad, -kMaxAngle_rad, kMaxAngle_rad) &&
-         finite_and_within(sat.omega_dot_radps, -1e-6, 1e-6) &&
-         finite_and_within(sat.sqrt_a_sqrtm, kMinSqrtA_sqrtm, kMaxSqrtA_sqrtm) &&
-         finite_and_within(sat.omega0_rad, -kMaxAngle_rad, kMaxAngle_rad) &&
-         finite_and_within(sat.arg_perigee_rad, -kMaxAngle_rad, kMaxAngle_rad) &&
-         finite_and_within(sat.mean_anomaly_rad, -kMaxAngle_rad, kMaxAngle_rad) &&
-         finite_and_within(sat.af0_s, -kMaxClock_s, kMaxClock_s) &&
-         finite_and_within(sat.af1_sps, -kMaxClockDrift_sps, kMaxClockDrift_sps) && sat.week_mod_1024 >= 0 &&
-         sat.week_mod_1024 < 1024 * 64;
+const char* almanac_invalid_field(const GpsAlmanac& sat) {
+  if (!(sat.prn >= 1 && sat.prn <= kMaxGpsPrn)) return "PRN";
+  if (!finite_and_within(sat.eccentricity, 0.0, 0.999)) return "eccentricity";
+  if (!finite_and_within(sat.toa_s, 0.0, kSecondsPerWeek)) return "time of applicability";
+  if (!finite_and_within(sat.inclination_rad, -kMaxAngle_rad, kMaxAngle_rad)) return "inclination";
+  if (!finite_and_within(sat.omega_dot_radps, -1e-6, 1e-6)) return "rate of right ascension";
+  if (!finite_and_within(sat.sqrt_a_sqrtm, kMinSqrtA_sqrtm, kMaxSqrtA_sqrtm)) return "sqrt(A)";
+  if (!finite_and_within(sat.omega0_rad, -kMaxAngle_rad, kMaxAngle_rad)) return "right ascension at week";
+  if (!finite_and_within(sat.arg_perigee_rad, -kMaxAngle_rad, kMaxAngle_rad)) return "argument of perigee";
+  if (!finite_and_within(sat.mean_anomaly_rad, -kMaxAngle_rad, kMaxAngle_rad)) return "mean anomaly";
+  if (!finite_and_within(sat.af0_s, -kMaxClock_s, kMaxClock_s)) return "af0 (clock bias)";
+  if (!finite_and_within(sat.af1_sps, -kMaxClockDrift_sps, kMaxClockDrift_sps)) return "af1 (clock drift)";
+  if (!(sat.week_mod_1024 >= 0 && sat.week_mod_1024 < 1024 * 64)) return "week";
+  return nullptr;
 }
+
+bool almanac_valid(const GpsAlmanac& sat) { return almanac_invalid_field(sat) == nullptr; }
 
 int full_week(int week_mod_1024, int reference_full_week) {
   const int w = ((week_mod_1024 % 1024) + 1024) % 1024;

@@ -1,6 +1,8 @@
 // candump log reader and writer (see hal/can_log.hpp).
 #include "hal/can_log.hpp"
 
+#include "hal/input_file.hpp"
+
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -42,6 +44,7 @@ const char* to_string(CandumpLine k) {
     case CandumpLine::kRemoteFrame: return "remote frame (unsupported)";
     case CandumpLine::kErrorFrame: return "error frame (unsupported)";
     case CandumpLine::kTrailing: return "unexpected text after the frame";
+    case CandumpLine::kTooLong: return "line longer than 64 KiB";
   }
   return "unknown";
 }
@@ -150,6 +153,8 @@ bool CandumpReader::open(const std::string& path) {
   counts_.fill(0);
   problems_.clear();
   error_.clear();
+  error_ = check_input_file(path, kMaxRecordingInputBytes);
+  if (!error_.empty()) return false;
   f_ = std::fopen(path.c_str(), "r");
   if (f_ == nullptr) {
     error_ = path + ": " + std::strerror(errno);
@@ -164,17 +169,21 @@ bool CandumpReader::next(CanFrame& frame, std::string& iface) {
     line_.clear();
     int c = 0;
     bool any = false;
+    bool too_long = false;
     while ((c = std::fgetc(f_)) != EOF) {
       any = true;
       if (c == '\n') break;
-      line_ += static_cast<char>(c);
+      if (line_.size() < kMaxInputLineBytes)
+        line_ += static_cast<char>(c);
+      else
+        too_long = true;  // the rest of the line is read and dropped: memory stays bounded
     }
     if (!any) {
       if (std::ferror(f_)) error_ = path_ + ": read error";
       return false;
     }
     ++lines_;
-    const CandumpLine k = parse_candump_line(line_, frame, iface);
+    const CandumpLine k = too_long ? CandumpLine::kTooLong : parse_candump_line(line_, frame, iface);
     ++counts_[static_cast<std::size_t>(k)];
     if (k == CandumpLine::kFrame) {
       ++frames_;
@@ -205,16 +214,15 @@ bool CandumpWriter::open(const std::string& path) {
   close();
   frames_ = 0;
   error_.clear();
-  f_ = std::fopen(path.c_str(), "w");
-  if (f_ == nullptr) {
-    error_ = path + ": " + std::strerror(errno);
+  if (!f_.open(path)) {
+    error_ = f_.error();
     return false;
   }
   return true;
 }
 
 bool CandumpWriter::write(const CanFrame& frame, std::string_view iface) {
-  if (f_ == nullptr) {
+  if (!f_.is_open()) {
     error_ = "not open";
     return false;
   }
@@ -222,9 +230,10 @@ bool CandumpWriter::write(const CanFrame& frame, std::string_view iface) {
     error_ = "invalid frame (identifier or length)";
     return false;
   }
-  const std::string line = format_candump_line(frame, iface);
-  if (std::fputs(line.c_str(), f_) < 0 || std::fputc('\n', f_) == EOF) {
-    error_ = std::string("write error: ") + std::strerror(errno);
+  line_ = format_candump_line(frame, iface);
+  line_ += '\n';
+  if (!f_.write(line_)) {
+    error_ = f_.error();
     return false;
   }
   ++frames_;
@@ -232,12 +241,14 @@ bool CandumpWriter::write(const CanFrame& frame, std::string_view iface) {
 }
 
 bool CandumpWriter::close() {
-  if (f_ == nullptr) return true;
-  const bool ok = std::fflush(f_) == 0 && !std::ferror(f_);
-  const bool closed = std::fclose(f_) == 0;
-  f_ = nullptr;
-  if (!(ok && closed) && error_.empty()) error_ = "write error on close";
-  return ok && closed;
+  if (!f_.is_open()) return error_.empty();
+  if (!f_.commit()) {
+    if (error_.empty() || !f_.error().empty()) error_ = f_.error();
+    return false;
+  }
+  return true;
 }
+
+void CandumpWriter::abort() { f_.abort(); }
 
 }  // namespace hal

@@ -102,7 +102,8 @@ bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
   }
   const LcmLogStatus ls = sink_.open(cfg.telemetry);
   if (ls != LcmLogStatus::kOk) {
-    error = "cannot open the telemetry/log (" + cfg.telemetry.log_path + "): " + to_string(ls);
+    const std::string& why = sink_.telemetry().log().error();
+    error = "cannot open the telemetry/log (" + cfg.telemetry.log_path + "): " + (why.empty() ? to_string(ls) : why);
     app_.reset();
     return false;
   }
@@ -173,12 +174,22 @@ void FswNode::set_prev_tick_exec_s(double s) {
 bool FswNode::close(std::string& error) {
   if (!app_ || closed_) return true;
   closed_ = true;
+  const std::uint64_t failures = sink_.telemetry().log().write_failures();
   const LcmLogStatus ls = sink_.close();
-  if (ls != LcmLogStatus::kOk) {
-    error = std::string("closing the log failed: ") + to_string(ls);
+  if (ls != LcmLogStatus::kOk || failures > 0) {
+    // docs/faults.md: a log that lost events is not put in place; the error names the file and errno.
+    const std::string& why = sink_.telemetry().log().error();
+    error = std::string("the log is incomplete and was not written: ") + (why.empty() ? to_string(ls) : why);
     return false;
   }
   return true;
+}
+
+void FswNode::abort() {
+  if (!app_ || closed_) return;
+  closed_ = true;
+  sink_.telemetry().abort_log();
+  sink_.close();
 }
 
 const fsw::FlightAppHealth& FswNode::app_health() const {

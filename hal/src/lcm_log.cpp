@@ -1,5 +1,7 @@
 #include "hal/lcm_log.hpp"
 
+#include "hal/input_file.hpp"
+
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -77,14 +79,16 @@ LcmLogStatus LcmLogReader::open(const std::string& path, std::size_t max_data_by
   close();
   stats_ = LcmLogReadStats{};
   error_.clear();
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: a FIFO must not block the open (it is refused below: regular files only).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
     error_ = path + ": " + std::strerror(errno);
     return LcmLogStatus::kOpenFailed;
   }
   struct stat st {};
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    error_ = path + ": not a regular file";
+    error_ = check_input_file(path, ~0ull);  // names the kind (device, FIFO, directory)
+    if (error_.empty()) error_ = path + ": not a regular file";
     ::close(fd);
     return LcmLogStatus::kOpenFailed;
   }
@@ -247,16 +251,15 @@ LcmLogWriter::~LcmLogWriter() { close(); }
 
 LcmLogStatus LcmLogWriter::open(const std::string& path) {
   close();
-  file_ = std::fopen(path.c_str(), "wb");
-  if (file_ == nullptr) return LcmLogStatus::kOpenFailed;
   path_ = path;
   events_ = 0;
   failures_ = 0;
+  if (!file_.open(path)) return LcmLogStatus::kOpenFailed;
   return LcmLogStatus::kOk;
 }
 
 LcmLogStatus LcmLogWriter::write(const char* channel, const void* data, std::size_t len, std::int64_t timestamp_us) {
-  if (file_ == nullptr) return LcmLogStatus::kNotOpen;
+  if (!file_.is_open()) return LcmLogStatus::kNotOpen;
   if (channel == nullptr || !lcm_channel_name_ok(channel)) return LcmLogStatus::kBadChannel;
   if (len > 0x7fffffffu || (len > 0 && data == nullptr)) return LcmLogStatus::kTooLarge;
   const std::size_t chan_len = std::strlen(channel);
@@ -266,8 +269,7 @@ LcmLogStatus LcmLogWriter::write(const char* channel, const void* data, std::siz
   put64(header + 12, static_cast<std::uint64_t>(timestamp_us));
   put32(header + 20, static_cast<std::uint32_t>(chan_len));
   put32(header + 24, static_cast<std::uint32_t>(len));
-  if (std::fwrite(header, 1, sizeof(header), file_) != sizeof(header) ||
-      std::fwrite(channel, 1, chan_len, file_) != chan_len || (len > 0 && std::fwrite(data, 1, len, file_) != len)) {
+  if (!file_.write(header, sizeof(header)) || !file_.write(channel, chan_len) || (len > 0 && !file_.write(data, len))) {
     ++failures_;
     return LcmLogStatus::kWriteFailed;
   }
@@ -276,8 +278,8 @@ LcmLogStatus LcmLogWriter::write(const char* channel, const void* data, std::siz
 }
 
 LcmLogStatus LcmLogWriter::flush() {
-  if (file_ == nullptr) return LcmLogStatus::kNotOpen;
-  if (std::fflush(file_) != 0) {
+  if (!file_.is_open()) return LcmLogStatus::kNotOpen;
+  if (!file_.flush()) {
     ++failures_;
     return LcmLogStatus::kWriteFailed;
   }
@@ -285,15 +287,14 @@ LcmLogStatus LcmLogWriter::flush() {
 }
 
 LcmLogStatus LcmLogWriter::close() {
-  if (file_ == nullptr) return LcmLogStatus::kOk;
-  const bool ok = std::fflush(file_) == 0;
-  const bool closed = std::fclose(file_) == 0;
-  file_ = nullptr;
-  if (!ok || !closed) {
+  if (!file_.is_open()) return LcmLogStatus::kOk;
+  if (!file_.commit()) {
     ++failures_;
     return LcmLogStatus::kWriteFailed;
   }
   return LcmLogStatus::kOk;
 }
+
+void LcmLogWriter::abort() { file_.abort(); }
 
 }  // namespace hal

@@ -73,6 +73,7 @@ bool later(const std::pair<double, std::uint64_t>& a, const std::pair<double, st
 LcmLogStatus LcmReplayReader::open(const std::string& path, const LcmReplayConfig& cfg) {
   cfg_ = cfg;
   if (!(cfg_.reorder_window_s >= 0.0)) cfg_.reorder_window_s = 0.0;  // NaN or negative: no reordering
+  if (!(cfg_.max_time_jump_s > 0.0)) cfg_.max_time_jump_s = LcmReplayConfig{}.max_time_jump_s;
   stats_ = LcmReplayStats{};
   pending_.clear();
   seq_ = 0;
@@ -80,12 +81,27 @@ LcmLogStatus LcmReplayReader::open(const std::string& path, const LcmReplayConfi
   have_newest_ = false;
   have_delivered_ = false;
   have_counter_ = false;
+  TimeTagGateConfig g;
+  g.max_forward_s = cfg_.max_time_jump_s;
+  g.max_backward_s = cfg_.reorder_window_s;
+  g.confirm_samples = cfg_.time_base_confirm_inputs;
+  gate_ = TimeTagFilter<LcmReplayInput>(g);
   return log_.open(path, cfg.max_event_bytes);
 }
 
 void LcmReplayReader::push(LcmReplayInput&& in) {
-  if ((have_delivered_ && in.t_s < last_delivered_t_s_) ||
-      (have_newest_ && in.t_s < newest_t_s_ - cfg_.reorder_window_s)) {
+  gate_.push(
+      in.t_s, std::move(in), [this](LcmReplayInput&& a) { enqueue(std::move(a)); },
+      [this](LcmReplayInput&&, TimeTagRejection) { ++stats_.time_tag_rejected; });
+  const TimeTagGateStats& g = gate_.stats();
+  stats_.time_base_changes = g.new_bases;
+  stats_.last_time_base_jump_s = g.last_new_base_jump_s;
+  stats_.last_time_base_at_s = g.last_new_base_at_s;
+}
+
+void LcmReplayReader::enqueue(LcmReplayInput&& in) {
+  // Inputs are delivered in time order: one older than an input already returned is too late.
+  if (have_delivered_ && in.t_s < last_delivered_t_s_) {
     ++stats_.out_of_order;
     return;
   }
@@ -167,6 +183,8 @@ LcmLogStatus LcmReplayReader::next(LcmReplayInput& in) {
     if (st == LcmLogStatus::kOk) {
       take(ev);
     } else if (st == LcmLogStatus::kEndOfLog) {
+      gate_.finish([this](LcmReplayInput&& a) { enqueue(std::move(a)); },
+                   [this](LcmReplayInput&&, TimeTagRejection) { ++stats_.time_tag_rejected; });
       eof_ = true;
     } else {
       return st;

@@ -1,5 +1,6 @@
 // YUMA almanac reader and visibility (the orbit computation is fsw/gps_orbit.cpp).
 #include "sim/almanac.hpp"
+#include "fsw/gps_orbit.hpp"
 #include "sim/text_file.hpp"
 
 #include <algorithm>
@@ -177,6 +178,11 @@ class YumaParser {
       return error(r.line[kToa], "time of applicability outside [0, 604800) s");
     }
     if (s.week_mod_1024 < 0 || s.week_mod_1024 > 1023) return error(r.line[kWeek], "week outside 0..1023");
+    // The flight software's own plausibility (one validation, docs/faults.md): what a receiver
+    // would reject must not be simulated either (e.g. sqrt(A) 1e30, a clock bias of 1e6 s).
+    if (const char* bad = fsw::almanac_invalid_field(s))
+      return error(r.header_line, std::string("PRN ") + std::to_string(s.prn) + ": " + bad +
+                                      " outside the flight software's plausible range (fsw::almanac_valid)");
     sats_.push_back(s);
     return true;
   }
@@ -199,7 +205,7 @@ AlmanacParseResult parse_yuma_text(const std::string& text, const std::string& s
 AlmanacParseResult parse_yuma_file(const std::string& path) {
   try {
     const std::optional<std::string> text = read_text_file(path);
-    if (!text) return {std::nullopt, path + ":0: cannot open almanac file"};
+    if (!text) return {std::nullopt, path + ":0: cannot open almanac file: " + text_file_problem(path)};
     return parse_yuma_text(*text, path);
   } catch (const std::exception& e) {
     return {std::nullopt, path + ":0: " + e.what()};

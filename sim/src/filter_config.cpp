@@ -204,7 +204,7 @@ FilterConfigParseResult parse_filter_config_text(const std::string& toml_text, c
 
 FilterConfigParseResult parse_filter_config_file(const std::string& path, FilterConfig& cfg) {
   const std::optional<std::string> text = read_text_file(path);
-  if (!text) return {false, path + ": cannot open filter configuration"};
+  if (!text) return {false, path + ": cannot open filter configuration: " + text_file_problem(path)};
   return parse_filter_config_text(*text, path, cfg);
 }
 

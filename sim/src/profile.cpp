@@ -116,7 +116,7 @@ ProfileLoadResult load_profile(const std::string& path) {
   const std::optional<std::string> text = read_text_file(path);
   if (!text) {
     ProfileLoadResult result;
-    result.error = path + ": cannot open file";
+    result.error = path + ": cannot open file: " + text_file_problem(path);
     return result;
   }
   return parse_profile_text(*text, path);

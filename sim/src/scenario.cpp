@@ -295,7 +295,7 @@ ScenarioParseResult parse_scenario_text(const std::string& toml_text, const std:
 
 ScenarioParseResult parse_scenario_file(const std::string& path) {
   const std::optional<std::string> text = read_text_file(path);
-  if (!text) return {std::nullopt, path + ": cannot open scenario file"};
+  if (!text) return {std::nullopt, path + ": cannot open scenario file: " + text_file_problem(path)};
   ScenarioParseResult r = parse_scenario_text(*text, path);
   if (r.scenario && !r.scenario->gps.almanac.empty()) {
     try {

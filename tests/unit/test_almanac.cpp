@@ -138,7 +138,7 @@ TEST(AlmanacParse, RejectsMalformedWithLineNumbers) {
   EXPECT_EQ(parse_error(replace(good, "Af0(s):", "Af0(s)")), "t.alm:12: expected 'field: value', got 'Af0(s)                     0.1697540283E-003'");
   const AlmanacParseResult missing = parse_yuma_file("/nonexistent/x.alm");
   EXPECT_FALSE(missing.ok());
-  EXPECT_EQ(missing.error, "/nonexistent/x.alm:0: cannot open almanac file");
+  EXPECT_EQ(missing.error, "/nonexistent/x.alm:0: cannot open almanac file: No such file or directory");
 }
 
 TEST(AlmanacWeek, RolloverNearestReference) {

@@ -202,7 +202,7 @@ TEST(ImportImuCsv, ReadsLinesAndCountsEveryBadOne) {
   EXPECT_EQ(st.by_reason.at("non-finite value"), 1u);
   EXPECT_EQ(st.by_reason.at("unparsable number"), 1u);
   EXPECT_EQ(st.by_reason.at("value beyond the sensor range"), 1u);
-  EXPECT_EQ(st.by_reason.at("tick not increasing"), 1u);
+  EXPECT_EQ(st.by_reason.at("time not increasing"), 1u);
   EXPECT_EQ(st.by_reason.at("empty line"), 1u);
   EXPECT_EQ(st.by_reason.at("partial last line (no newline)"), 1u);
   ASSERT_EQ(s.size(), 2u);
@@ -310,7 +310,7 @@ TEST(ImportPsins, ImuObservationAndEphemerisReaders) {
   EXPECT_EQ(os.accepted, 3u);
   EXPECT_EQ(os.by_reason.at("PRN outside 1..32"), 1u);
   EXPECT_EQ(os.by_reason.at("pseudorange outside 1e7..5e7 m"), 1u);
-  EXPECT_EQ(os.by_reason.at("time going backwards"), 1u);
+  EXPECT_EQ(os.by_reason.at("time-tag outlier (a jump the following samples did not confirm)"), 1u);
   ASSERT_EQ(o.size(), 3u);
   EXPECT_EQ(o[1].prn, 10);
   EXPECT_EQ(o[1].doppler_mps, 481.874907);
@@ -572,7 +572,7 @@ TEST(ImportRinex, ObservationEpochs) {
   EXPECT_EQ(ep[0].sats[3].d1c_hz, -585.078);
   EXPECT_NEAR(ep[1].time.tow_s, 408640.248, 1e-9);
   EXPECT_EQ(st.lines.by_reason.at("partial last line (no newline)"), 1u);
-  EXPECT_EQ(st.lines.by_reason.at("epoch time not increasing"), 1u);
+  EXPECT_EQ(st.lines.by_reason.at("time not increasing"), 1u);
   // Pseudorange rate from Doppler: -D * lambda_L1 (a satellite coming closer has a positive
   // Doppler and a falling range).
   EXPECT_NEAR(-g10.d1c_hz * tools::kGpsL1Wavelength_m, -202.54, 0.01);

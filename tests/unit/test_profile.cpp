@@ -123,7 +123,7 @@ TEST(Profile, LoaderReportsMissingAndEmptyFile) {
   const std::string missing = ::testing::TempDir() + "sdins_profile_does_not_exist.csv";
   const sim::ProfileLoadResult r = sim::load_profile(missing);
   EXPECT_FALSE(r.ok());
-  EXPECT_EQ(r.error, missing + ": cannot open file");
+  EXPECT_EQ(r.error, missing + ": cannot open file: No such file or directory");
   const TempFile f("empty", "\n  \n");
   const sim::ProfileLoadResult r2 = sim::load_profile(f.path());
   EXPECT_FALSE(r2.ok());

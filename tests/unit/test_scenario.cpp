@@ -404,7 +404,7 @@ TEST(ScenarioReject, NonexistentFile) {
   const std::string path = sim::data_file("scenarios/does_not_exist.toml");
   const sim::ScenarioParseResult r = sim::parse_scenario_file(path);
   ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error, path + ": cannot open scenario file");
+  EXPECT_EQ(r.error, path + ": cannot open scenario file: No such file or directory");
 }
 
 TEST(EffectsLookup, NamesAndComponents) {

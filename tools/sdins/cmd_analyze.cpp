@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "tools/output_file.hpp"
 #include "tools/analysis.hpp"
 
 namespace sdins {
@@ -28,10 +29,12 @@ struct Options {
 
 json vec_arcsec(const fsw::Vec3& v) { return json::array({v.x() * kRadToArcsec, v.y() * kRadToArcsec, v.z() * kRadToArcsec}); }
 
-std::ofstream open_out(const std::filesystem::path& p) {
-  std::ofstream f(p);
-  if (!f) throw std::runtime_error("cannot write " + p.string());
-  return f;
+/// Every output through tools::TextOutput (docs/faults.md): complete, or the old file / nothing.
+template <class F>
+void write_out(const std::filesystem::path& p, F&& fill) {
+  tools::TextOutput o(p.string());
+  fill(o.os());
+  o.commit();
 }
 
 const char* kSignArgument = R"(The vertical attitude error obeys (the paper's equation (7), ENU)
@@ -82,7 +85,8 @@ int run_analyze() { return run_analysis(opt.scenario.load(), opt.out, opt.gamma_
 int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gamma_arcsec, bool plots) {
   namespace fs = std::filesystem;
   const fs::path out(out_dir);
-  fs::create_directories(out);
+  tools::require_distinct({out_dir}, {});
+  const tools::RunDirectory run_dir(out_dir);  // docs/faults.md: summary.json removed now, written last
   const double lat = sc.start.lat_deg * kDegToRad;
   json j;
   j["scenario"] = {{"name", sc.name}, {"duration_s", sc.duration_s}, {"lat_deg", sc.start.lat_deg},
@@ -98,8 +102,7 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
       tools::run_alignment_case("combined_heading37", fsw::Vec3(70 * ug, -100 * ug, 40 * ug),
                                 fsw::Vec3(0.01 * dph, -0.007 * dph, 0.004 * dph), lat, 37.0 * kDegToRad, 120.0),
   };
-  {
-    std::ofstream f = open_out(out / "alignment.csv");
+  write_out(out / "alignment.csv", [&](std::ostream& f) {
     f << "case,phi_E_sim_arcsec,phi_N_sim_arcsec,phi_U_sim_arcsec,phi_E_formula_arcsec,phi_N_formula_arcsec,"
          "phi_U_formula_arcsec\n";
     for (const auto& c : acases) {
@@ -111,21 +114,22 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
       j["alignment"].push_back({{"case", c.name}, {"phi_sim_arcsec", vec_arcsec(c.phi_sim_rad)},
                                 {"phi_formula_arcsec", vec_arcsec(c.phi_formula_rad)}});
     }
-  }
+  });
 
   // ---- Single-axis rotation ----
   std::printf("single-axis rotation (10 deg/s, 72 s, one gyro misalignment):\n");
   for (const tools::RotationPair p : tools::kExcitedRotationPairs) {
     for (double gamma : {5.0, 10.0}) {
       const tools::RotationCase c = tools::run_rotation_case(p.axis, p.component, gamma, 10.0, 72.0, lat);
-      std::ofstream f = open_out(out / ("rotation_" + c.name + ".csv"));
-      f << "t_s,phi_E_sim_arcsec,phi_N_sim_arcsec,phi_U_sim_arcsec,phi_E_formula_arcsec,phi_N_formula_arcsec,"
-           "phi_U_formula_arcsec\n";
-      for (std::size_t i = 0; i < c.t_s.size(); ++i) {
-        const fsw::Vec3 s = c.phi_sim_rad[i] * kRadToArcsec, q = c.phi_formula_rad[i] * kRadToArcsec;
-        f << c.t_s[i] << "," << s.x() << "," << s.y() << "," << s.z() << "," << q.x() << "," << q.y() << "," << q.z()
-          << "\n";
-      }
+      write_out(out / ("rotation_" + c.name + ".csv"), [&](std::ostream& f) {
+        f << "t_s,phi_E_sim_arcsec,phi_N_sim_arcsec,phi_U_sim_arcsec,phi_E_formula_arcsec,phi_N_formula_arcsec,"
+             "phi_U_formula_arcsec\n";
+        for (std::size_t i = 0; i < c.t_s.size(); ++i) {
+          const fsw::Vec3 s = c.phi_sim_rad[i] * kRadToArcsec, q = c.phi_formula_rad[i] * kRadToArcsec;
+          f << c.t_s[i] << "," << s.x() << "," << s.y() << "," << s.z() << "," << q.x() << "," << q.y() << ","
+            << q.z() << "\n";
+        }
+      });
       const double pct = 100.0 * c.max_deviation_rad / c.peak_formula_rad;
       std::printf("  about %c, gamma_%s = %4.1f arcsec: peak %6.2f arcsec, max |sim - formula| %.4f arcsec (%.2f%% of peak)\n",
                   "xyz"[p.axis], fsw::kEffectCatalogue[0].components[p.component], gamma,
@@ -149,12 +153,13 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
     bcases.push_back(tools::run_bank_turn_case(sc, k, gamma_arcsec));
     const tools::BankTurnCase& c = bcases.back();
     if (c.turn_end_t_s.empty()) throw std::runtime_error("the scenario completes no turn: nothing to analyse");
-    std::ofstream f = open_out(out / ("bank_turn_" + c.component + ".csv"));
-    f << "t_s,roll_deg,phi_E_arcsec,phi_N_arcsec,phi_U_arcsec\n";
-    for (std::size_t i = 0; i < c.t_s.size(); ++i) {
-      const fsw::Vec3 s = c.phi_rad[i] * kRadToArcsec;
-      f << c.t_s[i] << "," << c.roll_rad[i] * fsw::kRadToDeg << "," << s.x() << "," << s.y() << "," << s.z() << "\n";
-    }
+    write_out(out / ("bank_turn_" + c.component + ".csv"), [&](std::ostream& f) {
+      f << "t_s,roll_deg,phi_E_arcsec,phi_N_arcsec,phi_U_arcsec\n";
+      for (std::size_t i = 0; i < c.t_s.size(); ++i) {
+        const fsw::Vec3 s = c.phi_rad[i] * kRadToArcsec;
+        f << c.t_s[i] << "," << c.roll_rad[i] * fsw::kRadToDeg << "," << s.x() << "," << s.y() << "," << s.z() << "\n";
+      }
+    });
     std::printf("  gamma_%s: phi_U %+8.3f arcsec/turn over %zu turns (eq. 7 forcing %+8.3f, Earth-rate coupling %+7.3f), "
                 "tilt %6.2f arcsec/turn, oscillation %6.2f arcsec -> %s\n",
                 c.component.c_str(), c.u_error_per_turn_arcsec, c.turn_end_t_s.size(), c.predicted_per_turn_arcsec,
@@ -169,16 +174,15 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
                                    {"gamma_arcsec", c.gamma_arcsec},
                                    {"turns", c.turn_end_t_s.size()}};
   }
-  {
-    std::ofstream f = open_out(out / "turns.csv");
+  write_out(out / "turns.csv", [&](std::ostream& f) {
     f << "turn,t_end_s\n";
     for (std::size_t i = 0; i < bcases[0].turn_end_t_s.size(); ++i) f << i << "," << bcases[0].turn_end_t_s[i] << "\n";
-  }
+  });
   j["bank_turn_criterion"] =
       "accumulates: every completed turn changes phi_U with the same sign, the mean change per turn exceeds 10% of "
       "the misalignment angle, and the turns' own eq. (7) forcing explains it within 25% (rather than tilt errors "
       "leaking into phi_U through the Earth rate)";
-  open_out(out / "analysis.json") << j.dump(2) << "\n";
+  tools::write_json_file((out / "analysis.json").string(), j);
 
   // ---- Markdown summary ----
   std::ostringstream md;
@@ -224,14 +228,20 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
                   s.z(), p.x(), p.y(), p.z());
     md << buf;
   }
-  open_out(out / "summary.md") << md.str();
+  tools::write_text_file((out / "summary.md").string(), md.str());
 
   int rc = 0;
   if (plots) {
     rc = run_plot_script("plot_analysis.py", "'" + out.string() + "'");
     if (rc != 0) std::fprintf(stderr, "sdins analyze: plotting failed (needs %s with matplotlib)\n", SDINS_PYTHON);
   }
-  std::printf("wrote %s/{analysis.json,summary.md,*.csv%s}\n", out.string().c_str(), plots ? ",*.png" : "");
+  run_dir.finish({{"command", "analyze"},
+                  {"scenario", sc.name},
+                  {"complete", true},
+                  {"plots", plots && rc == 0},
+                  {"files", {"analysis.json", "summary.md", "alignment.csv", "turns.csv", "rotation_*.csv",
+                             "bank_turn_*.csv"}}});
+  std::printf("wrote %s/{summary.json,analysis.json,summary.md,*.csv%s}\n", out.string().c_str(), plots ? ",*.png" : "");
   return rc;
 }
 

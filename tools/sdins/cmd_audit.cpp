@@ -20,6 +20,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "tools/output_file.hpp"
 #include "fsw/executive.hpp"
 #include "tools/stack_audit.hpp"
 #include "tools/timing_audit.hpp"
@@ -287,9 +288,7 @@ int run_audit_stack() {
     nlohmann::json je = nlohmann::json::array();
     for (const auto& c : costs) je.push_back({{"name", c.name}, {"bytes", c.bytes}, {"basis", c.basis}});
     j["external_costs"] = je;
-    std::ofstream out(stack_opt.json);
-    if (!out) throw std::runtime_error("cannot write " + stack_opt.json);
-    out << j.dump(2) << "\n";
+    tools::write_json_file(stack_opt.json, j);  // docs/faults.md
   }
   if (!checks_ok) {
     std::fprintf(stderr, "sdins audit stack: the instrument self-check failed: the numbers above cannot be trusted\n");
@@ -386,9 +385,7 @@ int run_audit_timing() {
                                      {"t_s", l.worst_frame_t_s},
                                      {"work", l.worst_frame_work}}}});
     j["layouts"] = jl;
-    std::ofstream out(timing_opt.json);
-    if (!out) throw std::runtime_error("cannot write " + timing_opt.json);
-    out << j.dump(2) << "\n";
+    tools::write_json_file(timing_opt.json, j);  // docs/faults.md
   }
   return 0;
 }

@@ -5,6 +5,8 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "tools/interrupt.hpp"
+#include "tools/output_file.hpp"
 #include "hal/can_bus.hpp"
 #include "tools/hil.hpp"
 
@@ -50,6 +52,7 @@ void register_bus_sim(CLI::App& app) {
 }
 
 int run_bus_sim() {
+  tools::require_distinct({opt.json}, {opt.scenario.file});
   const sim::Scenario sc = opt.scenario.load();
   tools::SensorStream stream(sc);
   hal::CanBus bus;
@@ -64,7 +67,8 @@ int run_bus_sim() {
   std::fprintf(stderr, "sdins bus-sim: %s, %s on %s, %.3f s, seed %llu\n", sc.name.c_str(),
                opt.lockstep ? "lockstep" : "realtime", opt.bus.c_str(), sc.duration_s,
                static_cast<unsigned long long>(sc.seed));
-  const tools::BusSimResult r = tools::run_bus_sim(bus, stream, cfg);
+  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the run, counters printed
+  const tools::BusSimResult r = tools::run_bus_sim(bus, stream, cfg, &tools::interrupt_flag());
   std::printf("run %08x: %lld steps, %lld frames (%lld IMU, %lld GPS epochs, %lld almanac), %lld control frames, "
               "%.3f s wall\n",
               r.run_id, r.steps, r.frames_sent, r.imu_sent, r.gps_epochs, r.almanac_sent, r.control_sent, r.wall_s);
@@ -80,10 +84,10 @@ int run_bus_sim() {
   std::printf("encoder: %lld IMU rejected, %lld flagged, %lld measurements skipped, %lld epochs rejected, %lld "
               "almanac rejected; tx busy retries %lld\n",
               r.imu_rejected, r.imu_flagged, r.gps_skipped, r.gps_rejected, r.almanac_rejected, r.tx_busy_retries);
-  if (!opt.json.empty()) {
-    std::ofstream f(opt.json);
-    if (!f) throw std::runtime_error("cannot write " + opt.json);
-    f << tools::to_json(r).dump(2) << '\n';
+  if (!opt.json.empty()) tools::write_json_file(opt.json, tools::to_json(r));
+  if (tools::interrupted()) {
+    std::fprintf(stderr, "sdins bus-sim: stopped by %s\n", tools::interrupt_signal_name().c_str());
+    return tools::interrupt_exit_code();
   }
   if (!r.ok) {
     std::fprintf(stderr, "sdins bus-sim: error: %s\n", r.error.c_str());

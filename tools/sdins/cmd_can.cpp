@@ -7,11 +7,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <fstream>
 #include <stdexcept>
 #include <thread>
 
 #include "commands.hpp"
+#include "tools/interrupt.hpp"
+#include "tools/output_file.hpp"
 #include "hal/can_bus.hpp"
 #include "hal/can_log.hpp"
 #include "hal/can_protocol.hpp"
@@ -52,21 +55,24 @@ double lsb_dv() { return 1.0 / hal::can::kDvPerMps; }
 class ExpectedCsv {
  public:
   void open(const std::string& path) {
-    f_.open(path);
-    if (!f_) throw std::runtime_error("cannot write " + path);
-    f_ << "line,message,signal,value,tolerance\n";
-    f_.precision(17);
+    f_.emplace(path);  // docs/faults.md: a temporary file renamed into place by commit()
+    f_->os() << "line,message,signal,value,tolerance\n";
+    f_->os().precision(17);
   }
   void row(long line, const char* msg, const char* sig, double value, double tol) {
-    if (f_.is_open()) f_ << line << ',' << msg << ',' << sig << ',' << value << ',' << tol << '\n';
+    if (f_) f_->os() << line << ',' << msg << ',' << sig << ',' << value << ',' << tol << '\n';
   }
-  bool is_open() const { return f_.is_open(); }
+  bool is_open() const { return f_.has_value(); }
+  void commit() {
+    if (f_) f_->commit();
+  }
 
  private:
-  std::ofstream f_;
+  std::optional<tools::TextOutput> f_;
 };
 
 int run_encode() {
+  tools::require_distinct({opt.out, opt.expected}, {opt.scenario.file});
   const sim::Scenario sc = opt.scenario.load();
   tools::SensorStream stream(sc);
   hal::CandumpWriter w;
@@ -178,7 +184,8 @@ int run_encode() {
       csv.row(line, m, "AlmAf1", x.af1_sps, 0.5001 * hal::can::kAlmAf1Lsb_sps);
     }
   }
-  if (!w.close()) throw std::runtime_error(w.error());
+  if (!w.close()) throw std::runtime_error("cannot write " + w.error());
+  csv.commit();
   std::printf("sdins can encode: %d frames (%ld IMU samples, %ld GPS epochs, %ld almanac) -> %s\n", w.frames(), n_imu,
               n_epochs, n_alm, opt.out.c_str());
   std::printf("  encoder: %d IMU samples rejected, %d flagged, %d measurements skipped, %d epochs rejected, %d almanac "
@@ -251,7 +258,11 @@ int run_dump() {
                 r.bad_lines());
     for (const std::string& p : r.problems()) std::printf("  %s\n", p.c_str());
     print_health(rx.health());
-    return r.error().empty() ? 0 : 1;
+    if (!r.error().empty()) throw std::runtime_error(r.error());
+    // docs/faults.md: an input with nothing valid in it is an error, not an empty success.
+    if (r.frames() == 0)
+      throw std::runtime_error(opt.log + ": no valid candump frame in " + std::to_string(r.lines()) + " lines");
+    return 0;
   }
   hal::CanBus bus;
   if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
@@ -279,6 +290,7 @@ int run_dump() {
 }
 
 int run_record() {
+  const tools::InterruptPolling polling;  // SIGINT/SIGTERM end the recording: the log is kept complete
   hal::CanBus bus;
   if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
   hal::CandumpWriter w;
@@ -289,18 +301,23 @@ int run_record() {
   long long n = 0;
   int rc = 0;
   while (opt.count <= 0 || n < opt.count) {
+    if (tools::interrupted()) {
+      rc = tools::interrupt_exit_code();
+      break;
+    }
     hal::CanFrame f;
     const hal::CanBusStatus st = bus.receive(f, opt.timeout_s);
     if (st == hal::CanBusStatus::kTimeout) {
+      if (tools::interrupted()) continue;  // the signal cut the wait short
       std::printf("silent bus: no frame for %.3f s\n", opt.timeout_s);
       rc = opt.count > 0 ? 2 : 0;
       break;
     }
     if (st != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
-    if (!w.write(f, iface)) throw std::runtime_error(w.error());
+    if (!w.write(f, iface)) throw std::runtime_error("cannot write " + w.error());
     ++n;
   }
-  if (!w.close()) throw std::runtime_error(w.error());
+  if (!w.close()) throw std::runtime_error("cannot write " + w.error());
   std::printf("recorded %lld frames -> %s\n", n, opt.out.c_str());
   print_bus_stats(bus);
   return rc;

@@ -9,6 +9,8 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "tools/interrupt.hpp"
+#include "tools/output_file.hpp"
 #include "tools/diagnosis.hpp"
 
 namespace sdins {
@@ -50,8 +52,8 @@ nlohmann::json nav_json(const tools::NavErrorStats& s) {
 }
 
 void write_traces(const std::string& path, const tools::ModelRun& r) {
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error("cannot write " + path);
+  tools::TextOutput out(path);  // docs/faults.md: complete or not there
+  std::ostream& f = out.os();
   const auto& cands = tools::diagnosis_candidates();
   f << "t_s,pr_rms_m,prr_rms_mps,pos_rms_m,vel_rms_mps,heading_err_deg";
   for (int c : r.active) {
@@ -68,6 +70,7 @@ void write_traces(const std::string& path, const tools::ModelRun& r) {
     for (std::size_t a = 0; a < r.active.size(); ++a) f << "," << r.est_trace[k][a] << "," << r.sigma_trace[k][a];
     f << "\n";
   }
+  out.commit();
 }
 
 std::string fmt(double v, const char* f = "%.4g") {
@@ -102,6 +105,8 @@ void register_diagnose(CLI::App& app) {
 }
 
 int run_diagnose() {
+  tools::require_distinct({opt.json, opt.report}, {opt.log, opt.filter_config});
+  const tools::InterruptPolling polling;
   tools::RecordedData data;
   std::string err, load_report;
   if (!tools::load_recorded_data(opt.log, data, err, load_report)) throw std::runtime_error(err);
@@ -117,7 +122,11 @@ int run_diagnose() {
   cfg.alpha = opt.alpha;
   if (!tools::set_diagnosis_baseline(cfg, opt.baseline)) throw std::runtime_error("unknown baseline " + opt.baseline);
   const tools::DiagnosisResult r =
-      tools::diagnose(data, cfg, [](const std::string& m) { std::printf("  %s\n", m.c_str()); });
+      tools::diagnose(data, cfg, [](const std::string& m) {
+        std::printf("  %s\n", m.c_str());
+        tools::throw_if_interrupted("diagnose stopped (" + m + "); no output written");
+      });
+  tools::throw_if_interrupted("diagnose stopped; no output written");
   if (!r.base.initialised) throw std::runtime_error("the flight software never initialised on this log");
 
   const auto& cands = tools::diagnosis_candidates();
@@ -130,6 +139,8 @@ int run_diagnose() {
                {"gnss_epochs", data.gnss.size()},
                {"gnss_solutions", data.pvt.size()},
                {"truth_samples", data.truth.size()},
+               {"damaged_stretches_excluded", data.damaged_stretches},
+               {"imu_samples_excluded", data.excluded_imu_samples},
                {"summary", load_report}};
   j["method"] = {{"statistic", "wald_chi2_1"},
                  {"alpha", cfg.alpha},
@@ -213,11 +224,7 @@ int run_diagnose() {
     gain["outages"] = nullptr;
   }
   j["gain"] = gain;
-  {
-    std::ofstream f(opt.json);
-    if (!f) throw std::runtime_error("cannot write " + opt.json);
-    f << j.dump(2) << "\n";
-  }
+  tools::write_json_file(opt.json, j);
 
   const bool pvt = cfg.gnss_source == sim::GnssSource::kPvt;
   const auto heading_text = [](const tools::NavErrorStats& n) {
@@ -275,12 +282,13 @@ int run_diagnose() {
                 r.base.outages.reacquisition_nis_mean, r.extended.outages.reacquisition_nis_mean);
 
   if (!opt.report.empty()) {
-    std::filesystem::create_directories(opt.report);
-    write_traces(opt.report + "/baseline.csv", r.base);
-    write_traces(opt.report + "/extended.csv", r.extended);
-    std::ofstream(opt.report + "/diagnosis.json") << j.dump(2) << "\n";
+    const tools::RunDirectory run_dir(opt.report);  // docs/faults.md: summary.json removed now, written last
+    write_traces(run_dir.path("baseline.csv"), r.base);
+    write_traces(run_dir.path("extended.csv"), r.extended);
+    tools::write_json_file(run_dir.path("diagnosis.json"), j);
     const int rc = run_plot_script("plot_diagnosis.py", "'" + opt.report + "'");
-    std::ofstream md(opt.report + "/report.md");
+    tools::TextOutput md_out(run_dir.path("report.md"));
+    std::ostream& md = md_out.os();
     md << "# Diagnosis of `" << opt.log << "`\n\n";
     md << "Data: " << load_report << ".\n\n";
     md << "Baseline model: " << opt.baseline << " states (+ clock, + Gauss-Markov GPS errors). Each of the "
@@ -360,6 +368,13 @@ int run_diagnose() {
     } else {
       md << "(plots not made: matplotlib unavailable)\n\n";
     }
+    md_out.commit();
+    run_dir.finish({{"command", "diagnose"},
+                    {"log", opt.log},
+                    {"complete", true},
+                    {"findings", r.findings.size()},
+                    {"plots", rc == 0},
+                    {"files", {"diagnosis.json", "report.md", "baseline.csv", "extended.csv"}}});
     std::printf("report: %s/report.md\n", opt.report.c_str());
   }
   return 0;

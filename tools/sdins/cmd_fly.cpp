@@ -2,13 +2,14 @@
 // scenario's IMU errors; prints the error growth and optionally writes a CSV.
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <optional>
 #include <stdexcept>
 
 #include "commands.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/trajectory.hpp"
 #include "tools/free_inertial.hpp"
+#include "tools/output_file.hpp"
 
 namespace sdins {
 namespace {
@@ -37,11 +38,12 @@ int run_fly() {
   auto motion = sim::FlightMotion::create(sc, err);
   if (!motion) throw std::runtime_error(err);
   sim::ImuModel imu(sim::draw_imu_errors(sc.imu, sc.effects, sc.seed), sc.seed);
-  std::ofstream csv;
+  // docs/faults.md: the CSV goes to a temporary file renamed into place when complete.
+  std::optional<tools::TextOutput> csv_out;
   if (!opt.csv.empty()) {
-    csv.open(opt.csv);
-    if (!csv) throw std::runtime_error("cannot write " + opt.csv);
-    csv << "t_s,dpos_E_m,dpos_N_m,dpos_U_m,dvel_E_mps,dvel_N_mps,dvel_U_mps,phi_E_arcsec,phi_N_arcsec,phi_U_arcsec\n";
+    tools::require_distinct({opt.csv}, {opt.scenario.file});
+    csv_out.emplace(opt.csv);
+    csv_out->os() << "t_s,dpos_E_m,dpos_N_m,dpos_U_m,dvel_E_mps,dvel_N_mps,dvel_U_mps,phi_E_arcsec,phi_N_arcsec,phi_U_arcsec\n";
   }
   tools::FreeInertialConfig cfg;
   cfg.duration_s = sc.duration_s;
@@ -57,8 +59,8 @@ int run_fly() {
         if (frame % 200 != 0) return;
         const tools::NavErrors e = tools::nav_errors(nav, truth);
         const fsw::Vec3 phi = e.att_phi_enu_rad * fsw::kRadToArcsec;
-        if (csv.is_open()) {
-          csv << truth.t_s << "," << e.pos_enu_m.x() << "," << e.pos_enu_m.y() << "," << e.pos_enu_m.z() << ","
+        if (csv_out) {
+          csv_out->os() << truth.t_s << "," << e.pos_enu_m.x() << "," << e.pos_enu_m.y() << "," << e.pos_enu_m.z() << ","
               << e.vel_enu_mps.x() << "," << e.vel_enu_mps.y() << "," << e.vel_enu_mps.z() << "," << phi.x() << ","
               << phi.y() << "," << phi.z() << "\n";
         }
@@ -69,6 +71,7 @@ int run_fly() {
       },
       &st);
   if (st != fsw::Status::kOk) throw std::runtime_error(std::string("fsw step failed: ") + fsw::to_string(st));
+  if (csv_out) csv_out->commit();
   return 0;
 }
 

@@ -9,6 +9,8 @@
 #include "commands.hpp"
 #include "hal/can_bus.hpp"
 #include "tools/hil.hpp"
+#include "tools/interrupt.hpp"
+#include "tools/output_file.hpp"
 
 namespace sdins {
 namespace {
@@ -31,7 +33,8 @@ void warn(const std::string& m) { std::fprintf(stderr, "sdins fsw: %s\n", m.c_st
 void register_fsw(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "fsw", "Run the flight software fed by a CAN bus (IMU and GPS frames of hal/can/sdins.dbc), with LCM "
-             "telemetry and log; answers `sdins bus-sim` with FSW_ACK. Exit 0: end of run; 2: silent bus.");
+             "telemetry and log; answers `sdins bus-sim` with FSW_ACK. Exit 0: end of run; 2: silent bus; 130/143: "
+             "stopped by SIGINT/SIGTERM (summary, log and --json complete).");
   sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT")->required();
   sub->add_option("--model", opt.model, "filter model: 15 or 24")->check(CLI::IsMember({"15", "24"}))->capture_default_str();
   sub->add_option("--log", opt.log, "write an LCM log (inputs and outputs)");
@@ -57,13 +60,20 @@ int run_fsw() {
   cfg.realtime = opt.realtime;
   cfg.fifo_priority = opt.fifo_priority;
   cfg.idle_timeout_s = opt.idle_timeout_s;
+  tools::require_distinct({opt.log, opt.json}, {});
   hal::CanBus bus;
   if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
   std::fprintf(stderr, "sdins fsw: %s-state model listening on %s\n", opt.model.c_str(), opt.bus.c_str());
-  const tools::FswRunResult r = tools::run_fsw(bus, cfg, nullptr, &warn);
+  // SIGINT/SIGTERM (docs/faults.md): the loop stops, the log is closed complete, the summary and
+  // --json are written, exit 128 + signal.
+  const tools::InterruptPolling polling;
+  const tools::FswRunResult r = tools::run_fsw(bus, cfg, &tools::interrupt_flag(), &warn);
   if (r.exit == tools::FswExit::kError) throw std::runtime_error(r.error);
 
-  if (r.exit == tools::FswExit::kIdleTimeout)
+  if (r.exit == tools::FswExit::kStopped)
+    std::printf("stopped by %s%s\n", tools::interrupt_signal_name().c_str(),
+                r.run_started ? " during the run (no SIM_CONTROL end)" : " (no run started)");
+  else if (r.exit == tools::FswExit::kIdleTimeout)
     std::printf("silent bus: no frame for %.3f s, stopping%s\n", r.idle_timeout_s,
                 r.end_received ? "" : (r.run_started ? " (run started, no SIM_CONTROL end)" : " (no run started)"));
   else
@@ -102,11 +112,8 @@ int run_fsw() {
                 r.exec_max_s, e.overruns, r.imu_lateness_mean_s, r.imu_lateness_max_s, r.late_threshold_s,
                 static_cast<unsigned long long>(r.imu_late), r.rx.imu_missing);
   std::printf("wall time: %.3f s\n", r.wall_s);
-  if (!opt.json.empty()) {
-    std::ofstream f(opt.json);
-    if (!f) throw std::runtime_error("cannot write " + opt.json);
-    f << tools::to_json(r).dump(2) << '\n';
-  }
+  if (!opt.json.empty()) tools::write_json_file(opt.json, tools::to_json(r));
+  if (r.exit == tools::FswExit::kStopped) return tools::interrupt_exit_code();
   return r.exit == tools::FswExit::kEndOfRun ? 0 : 2;
 }
 

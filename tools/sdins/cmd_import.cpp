@@ -2,11 +2,11 @@
 // log + raw u-blox receiver log, or the PSINS tight-coupling data set) into the project's LCM log
 // format. The work is in the tools library (tools/importers.hpp); this file parses options and prints.
 #include <cstdio>
-#include <fstream>
 #include <stdexcept>
 
 #include "commands.hpp"
 #include "tools/importers.hpp"
+#include "tools/output_file.hpp"
 
 namespace sdins {
 namespace {
@@ -52,13 +52,10 @@ void register_import(CLI::App& app) {
 }
 
 int run_import() {
+  // docs/faults.md: neither output may be (or lie inside) the recording, nor each other.
+  tools::require_distinct({opt.imp.log_path, opt.json}, {opt.imp.path});
   const nlohmann::json summary = tools::import_recording(opt.imp);
-  if (!opt.json.empty()) {
-    std::ofstream f(opt.json);
-    if (!f) throw std::runtime_error("cannot write " + opt.json);
-    f << summary.dump(2) << "\n";
-    if (!f) throw std::runtime_error("write failed: " + opt.json);
-  }
+  if (!opt.json.empty()) tools::write_json_file(opt.json, summary);
   std::fputs(tools::import_summary_text(summary).c_str(), stdout);
   return 0;
 }

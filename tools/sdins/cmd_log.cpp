@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "tools/output_file.hpp"
 #include "hal/lcm_log.hpp"
 #include "hal/lcm_types.hpp"
 
@@ -128,6 +129,14 @@ int run_info() {
     c.have_t = true;
   }
   const hal::LcmLogReadStats& st = reader.stats();
+  // docs/faults.md: a log with no valid event is an error (exit 1), after the summary is printed.
+  const auto nothing_valid = [&] {
+    if (st.events > 0) return 0;
+    std::fprintf(stderr, "sdins: error: %s: no valid LCM event in %llu bytes (%llu rejections)\n", opt.log.c_str(),
+                 static_cast<unsigned long long>(reader.file_size()),
+                 static_cast<unsigned long long>(st.total_rejections()));
+    return 1;
+  };
 
   if (opt.json) {
     nlohmann::json j;
@@ -160,7 +169,7 @@ int run_info() {
     }
     j["channels"] = chans;
     std::printf("%s\n", j.dump(2).c_str());
-    return 0;
+    return nothing_valid();
   }
 
   std::printf("log %s: %" PRIu64 " bytes, %" PRIu64 " events, %zu channels\n", opt.log.c_str(), reader.file_size(),
@@ -179,17 +188,16 @@ int run_info() {
                 rej.c_str());
   }
   print_reader_rejections(st, opt.show_rejections, stdout);
-  return 0;
+  return nothing_valid();
 }
 
-bool csv_created = false;
-
-int export_channel() {
+int run_export() {
+  tools::require_distinct({opt.csv}, {opt.log});
   hal::LcmLogReader reader;
   open_log(reader, opt.log);
-  std::ofstream csv(opt.csv);
-  if (!csv) throw std::runtime_error("cannot write " + opt.csv);
-  csv_created = true;
+  // docs/faults.md: the CSV is written to a temporary file and renamed into place only when complete.
+  tools::TextOutput csv_out(opt.csv);
+  std::ostream& csv = csv_out.os();
   const hal::LcmTypeInfo* expected = hal::lcm_channel_type(opt.channel);
   const hal::LcmTypeInfo* type = nullptr;
   std::vector<std::string> header;
@@ -227,27 +235,19 @@ int export_channel() {
     csv << '\n';
     ++rows;
   }
-  csv.close();
-  if (!csv) throw std::runtime_error("write failed: " + opt.csv);
+  if (rows == 0) {
+    print_reader_rejections(reader.stats(), opt.show_rejections, stderr);
+    throw std::runtime_error("no message of a known type on channel '" + opt.channel + "' of " + opt.log +
+                             " (see sdins log info); no CSV written");
+  }
+  csv_out.commit();
   std::fprintf(stderr, "%s: %" PRIu64 " rows of %s from channel %s (%" PRIu64
                        " messages on it; skipped: %" PRIu64 " wrong_type, %" PRIu64 " unknown_type, %" PRIu64
                        " decode_failed)\n",
                opt.csv.c_str(), rows, type != nullptr ? type->name.c_str() : "-", opt.channel.c_str(), on_channel,
                wrong_type, unknown_type, decode_failed);
   print_reader_rejections(reader.stats(), opt.show_rejections, stderr);
-  if (rows == 0)
-    throw std::runtime_error("no message of a known type on channel '" + opt.channel + "' (see sdins log info)");
   return 0;
-}
-
-/// Exports, or removes the partial CSV it created and rethrows.
-int run_export() {
-  try {
-    return export_channel();
-  } catch (...) {
-    if (csv_created) std::remove(opt.csv.c_str());
-    throw;
-  }
 }
 
 }  // namespace

@@ -3,12 +3,14 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
 #include "commands.hpp"
 #include "montecarlo_case.hpp"
+#include "tools/interrupt.hpp"
+#include "tools/output_file.hpp"
 
 namespace sdins {
 namespace {
@@ -66,7 +68,11 @@ int run_montecarlo() {
     mc.runs = opt.runs;
     mc.models = parse_models(opt.models);
     mc.threads = opt.threads;
-    if (mpi_world().rank == 0) std::filesystem::create_directories(opt.out);
+    // docs/faults.md: summary.json marks a complete run; removed now, written last.
+    tools::require_distinct({opt.out}, {opt.scenario.file});
+    std::optional<tools::RunDirectory> dir;
+    if (mpi_world().rank == 0) dir.emplace(opt.out);
+    const tools::InterruptPolling polling;
     const CaseResult r = run_case(sc, mc, opt.out, "");
     if (!r.written) return 0;  // a non-root MPI rank: rank 0 writes everything
     nlohmann::json j;
@@ -75,11 +81,19 @@ int run_montecarlo() {
     j["runs"] = mc.runs;
     j["models"] = r.models;
     j["timing"] = r.timing;
-    std::ofstream f(std::filesystem::path(opt.out) / "summary.json");
-    if (!f) throw std::runtime_error("cannot write summary.json in " + opt.out);
-    f << j.dump(2) << "\n";
+    // docs/faults.md: a run in which no pseudorange was used (e.g. every satellite unhealthy) has a
+    // NEES that says nothing about the aided filter: said so, and the exit code is 2.
+    bool gnss_used = true;
+    for (const auto& m : r.models) gnss_used = gnss_used && m["health"]["pr_used"].get<double>() > 0.0;
+    j["gnss_used"] = gnss_used;
+    dir->finish(j);
     print_case(r);
     std::printf("outputs in %s\n", opt.out.c_str());
+    if (!gnss_used) {
+      std::fprintf(stderr, "sdins montecarlo: no pseudorange was used by a filter in any run (no healthy satellite "
+                           "in view?): the statistics describe unaided inertial navigation\n");
+      return 2;
+    }
     return 0;
   });
 }

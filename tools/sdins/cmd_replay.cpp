@@ -12,6 +12,8 @@
 #include "hal/fsw_node.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "tools/fsw_report.hpp"
+#include "tools/interrupt.hpp"
+#include "tools/output_file.hpp"
 
 namespace sdins {
 namespace {
@@ -36,6 +38,7 @@ void register_replay(CLI::App& app) {
 }
 
 int run_replay() {
+  tools::require_distinct({opt.run.log, opt.run.json}, {opt.in, opt.run.filter_config});
   const sim::FilterConfig filter = opt.run.filter();
   const bool pvt = filter.gnss_source == sim::GnssSource::kPvt;
   hal::LcmReplayConfig rc;
@@ -56,7 +59,9 @@ int run_replay() {
     if (t < t0) return false;
     return std::fmod(t - t0, opt.outages[1]) < opt.outages[0];
   };
+  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
   while (reader.next(in) == hal::LcmLogStatus::kOk) {
+    if (tools::interrupted()) break;
     switch (in.kind) {
       case hal::LcmReplayInput::Kind::kAlmanac: node.on_almanac(in.almanac, in.t_s); break;
       case hal::LcmReplayInput::Kind::kGnss:
@@ -76,7 +81,11 @@ int run_replay() {
         break;
     }
   }
-  if (!node.close(err)) throw std::runtime_error(err);
+  const bool stopped = tools::interrupted();
+  if (stopped)
+    node.abort();  // an interrupted replay leaves no partial log (the target keeps its old contents)
+  else if (!node.close(err))
+    throw std::runtime_error(err);
   const hal::LcmReplayStats& st = reader.stats();
   const hal::LcmLogReadStats& ls = reader.log_stats();
   std::printf("replay: %s, %llu inputs (%llu IMU, %llu GNSS, %llu GNSS solutions, %llu almanac accepted; %llu raw "
@@ -88,10 +97,21 @@ int run_replay() {
               static_cast<unsigned long long>(raw_not_used), static_cast<unsigned long long>(st.rejected()),
               static_cast<unsigned long long>(st.other_events), static_cast<unsigned long long>(ls.events),
               static_cast<unsigned long long>(ls.total_rejections()));
+  if (st.time_tag_rejected > 0 || st.time_base_changes > 0)
+  {
+    std::printf("time tags: %llu rejected as outliers, %llu new time bases", static_cast<unsigned long long>(st.time_tag_rejected),
+                static_cast<unsigned long long>(st.time_base_changes));
+    if (st.time_base_changes > 0)
+      std::printf(" (last: a jump of %.6f s at t = %.6f s)", st.last_time_base_jump_s, st.last_time_base_at_s);
+    std::printf("\n");
+  }
   if (opt.outages.size() == 3)
     std::printf("GNSS outages: %.1f s every %.1f s from %.1f s after initialisation, %llu inputs withheld\n",
                 opt.outages[0], opt.outages[1], opt.outages[2], static_cast<unsigned long long>(withheld));
   tools::print_fsw_summary(node);
+  if (stopped)
+    throw tools::Interrupted("replay stopped after " + std::to_string(st.delivered) + " inputs (the summary so far is "
+                             "above); no log or JSON written");
   if (!opt.run.json.empty()) {
     nlohmann::json j = tools::fsw_summary_json(node);
     j["mode"] = "replay";
@@ -108,13 +128,13 @@ int run_replay() {
                    {"almanac_accepted", st.almanac.accepted()},
                    {"rejected", st.rejected()},
                    {"out_of_order", st.out_of_order},
+                   {"time_tag_rejected", st.time_tag_rejected},
+                   {"time_base_changes", st.time_base_changes},
                    {"imu_counter_gaps", st.imu_counter_gaps},
                    {"other_events", st.other_events},
                    {"log_events", ls.events},
                    {"log_rejections", ls.total_rejections()}};
-    std::ofstream f(opt.run.json);
-    if (!f) throw std::runtime_error("cannot write " + opt.run.json);
-    f << j.dump(2) << "\n";
+    tools::write_json_file(opt.run.json, j);
   }
   return node.summary().initialised ? 0 : 2;
 }

@@ -12,6 +12,7 @@
 #include "hal/can_protocol.hpp"
 #include "tools/free_inertial.hpp"
 #include "tools/fsw_report.hpp"
+#include "tools/output_file.hpp"
 #include "tools/sensor_stream.hpp"
 
 namespace sdins {
@@ -31,6 +32,7 @@ void register_sil(CLI::App& app) {
 }
 
 int run_sil() {
+  tools::require_distinct({opt.run.log, opt.run.json}, {opt.scenario.file, opt.run.filter_config});
   const sim::Scenario sc = opt.scenario.load();
   tools::SensorStream stream(sc);
   const hal::FswNodeConfig cfg = opt.run.node_config();
@@ -89,9 +91,7 @@ int run_sil() {
     j["seed"] = sc.seed;
     j["can_frames"] = n_frames;
     j["can_rx"] = tools::can_rx_json(input.health());
-    std::ofstream f(opt.run.json);
-    if (!f) throw std::runtime_error("cannot write " + opt.run.json);
-    f << j.dump(2) << "\n";
+    tools::write_json_file(opt.run.json, j);
   }
   return node.summary().initialised ? 0 : 2;
 }

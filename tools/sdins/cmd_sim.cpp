@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "tools/output_file.hpp"
 #include "fsw/effect_catalogue.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "sim/effects.hpp"
@@ -110,8 +111,13 @@ nlohmann::ordered_json imu_errors_json(const sim::ImuErrors& e) {
   return j;
 }
 
+const hal::LcmLogSink* g_sink = nullptr;  ///< for check()'s message (the writer's errno text)
+
 void check(hal::LcmLogStatus st, const std::string& what) {
-  if (st != hal::LcmLogStatus::kOk) throw std::runtime_error("writing " + what + " to " + opt.log + ": " + hal::to_string(st));
+  if (st == hal::LcmLogStatus::kOk) return;
+  const std::string why = g_sink != nullptr ? g_sink->telemetry().log().error() : std::string();
+  throw std::runtime_error("writing " + what + " to " + opt.log + ": " + (why.empty() ? hal::to_string(st) : why) +
+                           "; nothing written");
 }
 
 }  // namespace
@@ -139,6 +145,7 @@ void register_sim(CLI::App& app) {
 
 int run_sim() {
   // Everything that can be wrong with the request is checked before the log is created.
+  tools::require_distinct({opt.log, opt.log + ".json"}, {opt.scenario.file});
   sim::Scenario sc = opt.scenario.load();
   if (opt.truth_errors == "paper") sc.imu.errors = sim::ImuErrorSet::kPaper;
   if (opt.truth_errors == "baseline") sc.imu.errors = sim::ImuErrorSet::kBaseline;
@@ -173,6 +180,7 @@ int run_sim() {
   hal::LcmTelemetryConfig tcfg;
   tcfg.lcm_url = "none";
   tcfg.log_path = opt.log;
+  g_sink = &sink;
   check(sink.open(tcfg), "the log");
 
   long long n_imu = 0, n_gnss = 0, n_truth = 0;
@@ -250,12 +258,7 @@ int run_sim() {
       "IMU, GNSS_RAW and GPS_ALMANAC t_s: navigation time (IMU time tags = true time + imu_gnss_time_offset); "
       "TRUTH t_s: true time";
   const std::string sidecar = opt.log + ".json";
-  {
-    std::ofstream f(sidecar);
-    if (!f) throw std::runtime_error("cannot write " + sidecar);
-    f << j.dump(2) << "\n";
-    if (!f) throw std::runtime_error("cannot write " + sidecar);
-  }
+  tools::write_text_file(sidecar, j.dump(2) + "\n");
 
   std::string fx;
   for (const EffectEntry& e : on) {

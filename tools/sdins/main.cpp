@@ -5,6 +5,8 @@
 
 #include "commands.hpp"
 #include "sim/data_dir.hpp"
+#include "tools/interrupt.hpp"
+#include "numeric_options.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -38,6 +40,8 @@ int main(int argc, char** argv) {
   sdins::register_diagnose(app);
   sdins::register_sim(app);
   sdins::register_import(app);
+  tools::require_finite_numbers(app);  // docs/faults.md: NaN / infinities refused by every option
+  tools::install_interrupt_handlers();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -45,6 +49,9 @@ int main(int argc, char** argv) {
   }
   try {
     return sdins::run_selected(app);
+  } catch (const tools::Interrupted& e) {
+    std::fprintf(stderr, "sdins: interrupted: %s\n", e.what());
+    return tools::interrupt_exit_code();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sdins: error: %s\n", e.what());
     return 1;

@@ -44,6 +44,10 @@ struct GpsAlmanac {
 /// Plausibility of received elements (PRN 1..32, 0 <= e < 1, sqrt(A) in the GPS range, finite
 /// angles and times, toa within a week).
 bool almanac_valid(const GpsAlmanac& sat);
+/// The first element almanac_valid() refuses ("sqrt(A)", "af0 (clock bias)", ...), nullptr when
+/// valid. The one validation of almanac elements: the flight software's inputs (CAN, LCM) and the
+/// simulator's almanac reader (sim::parse_yuma_text) both use it (docs/faults.md).
+const char* almanac_invalid_field(const GpsAlmanac& sat);
 
 /// Full GPS week for a week modulo 1024: the rollover candidate nearest reference_full_week.
 int full_week(int week_mod_1024, int reference_full_week);

@@ -16,6 +16,8 @@
 #include <string_view>
 #include <vector>
 
+#include "hal/output_file.hpp"
+
 #include "hal/can_frame.hpp"
 
 namespace hal {
@@ -33,8 +35,9 @@ enum class CandumpLine : std::uint8_t {
   kRemoteFrame,     ///< ID#R...: unsupported
   kErrorFrame,      ///< error-frame flag in the identifier: unsupported
   kTrailing,        ///< unexpected text after the frame
+  kTooLong,         ///< a line longer than hal::kMaxInputLineBytes (kept bounded, then dropped)
 };
-inline constexpr int kCandumpLineKinds = 12;
+inline constexpr int kCandumpLineKinds = 13;
 const char* to_string(CandumpLine k);
 
 /// Parses one line (without the newline). On kFrame fills frame (timestamp_s included) and iface.
@@ -50,7 +53,8 @@ class CandumpReader {
   CandumpReader(const CandumpReader&) = delete;
   CandumpReader& operator=(const CandumpReader&) = delete;
 
-  /// false (with error()) if the file cannot be opened.
+  /// false (with error()) if the file cannot be opened, is not a regular file or is larger than
+  /// hal::kMaxRecordingInputBytes (hal/input_file.hpp).
   bool open(const std::string& path);
   /// The next frame: true, or false at the end of the file (or on a read error: error() set).
   bool next(CanFrame& frame, std::string& iface);
@@ -85,15 +89,18 @@ class CandumpWriter {
   bool open(const std::string& path);
   /// false (with error()) on a write error or an invalid frame.
   bool write(const CanFrame& frame, std::string_view iface);
-  /// Flushes and closes; false on a write error.
+  /// Flushes, fsyncs, closes and renames into place (hal::OutputFile); false on a write error.
   bool close();
+  /// Drops the output: the target is left as it was.
+  void abort();
   int frames() const { return frames_; }
   const std::string& error() const { return error_; }
 
  private:
-  std::FILE* f_ = nullptr;
+  OutputFile f_;
   int frames_ = 0;
   std::string error_;
+  std::string line_;
 };
 
 }  // namespace hal

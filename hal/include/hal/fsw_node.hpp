@@ -60,8 +60,11 @@ class FswNode {
   void on_truth(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, const fsw::Mat3& C_b_n);
   /// Measured execution time of the previous minor frame (real-time mode).
   void set_prev_tick_exec_s(double s);
-  /// Flushes and closes the log.
+  /// Flushes and closes the log (hal::OutputFile: renamed into place only when complete).
   bool close(std::string& error);
+  /// Ends the run without its log: the log's temporary file is removed, the target left as it was
+  /// (an interrupted replay, docs/faults.md).
+  void abort();
 
   const FswNodeSummary& summary() const { return summary_; }
   const fsw::FlightAppHealth& app_health() const;

@@ -31,6 +31,8 @@
 #include <string_view>
 #include <vector>
 
+#include "hal/output_file.hpp"
+
 namespace hal {
 
 inline constexpr std::uint32_t kLcmLogSyncWord = 0xEDA1DA01u;
@@ -132,20 +134,25 @@ class LcmLogWriter {
   LcmLogWriter(const LcmLogWriter&) = delete;
   LcmLogWriter& operator=(const LcmLogWriter&) = delete;
 
-  /// Creates (truncates) the file.
+  /// Starts the file through hal::OutputFile: the events go to a temporary file beside `path`,
+  /// which close() renames over it (an existing file stays as it was until then).
   LcmLogStatus open(const std::string& path);
   /// Appends one event; the event number counts from 0. No allocation.
   LcmLogStatus write(const char* channel, const void* data, std::size_t len, std::int64_t timestamp_us);
   LcmLogStatus flush();
-  /// Flushes and closes; kWriteFailed when the final flush failed.
+  /// Flushes, fsyncs, closes and renames into place; kWriteFailed (error()) on any failure.
   LcmLogStatus close();
-  bool is_open() const { return file_ != nullptr; }
+  /// Drops the log: the temporary file is removed, `path` is left as it was.
+  void abort();
+  bool is_open() const { return file_.is_open(); }
+  /// The first failure: the file's name and the errno text.
+  const std::string& error() const { return file_.error(); }
   std::uint64_t events_written() const { return events_; }
   std::uint64_t write_failures() const { return failures_; }
   const std::string& path() const { return path_; }
 
  private:
-  std::FILE* file_ = nullptr;
+  OutputFile file_;
   std::uint64_t events_ = 0;
   std::uint64_t failures_ = 0;
   std::string path_;

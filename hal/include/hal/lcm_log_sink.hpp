@@ -9,10 +9,14 @@
 // GNSS_PVT solutions when LcmReplayConfig::gnss_pvt_channel names it (off by default: a replay reads
 // them when its filter configuration takes solutions, gnss.source = "pvt"), and returns them as inputs in time order (t_s, then log order for equal times). Inputs may be
 // logged slightly out of order (e.g. an epoch written after the IMU samples that followed it); a
-// reorder window (reorder_window_s of input time) puts them back in order. An input that lags
-// more than the window behind the newest input read so far, or is older than one already
-// returned, is dropped and counted (out_of_order); the rule depends only on the log, not on how
-// far the caller has read, so a single wild time tag cannot jump ahead of the data. Every event is
+// reorder window (reorder_window_s of input time) puts them back in order. Every input's time tag
+// passes hal::TimeTagGate (time_tag_gate.hpp) in log order: an input more than the window behind
+// the newest accepted input, or more than max_time_jump_s ahead of it, is a jump; a jump alone is
+// dropped and counted (time_tag_rejected) and the log goes on, a jump sustained over
+// time_base_confirm_inputs consecutive inputs is a new time base (time_base_changes, nothing
+// dropped). An input older than one already returned is dropped and counted (out_of_order). The
+// rules depend only on the log, not on how far the caller has read, so a single wild time tag can
+// neither jump ahead of the data nor make the rest of the log look late. Every event is
 // accounted for: log-level rejections (LcmLogReader), per-channel decode/validation statuses
 // (LcmInputStats), events on other channels (other_events), IMU counter gaps.
 #pragma once
@@ -30,6 +34,7 @@
 #include "hal/lcm_convert.hpp"
 #include "hal/lcm_log.hpp"
 #include "hal/lcm_telemetry.hpp"
+#include "hal/time_tag_gate.hpp"
 
 namespace hal {
 
@@ -112,6 +117,8 @@ struct LcmReplayConfig {
   std::string gnss_pvt_channel;
   GnssPvtLimits pvt_limits{};
   double reorder_window_s = 1.0;  ///< how far (input time) a logged input may lag behind later ones
+  double max_time_jump_s = 2.0;   ///< a step ahead of the newest input larger than this is a time jump
+  int time_base_confirm_inputs = 5;  ///< consecutive inputs that make a time jump a new time base
   ImuInputLimits imu_limits{};
   std::size_t max_event_bytes = 64u << 20;
 };
@@ -133,11 +140,16 @@ struct LcmReplayStats {
   std::uint64_t other_events = 0;    ///< events on other channels (outputs, truth, foreign data)
   std::uint64_t imu_counter_gaps = 0;     ///< accepted samples whose counter is not previous + 1
   std::uint64_t imu_counter_missing = 0;  ///< samples missing according to forward counter jumps
-  std::uint64_t out_of_order = 0;    ///< inputs lagging > window behind the newest, or older than one returned: dropped
+  std::uint64_t out_of_order = 0;    ///< inputs older than one already returned: dropped
+  std::uint64_t time_tag_rejected = 0;  ///< time-tag outliers (TimeTagGate): dropped, the log goes on
+  std::uint64_t time_base_changes = 0;  ///< sustained time jumps taken as a new time base
+  double last_time_base_jump_s = 0.0;   ///< size of the last one
+  double last_time_base_at_s = 0.0;     ///< first input time of the last new base
   std::uint64_t delivered = 0;       ///< inputs returned by next()
 
   std::uint64_t rejected() const {
-    return imu.rejected() + gnss.rejected() + almanac.rejected() + gnss_pvt.rejected() + out_of_order;
+    return imu.rejected() + gnss.rejected() + almanac.rejected() + gnss_pvt.rejected() + out_of_order +
+           time_tag_rejected;
   }
 };
 
@@ -159,11 +171,13 @@ class LcmReplayReader {
   /// Decodes one event into pending_ (or counts why not).
   void take(const LcmLogEvent& ev);
   void push(LcmReplayInput&& in);
+  void enqueue(LcmReplayInput&& in);
 
   LcmLogReader log_;
   LcmReplayConfig cfg_{};
   LcmReplayStats stats_{};
   std::vector<Pending> pending_;  ///< min-heap on (t_s, seq)
+  TimeTagFilter<LcmReplayInput> gate_;
   std::uint64_t seq_ = 0;
   bool eof_ = false;
   bool have_newest_ = false;

@@ -54,6 +54,8 @@ class LcmTelemetry {
   LcmLogStatus publish(const char* channel, const void* data, std::size_t len, std::int64_t timestamp_us);
   /// Flushes and closes the log, destroys the LCM instance. kWriteFailed if the log's final flush failed.
   LcmLogStatus close();
+  /// Drops the log file being written (its target keeps its old contents).
+  void abort_log() { log_.abort(); }
 
   bool network_active() const { return lcm_ != nullptr; }
   bool log_active() const { return log_.is_open(); }

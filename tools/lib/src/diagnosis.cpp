@@ -195,6 +195,58 @@ void apply_filter_config(DiagnosisConfig& cfg, const sim::FilterConfig& f) {
 }
 
 // ---------------------------------------------------------------------------------------------
+void exclude_damaged_stretches(RecordedData& d) {
+  // docs/faults.md: a damaged stretch of a log (lost or rejected events: the IMU stream has a hole
+  // longer than kDamagedImuGap_s) must not become a finding. The IMU missed motion there, so the
+  // navigation error it causes is not a sensor effect; the diagnosis keeps the longest stretch
+  // without such a hole and counts what it leaves out.
+  if (d.imu.size() < 2) return;
+  std::size_t best_begin = 0, best_end = 0, begin = 0;  // IMU index ranges [begin, end)
+  int holes = 0;
+  for (std::size_t k = 1; k <= d.imu.size(); ++k) {
+    const bool hole = k < d.imu.size() && d.imu[k].t_s - d.imu[k - 1].t_s > kDamagedImuGap_s;
+    if (hole) ++holes;
+    if (hole || k == d.imu.size()) {
+      if (k - begin > best_end - best_begin) {
+        best_begin = begin;
+        best_end = k;
+      }
+      begin = k;
+    }
+  }
+  if (holes == 0) return;
+  const double t0 = d.imu[best_begin].t_s - d.imu[best_begin].dt_s, t1 = d.imu[best_end - 1].t_s;
+  RecordedData kept;
+  kept.description = d.description;
+  kept.truth = d.truth;
+  for (const RecordedData::Event& e : d.order) {
+    switch (e.kind) {
+      case RecordedData::Kind::kAlmanac:
+        kept.order.push_back({e.kind, static_cast<std::uint32_t>(kept.almanac.size())});
+        kept.almanac.push_back(d.almanac[e.index]);
+        break;
+      case RecordedData::Kind::kImu:
+        if (e.index < best_begin || e.index >= best_end) break;
+        kept.order.push_back({e.kind, static_cast<std::uint32_t>(kept.imu.size())});
+        kept.imu.push_back(d.imu[e.index]);
+        break;
+      case RecordedData::Kind::kGnss:
+        if (d.gnss[e.index].t_s < t0 || d.gnss[e.index].t_s > t1) break;
+        kept.order.push_back({e.kind, static_cast<std::uint32_t>(kept.gnss.size())});
+        kept.gnss.push_back(d.gnss[e.index]);
+        break;
+      case RecordedData::Kind::kPvt:
+        if (d.pvt[e.index].t_s < t0 || d.pvt[e.index].t_s > t1) break;
+        kept.order.push_back({e.kind, static_cast<std::uint32_t>(kept.pvt.size())});
+        kept.pvt.push_back(d.pvt[e.index]);
+        break;
+    }
+  }
+  kept.damaged_stretches = holes;
+  kept.excluded_imu_samples = d.imu.size() - kept.imu.size();
+  d = std::move(kept);
+}
+
 bool load_recorded_data(const std::string& path, RecordedData& out, std::string& error, std::string& report) {
   out = RecordedData{};
   out.description = path;
@@ -268,12 +320,17 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
       out.truth.push_back(p);
     }
   }
+  exclude_damaged_stretches(out);
   const hal::LcmReplayStats& s = rd.stats();
   std::ostringstream r;
   r << out.imu.size() << " IMU samples, " << out.gnss.size() << " GNSS epochs, " << out.pvt.size()
     << " GNSS solutions, " << out.almanac.size()
     << " almanac entries, " << out.truth.size() << " truth samples; rejected: " << s.rejected() << " inputs, "
     << rd.log_stats().total_rejections() << " log events, " << truth_rejected << " truth samples";
+  if (out.damaged_stretches > 0)
+    r << "; " << out.damaged_stretches << " damaged stretches (IMU gaps > " << kDamagedImuGap_s
+      << " s) excluded: diagnosed on the longest undamaged stretch, " << out.excluded_imu_samples
+      << " IMU samples left out";
   report = r.str();
   if (out.imu.empty() || (out.gnss.empty() && out.pvt.empty())) {
     error = path + ": no IMU or no GNSS data (" + report + ")";

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hal/input_file.hpp"
 #include "hal/lcm_channels.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "tools/importers.hpp"
@@ -74,7 +75,7 @@ nlohmann::json write_log(const std::string& path, const Collected& c) {
   cfg.lcm_url = "none";
   cfg.log_path = path;
   if (sink.open(cfg) != hal::LcmLogStatus::kOk)
-    throw std::runtime_error("cannot create the log " + path);
+    throw std::runtime_error("cannot create the log " + sink.telemetry().log().error());
   std::map<std::string, std::uint64_t> per_channel;
   std::uint64_t failures = 0;
   for (const Event& e : ev) {
@@ -98,9 +99,15 @@ nlohmann::json write_log(const std::string& path, const Collected& c) {
     else
       ++per_channel[ch];
   }
-  if (sink.close() != hal::LcmLogStatus::kOk || failures > 0)
-    throw std::runtime_error("writing " + path + " failed (" + std::to_string(failures) +
-                             " events could not be written)");
+  if (failures > 0) {
+    // docs/faults.md: an incomplete log is not put in place (the target keeps its old contents).
+    const std::string why = sink.telemetry().log().error();
+    sink.telemetry().abort_log();
+    throw std::runtime_error("writing " + path + " failed (" + std::to_string(failures) + " events could not be written" +
+                             (why.empty() ? "" : ": " + why) + "); nothing written");
+  }
+  if (sink.close() != hal::LcmLogStatus::kOk)
+    throw std::runtime_error("writing failed: " + sink.telemetry().log().error() + "; nothing written");
   return {{"path", path}, {"events", ev.size()}, {"per_channel", per_channel}};
 }
 
@@ -365,6 +372,9 @@ std::string names(const std::vector<fs::path>& v) {
 }
 
 std::ifstream open_in(const fs::path& p) {
+  // Bounded readers (docs/faults.md): regular files only, at most hal::kMaxRecordingInputBytes.
+  const std::string bad = hal::check_input_file(p.string(), hal::kMaxRecordingInputBytes);
+  if (!bad.empty()) throw std::runtime_error(bad);
   std::ifstream f(p, std::ios::binary);
   if (!f) throw std::runtime_error("cannot read " + p.string());
   return f;
@@ -429,9 +439,14 @@ nlohmann::json import_rtklib(const ImportOptions& opt) {
     throw std::runtime_error(opt.path + " is neither a directory nor a .pos file");
   }
   // The IMU log: a CSV with its .tag beside it.
-  std::vector<fs::path> imu_csv;
+  std::vector<fs::path> imu_csv, untagged;
   for (const fs::path& c : files_with(dir, ".csv"))
-    if (fs::exists(c.string() + ".tag")) imu_csv.push_back(c);
+    (fs::exists(c.string() + ".tag") ? imu_csv : untagged).push_back(c);
+  // docs/faults.md: an IMU log without its time tag is an error, not an import without the IMU.
+  if (imu_csv.empty() && !untagged.empty())
+    throw std::runtime_error("IMU CSV without its time-tag file in " + dir.string() + " (" + names(untagged) +
+                             ": no " + untagged.front().filename().string() +
+                             ".tag beside it): the IMU cannot be placed on GPS time");
   if (imu_csv.size() > 1) throw std::runtime_error("several IMU CSVs with a .tag in " + dir.string() + " (" + names(imu_csv) + ")");
   const auto ubx = files_with(dir, ".ubx");
   if (ubx.size() > 1) throw std::runtime_error("several .ubx files in " + dir.string() + " (" + names(ubx) + ")");
@@ -454,9 +469,41 @@ nlohmann::json import_rtklib(const ImportOptions& opt) {
   if (have_imu) {
     std::ifstream f = open_in(imu_csv.front());
     imu_samples = read_gnss_imu_csv(f, imu_lines);
-    tag = read_time_tag(imu_csv.front().string() + ".tag");
-    map = tick_to_gps(tag, imu_samples);
-    if (opt.imu_clock_ratio > 0.0) map.seconds_per_tick = opt.imu_clock_ratio * 1e-3;
+    const std::string tag_path = imu_csv.front().string() + ".tag";
+    tag = read_time_tag(tag_path);
+    try {
+      map = tick_to_gps(tag, imu_samples);
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(tag_path + ": " + e.what());
+    }
+    // docs/faults.md: the time base is checked, never guessed. The tag's span against the IMU's own
+    // ticks (ms) must be a clock ratio, not a truncated CSV or a cut .tag stretching the samples.
+    if (tag.non_monotonic > 0)
+      throw std::runtime_error(tag_path + ": " + std::to_string(tag.non_monotonic) +
+                               " records go backwards in tick or offset: a damaged time-tag file");
+    if (imu_lines.time_base_changes > 0 && imu_lines.last_time_jump < 0.0)
+      throw std::runtime_error(imu_csv.front().string() + ": the IMU tick goes back by " +
+                               std::to_string(-imu_lines.last_time_jump) + " ms near line " +
+                               std::to_string(imu_lines.last_time_jump_line) +
+                               " and stays there (the IMU restarted): one .tag cannot place both parts on GPS time");
+    const double ratio = map.seconds_per_tick * 1e3;
+    const double imu_span_s = 1e-3 * static_cast<double>(imu_samples.back().tick_ms - imu_samples.front().tick_ms);
+    const std::string why = tag_path + ": the last tag record is " + std::to_string(tag.last_tick_s()) +
+                            " s after the start but the IMU's own ticks span " + std::to_string(imu_span_s) +
+                            " s (ratio " + std::to_string(ratio) + ", beyond the " +
+                            std::to_string(kMaxTagClockDeviation) +
+                            " a clock drift can explain): a cut .tag or a truncated IMU CSV";
+    if (opt.imu_clock_ratio > 0.0) {
+      if (!(std::abs(ratio - 1.0) <= kMaxTagClockDeviation)) {
+        std::fprintf(stderr, "sdins import: warning: %s; using --imu-clock-ratio %g (the IMU's own clock)\n",
+                     why.c_str(), opt.imu_clock_ratio);
+        sum["warnings"].push_back(why + "; the IMU's own clock used (--imu-clock-ratio)");
+      }
+      map.seconds_per_tick = opt.imu_clock_ratio * 1e-3;
+    } else if (!(std::abs(ratio - 1.0) <= kMaxTagClockDeviation)) {
+      throw std::runtime_error(why + "; to place the IMU by its own clock from the tag's start time instead, pass "
+                               "--imu-clock-ratio 1");
+    }
   }
 
   // Raw GNSS through convbin.

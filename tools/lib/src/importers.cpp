@@ -12,6 +12,8 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "hal/input_file.hpp"
+#include "hal/time_tag_gate.hpp"
 #include "import_util.hpp"
 #include "tools/importers.hpp"
 
@@ -84,19 +86,32 @@ bool parse_fortran_double(std::string_view s, double& v) {
 }
 
 bool getline_counted(std::istream& in, std::string& line, bool& terminated) {
+  // std::getline with a bound (docs/faults.md): a line longer than hal::kMaxInputLineBytes keeps
+  // its first kMaxInputLineBytes bytes (the rest is read and dropped), so it fails to parse and
+  // is counted as a bad line instead of growing memory without limit.
   line.clear();
   if (!in.good()) return false;
-  std::getline(in, line);
-  if (in.bad()) return false;
-  if (in.eof()) {
-    terminated = false;
-    return !line.empty();
+  std::streambuf* sb = in.rdbuf();
+  bool any = false;
+  for (;;) {
+    const int c = sb->sbumpc();
+    if (c == std::char_traits<char>::eof()) {
+      in.setstate(std::ios::eofbit);
+      terminated = false;
+      return any;
+    }
+    any = true;
+    if (c == '\n') {
+      terminated = true;
+      return true;
+    }
+    if (line.size() < hal::kMaxInputLineBytes) line.push_back(static_cast<char>(c));
   }
-  terminated = true;
-  return true;
 }
 
 std::vector<std::uint8_t> read_file_bytes(const std::string& path) {
+  const std::string bad = hal::check_input_file(path, hal::kMaxTextInputBytes);
+  if (!bad.empty()) throw std::runtime_error(bad);
   std::ifstream f(path, std::ios::binary);
   if (!f) throw std::runtime_error("cannot read " + path);
   return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
@@ -179,9 +194,58 @@ void LineStats::skip(const std::string& reason) { ++skipped[reason]; }
 nlohmann::json LineStats::to_json() const {
   nlohmann::json ex = nlohmann::json::array();
   for (const auto& [line, reason] : examples) ex.push_back({{"line", line}, {"reason", reason}});
-  return {{"lines", lines},         {"accepted", accepted}, {"rejected", rejected},
-          {"rejected_by_reason", by_reason}, {"rejected_examples", ex}, {"skipped", skipped}};
+  nlohmann::json j = {{"lines", lines},         {"accepted", accepted}, {"rejected", rejected},
+                      {"rejected_by_reason", by_reason}, {"rejected_examples", ex}, {"skipped", skipped}};
+  if (time_base_changes > 0)
+    j["time_base_changes"] = {{"count", time_base_changes}, {"last_jump", last_time_jump}, {"last_line", last_time_jump_line}};
+  return j;
 }
+
+namespace {
+
+/// The importers' time-tag gate (hal::TimeTagGate, shared with the replay reader): a line whose
+/// time jumps alone is rejected ("time-tag outlier") and the file goes on; a jump that
+/// confirm_samples lines agree with is a new time base (counted in LineStats). `T` has `line`.
+template <class T>
+class LineTimeGate {
+ public:
+  LineTimeGate(LineStats& stats, std::vector<T>& out, const hal::TimeTagGateConfig& cfg)
+      : stats_(stats), out_(out), filter_(cfg) {}
+  void push(double t, T item) {
+    filter_.push(t, std::move(item), [this](T&& a) { accept(std::move(a)); },
+                 [this](T&& a, hal::TimeTagRejection r) { stats_.reject(a.line, hal::to_string(r)); });
+    const hal::TimeTagGateStats& g = filter_.stats();
+    if (g.new_bases > stats_.time_base_changes) {
+      stats_.time_base_changes = g.new_bases;
+      stats_.last_time_jump = g.last_new_base_jump_s;
+      stats_.last_time_jump_line = out_.empty() ? 0 : out_.back().line;
+    }
+  }
+  void finish() {
+    filter_.finish([this](T&& a) { accept(std::move(a)); },
+                   [this](T&& a, hal::TimeTagRejection r) { stats_.reject(a.line, hal::to_string(r)); });
+  }
+
+ private:
+  void accept(T&& a) {
+    ++stats_.accepted;
+    out_.push_back(std::move(a));
+  }
+  LineStats& stats_;
+  std::vector<T>& out_;
+  hal::TimeTagFilter<T> filter_;
+};
+
+hal::TimeTagGateConfig gate_config(double max_forward, double max_backward, bool strict) {
+  hal::TimeTagGateConfig g;
+  g.max_forward_s = max_forward;
+  g.max_backward_s = max_backward;
+  g.strictly_increasing = strict;
+  g.confirm_samples = kTimeBaseConfirmLines;
+  return g;
+}
+
+}  // namespace
 
 // ---------------------------------------------------------------------------------------------
 // Time tags
@@ -268,7 +332,14 @@ PosFile read_rtklib_pos(std::istream& in) {
   std::size_t n_cols = 0;
   bool have_header = false;
   bool have_prev = false;
-  GpsTime prev;
+  GpsTime prev;  // the first line's time: the gate's origin
+  struct PosRow {
+    std::uint64_t line;
+    hal::GnssPvtSample sample;
+  };
+  std::vector<PosRow> rows;
+  // Solutions at a few Hz; a step of more than 600 s (or any step back) is a jump.
+  LineTimeGate<PosRow> gate(out.lines, rows, gate_config(600.0, 0.0, true));
   while (getline_counted(in, line, terminated)) {
     ++line_no;
     const std::string_view s = trim(line);
@@ -342,10 +413,6 @@ PosFile read_rtklib_pos(std::istream& in) {
       out.lines.reject(line_no, "non-finite value");
       continue;
     }
-    if (have_prev && !(static_cast<double>(t.week - prev.week) * fsw::kSecondsPerWeek + (t.tow_s - prev.tow_s) > 0.0)) {
-      out.lines.reject(line_no, "time not increasing");
-      continue;
-    }
     hal::GnssPvtSample p;
     p.gps_week = t.week;
     p.gps_tow_s = t.tow_s;
@@ -377,11 +444,13 @@ PosFile read_rtklib_pos(std::istream& in) {
       out.lines.reject(line_no, std::string("implausible solution (GNSS_PVT validation: ") + hal::to_string(st) + ")");
       continue;
     }
-    ++out.lines.accepted;
-    out.samples.push_back(p);
-    prev = t;
+    // Time order through the time-tag gate (docs/faults.md): seconds since the first line's week.
+    if (!have_prev) prev = t;
     have_prev = true;
+    gate.push(static_cast<double>(t.week - prev.week) * fsw::kSecondsPerWeek + t.tow_s, PosRow{line_no, p});
   }
+  gate.finish();
+  for (PosRow& r : rows) out.samples.push_back(r.sample);
   if (!have_header) throw std::runtime_error("not an RTKLIB .pos file: no column header ('%  GPST latitude(deg) ...')");
   return out;
 }
@@ -391,6 +460,8 @@ PosFile read_rtklib_pos(std::istream& in) {
 
 std::vector<ImuCsvSample> read_gnss_imu_csv(std::istream& in, LineStats& stats, const ImuCsvLimits& limits) {
   std::vector<ImuCsvSample> out;
+  // Ticks in ms, strictly increasing; a step of more than 1 s either way is a jump.
+  LineTimeGate<ImuCsvSample> gate(stats, out, gate_config(1000.0, 1000.0, true));
   std::string line;
   bool terminated = true;
   std::uint64_t line_no = 0;
@@ -434,13 +505,9 @@ std::vector<ImuCsvSample> read_gnss_imu_csv(std::istream& in, LineStats& stats, 
       stats.reject(line_no, "value beyond the sensor range");
       continue;
     }
-    if (!out.empty() && smp.tick_ms <= out.back().tick_ms) {
-      stats.reject(line_no, "tick not increasing");
-      continue;
-    }
-    ++stats.accepted;
-    out.push_back(smp);
+    gate.push(static_cast<double>(smp.tick_ms), smp);
   }
+  gate.finish();
   return out;
 }
 
@@ -576,6 +643,7 @@ bool parse_number_row(const std::vector<std::string_view>& f, std::size_t n, dou
 
 std::vector<PsinsImuRow> read_psins_imu(std::istream& in, LineStats& stats) {
   std::vector<PsinsImuRow> out;
+  LineTimeGate<PsinsImuRow> gate(stats, out, gate_config(1.0, 1.0, true));  // tow [s], 200 Hz
   std::string header;
   read_csv_rows(in, stats, header, [&](std::uint64_t ln, const std::vector<std::string_view>& f) {
     double v[7];
@@ -589,24 +657,22 @@ std::vector<PsinsImuRow> read_psins_imu(std::istream& in, LineStats& stats) {
       stats.reject(ln, "time of week out of range");
       return;
     }
-    if (!out.empty() && !(v[0] > out.back().tow_s)) {
-      stats.reject(ln, "time not increasing");
-      return;
-    }
     PsinsImuRow r;
     r.tow_s = v[0];
     r.dtheta_rad = fsw::Vec3(v[1], v[2], v[3]);
     r.dv_mps = fsw::Vec3(v[4], v[5], v[6]);
     r.line = ln;
-    ++stats.accepted;
-    out.push_back(r);
+    gate.push(r.tow_s, r);
   });
+  gate.finish();
   require_header(header, "PSINS IMU CSV");
   return out;
 }
 
 std::vector<PsinsObsRow> read_psins_obs(std::istream& in, LineStats& stats) {
   std::vector<PsinsObsRow> out;
+  // Several rows per epoch (equal times); a step of more than 600 s or any step back is a jump.
+  LineTimeGate<PsinsObsRow> gate(stats, out, gate_config(600.0, 0.0, false));
   std::string header;
   read_csv_rows(in, stats, header, [&](std::uint64_t ln, const std::vector<std::string_view>& f) {
     double v[6];
@@ -629,10 +695,6 @@ std::vector<PsinsObsRow> read_psins_obs(std::istream& in, LineStats& stats) {
       stats.reject(ln, "time of week out of range");
       return;
     }
-    if (!out.empty() && v[0] < out.back().tow_s) {
-      stats.reject(ln, "time going backwards");
-      return;
-    }
     PsinsObsRow r;
     r.tow_s = v[0];
     r.prn = static_cast<int>(v[1]);
@@ -640,9 +702,9 @@ std::vector<PsinsObsRow> read_psins_obs(std::istream& in, LineStats& stats) {
     r.carrier_m = v[3];
     r.doppler_mps = v[5];
     r.line = ln;
-    ++stats.accepted;
-    out.push_back(r);
+    gate.push(r.tow_s, r);
   });
+  gate.finish();
   require_header(header, "PSINS GPS observation CSV");
   return out;
 }
@@ -733,6 +795,16 @@ std::string_view field(std::string_view line, std::size_t pos, std::size_t len) 
 
 std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) {
   std::vector<RinexObsEpoch> out;
+  // Epoch times through the time-tag gate (docs/faults.md): more than 600 s ahead or any step
+  // back is a jump; a lone one costs its epoch only.
+  struct ObsRow {
+    std::uint64_t line;
+    RinexObsEpoch ep;
+  };
+  std::vector<ObsRow> rows;
+  LineTimeGate<ObsRow> gate(st.lines, rows, gate_config(600.0, 0.0, true));
+  bool have_week0 = false;
+  int week0 = 0;
   std::string line;
   bool terminated = true;
   std::uint64_t ln = 0;
@@ -841,14 +913,14 @@ std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) 
       continue;
     }
     if (!epoch_ok) continue;
-    if (!out.empty() && !(static_cast<double>(ep.time.week - out.back().time.week) * fsw::kSecondsPerWeek +
-                              (ep.time.tow_s - out.back().time.tow_s) > 0.0)) {
-      st.lines.reject(epoch_line, "epoch time not increasing");
-      continue;
-    }
-    ++st.lines.accepted;
-    out.push_back(std::move(ep));
+    if (!have_week0) week0 = ep.time.week;
+    have_week0 = true;
+    const double t = static_cast<double>(ep.time.week - week0) * fsw::kSecondsPerWeek + ep.time.tow_s;
+    gate.push(t, ObsRow{epoch_line, std::move(ep)});
   }
+  gate.finish();
+  out.reserve(rows.size());
+  for (ObsRow& r : rows) out.push_back(std::move(r.ep));
   return out;
 }
 

@@ -1,4 +1,6 @@
 #include "tools/montecarlo.hpp"
+#include "tools/interrupt.hpp"
+#include "tools/output_file.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -340,10 +342,13 @@ std::vector<RunResult> run_many(const sim::Scenario& sc, const TruthTrack& truth
   threads = std::max(1, std::min(threads, mc.runs));
   std::atomic<int> next{0};
   std::vector<std::string> errors(static_cast<std::size_t>(threads));
+  std::atomic<int> done{0};
   auto worker = [&](int w) {
     try {
-      for (int k = next++; k < mc.runs; k = next++)
+      for (int k = next++; k < mc.runs && !interrupted(); k = next++) {  // docs/faults.md: SIGINT/SIGTERM
         results[static_cast<std::size_t>(k)] = run_one(sc, truth, almanac, mc, mc.first_run + k);
+        ++done;
+      }
     } catch (const std::exception& e) {
       errors[static_cast<std::size_t>(w)] = e.what();
       next = mc.runs;
@@ -355,6 +360,8 @@ std::vector<RunResult> run_many(const sim::Scenario& sc, const TruthTrack& truth
   for (auto& t : pool) t.join();
   for (const auto& e : errors)
     if (!e.empty()) throw std::runtime_error(e);
+  throw_if_interrupted("Monte Carlo stopped after " + std::to_string(done.load()) + " of " + std::to_string(mc.runs) +
+                       " runs; no results written");
   return results;
 }
 
@@ -518,8 +525,8 @@ std::vector<MisalignmentCombination> misalignment_combinations(const ModelStats&
 }
 
 void write_stats_csv(const ModelStats& s, const std::string& path) {
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error("cannot write " + path);
+  TextOutput out(path);  // docs/faults.md: complete or not there
+  std::ostream& f = out.os();
   f << "t_s,turning,mean_E_deg,mean_N_deg,mean_U_deg,std_E_deg,std_N_deg,std_U_deg,filter_sigma_E_deg,"
        "filter_sigma_N_deg,filter_sigma_U_deg,pos_rms_m,pos_filter_sigma_m,vel_rms_mps,vel_filter_sigma_mps,nees,"
        "nees_att\n";
@@ -533,6 +540,7 @@ void write_stats_csv(const ModelStats& s, const std::string& path) {
     f << "," << s.pos_rms_m[e] << "," << s.pos_filter_sigma_m[e] << "," << s.vel_rms_mps[e] << ","
       << s.vel_filter_sigma_mps[e] << "," << s.nees_mean[e] << "," << s.nees_att_mean[e] << "\n";
   }
+  out.commit();
 }
 
 }  // namespace tools

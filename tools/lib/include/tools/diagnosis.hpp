@@ -75,7 +75,15 @@ struct RecordedData {
   std::vector<Event> order;
   std::vector<TruthPoint> truth;  ///< time-ordered; empty without truth
   std::string description;
+  int damaged_stretches = 0;                ///< IMU holes > kDamagedImuGap_s (exclude_damaged_stretches)
+  std::uint64_t excluded_imu_samples = 0;   ///< IMU samples outside the stretch kept
 };
+
+/// An IMU hole longer than this is a damaged stretch of a log (lost or rejected events).
+inline constexpr double kDamagedImuGap_s = 0.1;
+/// Keeps the longest stretch of d without an IMU hole longer than kDamagedImuGap_s (and the GNSS
+/// inputs within it; almanacs all), counting the holes and the samples left out (docs/faults.md).
+void exclude_damaged_stretches(RecordedData& d);
 
 /// Reads an LCM log (IMU, GNSS_RAW, GNSS_PVT, GPS_ALMANAC through hal::LcmReplayReader; TRUTH).
 /// Returns false with a message when the log cannot be read or has no IMU or GNSS data; rejections

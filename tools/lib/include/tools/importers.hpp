@@ -57,6 +57,9 @@ struct ImportTimeScale {
 // ---------------------------------------------------------------------------------------------
 // Line accounting
 
+/// Lines a time jump must hold for to be taken as a new time base (hal::TimeTagGate).
+inline constexpr int kTimeBaseConfirmLines = 5;
+
 /// Lines of one input file: how many were read, used and rejected, by reason, with the first few
 /// rejected line numbers (1-based) as examples.
 struct LineStats {
@@ -67,6 +70,11 @@ struct LineStats {
   std::vector<std::pair<std::uint64_t, std::string>> examples;  ///< at most kMaxExamples
   /// Lines that are fine but not used (other GNSS systems, absent satellites, ...), by reason.
   std::map<std::string, std::uint64_t> skipped;
+  /// Time tags (hal::TimeTagGate, docs/faults.md): sustained jumps taken as a new time base, the
+  /// last one's size (in the file's time unit) and line. Single outliers are rejected lines.
+  std::uint64_t time_base_changes = 0;
+  double last_time_jump = 0.0;
+  std::uint64_t last_time_jump_line = 0;
   static constexpr std::size_t kMaxExamples = 10;
 
   void reject(std::uint64_t line, const std::string& reason);
@@ -157,6 +165,9 @@ struct TickToGps {
   /// Seconds after start of a tick.
   double offset_s(std::int64_t tick_ms) const { return seconds_per_tick * static_cast<double>(tick_ms - tick0_ms); }
 };
+/// How far (relative) the tag's span may differ from the IMU's own tick span (1 ms per tick)
+/// before the importer refuses the mapping (docs/faults.md): a crystal drifts by 1e-4, not 1e-2.
+inline constexpr double kMaxTagClockDeviation = 0.01;
 /// Throws std::runtime_error with fewer than two samples or no tag records.
 TickToGps tick_to_gps(const TimeTag& tag, const std::vector<ImuCsvSample>& samples);
 
@@ -220,7 +231,8 @@ struct PsinsObsRow {
 };
 /// gps_obs.csv: header, then GPS tow [s], PRN, C/A pseudorange [m], L1 carrier [m], an
 /// undocumented column, Doppler [m/s] (= -range rate). Rejected: field count, unparsable or
-/// non-finite number, PRN outside 1..32, pseudorange outside 1e7..5e7 m, time going backwards.
+/// non-finite number, PRN outside 1..32, pseudorange outside 1e7..5e7 m, a time going backwards or
+/// jumping alone (hal::TimeTagGate).
 std::vector<PsinsObsRow> read_psins_obs(std::istream& in, LineStats& stats);
 
 /// gps_eph.csv: a header naming the columns (PRN,Toc,af0,...), one row per PRN; rows with health
