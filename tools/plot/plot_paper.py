@@ -47,7 +47,7 @@ COLUMNS = [
 ]
 # The paper's figure numbers for its four cases (misalignment arcsec, model).
 PAPER_FIGS = {(5.0, "15"): 16, (5.0, "24"): 17, (15.0, "15"): 18, (15.0, "24"): 19}
-MODEL_COLOR = {"15": "C3", "24": "C0"}
+MODEL_COLOR = {"15": "C3", "24": "C0", "15c": "C7", "15t": "C1"}
 NEES_DOF = 9
 
 
@@ -299,7 +299,8 @@ def plot_compare_u(out_dir, cases, data):
     t_all = np.concatenate([data[id(c)]["t_s"] for c in cases])
     if t_all.max() > t_all.min():
         axes[-1].set_xlim(t_all.min(), t_all.max())
-    fig.suptitle("Up (heading) residual error, Monte Carlo 1σ: 15-state vs 24-state filter", fontsize=11)
+    fig.suptitle("Up (heading) residual error, Monte Carlo 1σ: 15-state filters (15, 15c, 15t) vs 24-state filter",
+                 fontsize=11)
     fig.tight_layout()
     fig.savefig(os.path.join(out_dir, "compare_U.png"), dpi=DPI)
     plt.close(fig)
