@@ -156,6 +156,12 @@ PatternResult pattern_result(const std::string& name, const LevelSummary& level,
 /// most u_ratio_max, with horizontal errors alike).
 std::string pattern_paragraph(const std::vector<PatternResult>& results, double level_arcsec, double u_ratio_max = 0.6);
 
+/// The tuned conventional 15-state filter's gyro angle random walk [rad/sqrt(s)] for a gyro
+/// misalignment specification: the values `sdins paper --tune-15t` found on this flight (the
+/// smallest on its grid with the mean NEES inside the bounds, 20 runs; docs/paper-verdict.md),
+/// set once per specification, not per run. Between and beyond the tuned levels: the nearest.
+double tuned15t_arw_rad_per_rts(double misalignment_arcsec);
+
 /// chi-square bound of the RMS of `runs` unit-variance samples (99%, one-sided, Wilson-Hilferty).
 double rms_chi2_bound(int runs);
 
