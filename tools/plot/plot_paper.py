@@ -24,6 +24,7 @@ import csv
 import json
 import math
 import os
+import re
 import sys
 import warnings
 
@@ -80,9 +81,12 @@ def load_summary(out_dir):
         if isinstance(mis, bool) or not isinstance(mis, (int, float)) or not math.isfinite(mis) or mis < 0:
             raise InputError(f"{where}: misalignment_arcsec must be a non-negative number, got {mis!r}")
         model = c["model"]
-        if isinstance(model, bool) or not isinstance(model, (str, int)) or not str(model).strip().isdigit():
-            raise InputError(f"{where}: model must be a state count like \"15\" or \"24\", got {model!r}")
-        model = str(int(str(model).strip()))
+        # A state count with an optional variant letter: "15", "24", "15c" (conventional), "15t" (tuned).
+        if isinstance(model, bool) or not isinstance(model, (str, int)) or \
+                not re.fullmatch(r"[0-9]+[a-z]?", str(model).strip()):
+            raise InputError(f"{where}: model must be a state count like \"15\", \"24\" or \"15c\", got {model!r}")
+        m = re.fullmatch(r"([0-9]+)([a-z]?)", str(model).strip())
+        model = str(int(m.group(1))) + m.group(2)
         runs = c["runs"]
         if isinstance(runs, bool) or not isinstance(runs, (int, float)) or runs < 1 or runs != int(runs):
             raise InputError(f"{where}: runs must be a positive integer, got {runs!r}")
@@ -108,7 +112,7 @@ def load_summary(out_dir):
             "csv": os.path.join(out_dir, c["csv"]),
             "nees_bounds": bounds, "mean_nees": mean_nees,
         })
-    cases.sort(key=lambda c: (c["mis"], int(c["model"])))
+    cases.sort(key=lambda c: (c["mis"], int(re.match(r"[0-9]+", c["model"]).group(0)), c["model"]))
     return cases
 
 

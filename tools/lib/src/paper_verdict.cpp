@@ -524,18 +524,29 @@ std::string pattern_paragraph(const std::vector<PatternResult>& results, double 
                   fmt("%.1f", u_ratio_max) + " of the 15-state one in: " +
                   (paper_like.empty() ? std::string("none of the patterns") : paper_like) +
                   "; not in: " + (not_like.empty() ? std::string("none") : not_like) + ". ";
-  std::string accum, cancel, obs, unobs;
+  std::string alike;
+  for (const auto& r : results)
+    if (r.ratio24_15[2] <= u_ratio_max && ratio_max_min(r.ratio24_15[0], 1.0) <= 1.2 &&
+        ratio_max_min(r.ratio24_15[1], 1.0) <= 1.2)
+      alike += (alike.empty() ? "" : ", ") + r.name;
+  p += "With the horizontal errors alike as well (E and N within 20%), as the paper has it: " +
+       (alike.empty() ? std::string("in none of the patterns") : "in " + alike) + ". ";
+  std::string accum, cancel, small, obs, unobs;
+  double max_abs = 0.0;
+  for (const auto& r : results) max_abs = std::max(max_abs, r.tilt_kick_abs_sum_deg);
   for (const auto& r : results) {
     const double share = r.tilt_kick_abs_sum_deg > 0 ? r.tilt_kick_sum_deg / r.tilt_kick_abs_sum_deg : 0.0;
-    std::string item = r.name + " (" + fmt("%.2f", share) + ")";
-    std::string& a = share >= 0.5 ? accum : cancel;
+    const std::string item = r.name + " (" + fmt("%.4f", r.tilt_kick_sum_deg) + " deg over " + fmt("%d", r.turns) +
+                             " turns, " + fmt("%.4f", r.east_kick_last_turn_deg) + " deg East in the last)";
+    std::string& a = r.tilt_kick_abs_sum_deg < 0.1 * max_abs ? small : share >= 0.5 ? accum : cancel;
     a += (a.empty() ? "" : ", ") + item;
     std::string& o = r.heading_combination_observable ? obs : unobs;
     o += (o.empty() ? "" : ", ") + r.name;
   }
-  p += "The gamma_xy / gamma_yx tilt kicks of the turns add up (share of |sum of kicks| in the sum of |kick|, " +
-       std::string("1 = every turn kicks the same way) in: ") + (accum.empty() ? std::string("none") : accum) +
-       "; they cancel in: " + (cancel.empty() ? std::string("none") : cancel) +
+  p += "The gamma_xy / gamma_yx tilt kicks of the turns (predicted from the truth track, 1-sigma) add up in: " +
+       (accum.empty() ? std::string("none") : accum) + "; they cancel in: " +
+       (cancel.empty() ? std::string("none") : cancel) + "; they are small in every turn in: " +
+       (small.empty() ? std::string("none") : small) +
        ". The heading combination gamma_yz + gamma_zy is observable to the 24-state filter in: " +
        (obs.empty() ? std::string("none") : obs) + "; not in: " + (unobs.empty() ? std::string("none") : unobs) +
        ". Where the kicks add up the 15-state filter carries an East (or North) tilt the 24-state filter removes, "
