@@ -69,11 +69,13 @@ def main(argv):
             a.text(r.get_x() + r.get_width() / 2, v, f"{v:.2f}", ha="center", va="bottom", fontsize=7)
     a.axhline(1.0, color="0.4", lw=0.8)
     a.axhline(0.6, color="C0", lw=0.8, ls="--", label="U limit 0.6 (paper's case)")
+    top = max(max(p["ratio_24_15"][k] for k in "ENU") for p in pats)
+    a.set_ylim(0, max(1.0, top) * 1.3)  # room for the legend above the bars
     a.set_xticks(x, names, fontsize=8)
     a.set_ylabel("final residual 1σ, 24-state / 15-state")
     a.set_title(f"gyro misalignment {j.get('misalignment_arcsec', 0):g}\" (1σ), {j.get('runs', '?')} runs per pattern",
                 fontsize=10)
-    a.legend(fontsize=8)
+    a.legend(fontsize=8, ncol=2, loc="upper left")
     a.grid(alpha=0.3, axis="y")
     for k, (model, ax_name, style) in enumerate([("15", "E", "C3"), ("24", "E", "C0"), ("15", "U", "C3"),
                                                  ("24", "U", "C0")]):
