@@ -187,8 +187,10 @@ TEST(PaperVerdict, ClaimVerdictsFollowTheNumbers) {
     EXPECT_EQ(x.verdict == "reproduced", x.cause.empty()) << x.id << ": " << x.cause;
   }
   // The cause of the accumulated-error claim points at the untuned filter when it matches.
-  for (const auto& x : c)
+  for (const auto& x : c) {
     if (x.id == "15_as_large_as_initial") EXPECT_NE(x.cause.find("15c"), std::string::npos) << x.cause;
+    if (x.id == "single_axis") EXPECT_EQ(x.measured.rfind("10 cases:", 0), 0u) << x.measured;
+  }
 
   // The same claims flip when their numbers do.
   m(levels, 5, "24").final_sigma_deg[0] = 0.0060;

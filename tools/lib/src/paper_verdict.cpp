@@ -400,7 +400,7 @@ std::vector<Claim> claims(const std::vector<LevelSummary>& levels, const Analysi
                 "re-observing heading in every turn, so the accumulated error stays at " +
                 fmt("%.2f", r) + " of the initial one";
         if (c && rc >= 0.5 && rc <= 2.0)
-          cause += "; the paper's figure matches the untuned conventional filter (15c, " + fmt("%.2f", rc) +
+          cause += "; what the paper describes matches the untuned conventional filter (15c, " + fmt("%.2f", rc) +
                    " x), whose covariance ignores the misalignments and so under-weights the heading corrections";
       }
       out.push_back(Claim{"15_as_large_as_initial", paper, m, verdict(strict, qual), cause});
@@ -414,7 +414,7 @@ std::vector<Claim> claims(const std::vector<LevelSummary>& levels, const Analysi
     } else {
       const double p = an.single_axis_max_deviation_pct;
       out.push_back(Claim{"single_axis", paper,
-                          fmt("%d", an.single_axis_cases) + " cases: largest |sim - closed form| " + fmt("%.3f", p) +
+                          std::to_string(an.single_axis_cases) + " cases: largest |sim - closed form| " + fmt("%.3f", p) +
                               "% of the peak",
                           verdict(p <= 1.0, p <= 10.0),
                           p <= 1.0 ? "" : "the simulated error departs from the closed form by more than 1% of the peak"});
@@ -536,7 +536,7 @@ std::string pattern_paragraph(const std::vector<PatternResult>& results, double 
   for (const auto& r : results) max_abs = std::max(max_abs, r.tilt_kick_abs_sum_deg);
   for (const auto& r : results) {
     const double share = r.tilt_kick_abs_sum_deg > 0 ? r.tilt_kick_sum_deg / r.tilt_kick_abs_sum_deg : 0.0;
-    const std::string item = r.name + " (" + fmt("%.4f", r.tilt_kick_sum_deg) + " deg over " + fmt("%d", r.turns) +
+    const std::string item = r.name + " (" + fmt("%.4f", r.tilt_kick_sum_deg) + " deg over " + std::to_string(r.turns) +
                              " turns, " + fmt("%.4f", r.east_kick_last_turn_deg) + " deg East in the last)";
     std::string& a = r.tilt_kick_abs_sum_deg < 0.1 * max_abs ? small : share >= 0.5 ? accum : cancel;
     a += (a.empty() ? "" : ", ") + item;
