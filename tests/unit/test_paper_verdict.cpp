@@ -202,6 +202,7 @@ TEST(PaperVerdict, ClaimVerdictsFollowTheNumbers) {
   an.accumulating = {"yz", "zy", "xy"};
   an.single_axis_max_deviation_pct = 4.0;
   c = tools::paper::claims(levels, an);
+  EXPECT_EQ(verdict(c, "15_not_removed"), "reproduced");  // 0.040 / 0.0140: it grows
   EXPECT_EQ(verdict(c, "horizontal_similar"), "reproduced");
   EXPECT_EQ(verdict(c, "bias_heading_equal"), "not reproduced");  // 1.29x
   EXPECT_EQ(verdict(c, "15_as_large_as_initial"), "reproduced");  // 0.040 of 0.046
@@ -213,6 +214,13 @@ TEST(PaperVerdict, ClaimVerdictsFollowTheNumbers) {
   c = tools::paper::claims(levels, {});
   EXPECT_EQ(verdict(c, "gap_grows"), "not reproduced");
   EXPECT_EQ(verdict(c, "24_removes"), "not reproduced");
+  set_u(m(levels, 15, "24"), 0.0050);  // 24-state U end / first turn 0.28
+  set_u(m(levels, 15, "15"), 0.0100);  // the 15-state U falls to 0.71 of its first-turn value ...
+  c = tools::paper::claims(levels, {});
+  EXPECT_EQ(verdict(c, "15_not_removed"), "reproduced qualitatively");  // ... but less than the 24-state's
+  set_u(m(levels, 15, "15"), 0.0030);
+  c = tools::paper::claims(levels, {});
+  EXPECT_EQ(verdict(c, "15_not_removed"), "not reproduced");  // 0.21, below the 24-state's 0.28
   EXPECT_EQ(verdict(c, "single_axis"), "not run");
   EXPECT_EQ(verdict(c, "bank_turn"), "not run");
 }
