@@ -223,7 +223,7 @@ void register_paper(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--tune-15t", opt.tune15t,
                 "search the 15t filter's gyro angle random walk: the smallest value on a grid (paper's x 2^(k/2)) whose "
-                "mean NEES is inside its 95% bounds at every --levels level (writes tune_15t.json)")
+                "mean NEES is inside its 95% bounds, for each --levels level (writes tune_15t.json)")
       ->excludes(pat);
   sub->add_option("--tune-grid", opt.tune_first, "--tune-15t: first grid index k (arw = paper's x 2^(k/2))")
       ->check(CLI::Range(0, 40))
