@@ -24,6 +24,7 @@ import csv
 import json
 import math
 import os
+import re
 import sys
 import warnings
 
@@ -47,7 +48,7 @@ COLUMNS = [
 ]
 # The paper's figure numbers for its four cases (misalignment arcsec, model).
 PAPER_FIGS = {(5.0, "15"): 16, (5.0, "24"): 17, (15.0, "15"): 18, (15.0, "24"): 19}
-MODEL_COLOR = {"15": "C3", "24": "C0"}
+MODEL_COLOR = {"15": "C3", "24": "C0", "15c": "C7", "15t": "C1"}
 NEES_DOF = 9
 
 
@@ -80,9 +81,12 @@ def load_summary(out_dir):
         if isinstance(mis, bool) or not isinstance(mis, (int, float)) or not math.isfinite(mis) or mis < 0:
             raise InputError(f"{where}: misalignment_arcsec must be a non-negative number, got {mis!r}")
         model = c["model"]
-        if isinstance(model, bool) or not isinstance(model, (str, int)) or not str(model).strip().isdigit():
-            raise InputError(f"{where}: model must be a state count like \"15\" or \"24\", got {model!r}")
-        model = str(int(str(model).strip()))
+        # A state count with an optional variant letter: "15", "24", "15c" (conventional), "15t" (tuned).
+        if isinstance(model, bool) or not isinstance(model, (str, int)) or \
+                not re.fullmatch(r"[0-9]+[a-z]?", str(model).strip()):
+            raise InputError(f"{where}: model must be a state count like \"15\", \"24\" or \"15c\", got {model!r}")
+        m = re.fullmatch(r"([0-9]+)([a-z]?)", str(model).strip())
+        model = str(int(m.group(1))) + m.group(2)
         runs = c["runs"]
         if isinstance(runs, bool) or not isinstance(runs, (int, float)) or runs < 1 or runs != int(runs):
             raise InputError(f"{where}: runs must be a positive integer, got {runs!r}")
@@ -108,7 +112,7 @@ def load_summary(out_dir):
             "csv": os.path.join(out_dir, c["csv"]),
             "nees_bounds": bounds, "mean_nees": mean_nees,
         })
-    cases.sort(key=lambda c: (c["mis"], int(c["model"])))
+    cases.sort(key=lambda c: (c["mis"], int(re.match(r"[0-9]+", c["model"]).group(0)), c["model"]))
     return cases
 
 
@@ -299,7 +303,8 @@ def plot_compare_u(out_dir, cases, data):
     t_all = np.concatenate([data[id(c)]["t_s"] for c in cases])
     if t_all.max() > t_all.min():
         axes[-1].set_xlim(t_all.min(), t_all.max())
-    fig.suptitle("Up (heading) residual error, Monte Carlo 1σ: 15-state vs 24-state filter", fontsize=11)
+    fig.suptitle("Up (heading) residual error, Monte Carlo 1σ: 15-state filters (15, 15c, 15t) vs 24-state filter",
+                 fontsize=11)
     fig.tight_layout()
     fig.savefig(os.path.join(out_dir, "compare_U.png"), dpi=DPI)
     plt.close(fig)

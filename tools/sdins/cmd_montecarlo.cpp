@@ -36,8 +36,10 @@ std::vector<tools::Model> parse_models(const std::string& text) {
       models.push_back(tools::Model::k24);
     else if (item == "15c")
       models.push_back(tools::Model::k15c);
+    else if (item == "15t")
+      models.push_back(tools::Model::k15t);
     else
-      throw std::runtime_error("--models: unknown model '" + item + "' (use 15, 15c, 24 or a list such as 15,24)");
+      throw std::runtime_error("--models: unknown model '" + item + "' (use 15, 15c, 15t, 24 or a list such as 15,24)");
   }
   if (models.empty()) throw std::runtime_error("--models: no model given");
   return models;

@@ -233,6 +233,17 @@ fsw::FlightAppConfig flight_app_config(const sim::Scenario& sc, const MonteCarlo
   return c;
 }
 
+/// The configuration of one model: the tuned conventional 15-state filter (k15t) takes its raised
+/// gyro noise (MonteCarloConfig::tuned15t_*); every other model flies the common configuration.
+fsw::FlightAppConfig model_config(const fsw::FlightAppConfig& base, const MonteCarloConfig& mc, Model model) {
+  fsw::FlightAppConfig cfg = base;
+  if (model == Model::k15t) {
+    cfg.exec.ekf.arw_rad_per_rts = mc.tuned15t_arw_rad_per_rts;
+    cfg.exec.ekf.gyro_bias_rw_radps_per_rts = mc.tuned15t_gyro_bias_rw_radps_per_rts;
+  }
+  return cfg;
+}
+
 fsw::NavState initial_nav_state(const TruthTrack& truth, const sim::ImuErrors& errors, const MonteCarloConfig& mc,
                                 std::uint64_t seed) {
   // Initial errors: the attitude that self-alignment leaves for this run's biases (at the start
@@ -271,7 +282,7 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   std::vector<std::unique_ptr<ModelRunner>> runners;
   for (std::size_t m = 0; m < n_models; ++m) {
     const bool is15 = mc.models[m] == Model::k15;
-    if (mc.models[m] == Model::k15c)
+    if (mc.models[m] == Model::k15c || mc.models[m] == Model::k15t)
       runners.push_back(std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout15Conv>));
     else if (mc.model_gps_errors)
       runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout15Full>)
@@ -281,7 +292,7 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
                              : std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout24>));
     res.epochs[m].reserve(truth.epochs.size());
     runners[m]->records = &res.epochs[m];
-    if (runners[m]->init(app_cfg, sensors.almanac(), init) != fsw::Status::kOk)
+    if (runners[m]->init(model_config(app_cfg, mc, mc.models[m]), sensors.almanac(), init) != fsw::Status::kOk)
       throw std::runtime_error(std::string("flight application init failed for model ") + model_name(mc.models[m]));
   }
 
