@@ -46,6 +46,7 @@ struct TimingOptions {
 struct TargetOptions {
   std::string json;
   std::string out_dir;
+  std::string source_dir;  ///< empty: found by project_source_dir()
   double duration_s = 40.0;
 } target_opt;
 
@@ -399,10 +400,11 @@ int run_audit_target() {
   if (!fs::exists(tool))
     throw std::runtime_error("sdins_target not found beside sdins (" + tool.string() +
                              "): audit target runs from a build tree (cmake --build --preset release)");
-  const std::string dir = target_opt.out_dir.empty() ? std::string(SDINS_SOURCE_DIR) + "/build/target-audit" : target_opt.out_dir;
+  const std::string src = project_source_dir(target_opt.source_dir);  // the image is built from the sources
+  const std::string dir = target_opt.out_dir.empty() ? src + "/build/target-audit" : target_opt.out_dir;
   std::string cmd;
   if (!target_opt.json.empty()) cmd = "SDINS_TARGET_JSON=" + shell_quote(fs::absolute(target_opt.json).string()) + " ";
-  cmd += shell_quote(std::string(SDINS_SOURCE_DIR) + "/tests/e2e/target_qemu.sh") + " " + shell_quote(SDINS_SOURCE_DIR) +
+  cmd += shell_quote(src + "/tests/e2e/target_qemu.sh") + " " + shell_quote(src) +
          " " + shell_quote(exe.string()) + " " + shell_quote(tool.string()) + " " + shell_quote(dir) + " " +
          std::to_string(target_opt.duration_s);
   const int rc = std::system(cmd.c_str());
@@ -447,6 +449,8 @@ void register_audit(CLI::App& app) {
       "mismatch, an overrun or a failure.");
   g_target->add_option("--json", target_opt.json, "write the report as JSON (default: OUT_DIR/target.json)");
   g_target->add_option("--out-dir", target_opt.out_dir, "work directory (default: <source>/build/target-audit)");
+  g_target->add_option("--source-dir", target_opt.source_dir,
+                       "the project's source tree the image is built from (default: as for audit stack)");
   g_target->add_option("--duration", target_opt.duration_s, "simulated flight [s]")->check(CLI::Range(5.0, 600.0))
       ->capture_default_str();
 }
