@@ -59,6 +59,9 @@ def run_help(sdins, path):
     for real, name in ((exe_dir, "<sdins-dir>"), (os.path.realpath(ROOT), "<source>"),
                        (ROOT, "<source>")):
         text = text.replace(real, name)
+    # The help's footer names the data directory of this run (docs/install.md): machine-specific.
+    text = re.sub(r"(?m)^Data directory: .*$",
+                  "Data directory: <the one in use, and how it was found: docs/install.md>", text)
     return "\n".join(line.rstrip() for line in text.rstrip("\n").split("\n"))
 
 
