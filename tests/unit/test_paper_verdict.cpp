@@ -31,6 +31,7 @@ ModelSummary model(const std::string& name, double e, double n, double u, double
   }
   m.mean_nees = 9.0;
   m.nees_bounds = {8.19, 9.85};
+  m.pr_used = 1000;
   return m;
 }
 
@@ -82,9 +83,10 @@ TEST(PaperVerdict, PhysicallyConsistentStatisticsPassEveryCheck) {
   const auto checks = tools::paper::acceptance(good());
   for (const auto& c : checks) EXPECT_TRUE(c.pass) << c.name << " value " << c.value << " limit " << c.limit;
   EXPECT_TRUE(tools::paper::all_pass(checks));
-  // Per level: 2 NEES, N, E order, U first turn, 24 falling, heading combination (7); at 15 arcsec
-  // also the E excess, 15 flat and the two U ratios (4); one cross-level comparison.
-  EXPECT_EQ(checks.size(), 7u + 11u + 1u);
+  // Per level: 2 pseudoranges used, 2 NEES, N, E order, U first turn, 24 falling, heading
+  // combination (9); at 15 arcsec also the E excess, 15 flat and the two U ratios (4); one
+  // cross-level comparison.
+  EXPECT_EQ(checks.size(), 9u + 13u + 1u);
   EXPECT_FALSE(tools::paper::all_pass({}));
 }
 
@@ -97,6 +99,9 @@ TEST(PaperVerdict, EachCheckFailsOnItsOwnQuantity) {
   const std::vector<Breaker> breakers = {
       {"mean NEES of the 15-state filter, 5 arcsec", [](auto& l) { m(l, 5, "15").mean_nees = 12.0; }},
       {"mean NEES of the 24-state filter, 15 arcsec", [](auto& l) { m(l, 15, "24").mean_nees = 7.0; }},
+      // No pseudorange used (docs/faults.md): a NEES in bounds says nothing about the aided filter.
+      {"pseudoranges used by the 24-state filter, 5 arcsec", [](auto& l) { m(l, 5, "24").pr_used = 0; }},
+      {"mean NEES of the 24-state filter, 5 arcsec", [](auto& l) { m(l, 5, "24").pr_used = 0; }},
       {"N residual sigma, 15 vs 24 state, 15 arcsec", [](auto& l) { m(l, 15, "15").final_sigma_deg[1] = 0.0150; }},
       {"E residual sigma, 24 at most 15 state, 5 arcsec", [](auto& l) { m(l, 5, "24").final_sigma_deg[0] = 0.0070; }},
       {"E excess", [](auto& l) { l[1].predicted_east_excess_deg = 0.0060; }},  // measured 0.0100: +67%
