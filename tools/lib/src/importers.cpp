@@ -355,6 +355,10 @@ PosFile read_rtklib_pos(std::istream& in) {
           throw std::runtime_error("RTKLIB .pos time system '" + std::string(tok[0]) +
                                    "': only GPST is supported (out-timesys gpst)");
         out.time_system = "GPST";
+        // A later column header replaces an earlier one whole: no column index of the old one may
+        // survive into a layout with fewer columns (found by fuzz_importers: an out-of-range read).
+        i_lat = i_lon = i_h = i_q = i_ns = i_sdn = i_sde = i_sdu = -1;
+        i_vn = i_ve = i_vu = i_sdvn = i_sdve = i_sdvu = -1;
         // Header token k (k >= 1) is data token k + 1: the time is two data tokens.
         for (std::size_t k = 1; k < tok.size(); ++k) {
           const std::string_view n = tok[k];
