@@ -114,7 +114,7 @@ def gen_cli(sdins):
 
 
 def dbc_strings(text):
-    """The DBC with its quoted strings replaced by @N@ placeholders, and the strings."""
+    """The DBC with each quoted string replaced by the token @N@ (N its index), and the strings."""
     strings = []
 
     def keep(m):

@@ -1,6 +1,8 @@
 // The target replay (see replay.hpp): the same file in the QEMU image and in the host tool.
 #include "replay.hpp"
 
+#include "fsw/nav_digest.hpp"
+
 #include <cmath>
 #include <cstring>
 
@@ -13,16 +15,6 @@ std::uint32_t offset_of(const void* base, const void* member) {
   return static_cast<std::uint32_t>(static_cast<const unsigned char*>(member) - static_cast<const unsigned char*>(base));
 }
 
-constexpr std::uint64_t kFnvOffset = 1469598103934665603ull;  // as hal::FswNode's digest
-constexpr std::uint64_t kFnvPrime = 1099511628211ull;
-
-void fnv(std::uint64_t& h, const void* p, std::size_t n) {
-  const auto* b = static_cast<const unsigned char*>(p);
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= b[i];
-    h *= kFnvPrime;
-  }
-}
 
 /// One output line, built in place (no formatting library: the image has no printf).
 class Line {
@@ -69,7 +61,7 @@ struct Model {
   const char* name;
   fsw::FlightApp<Layout> app{};
   fsw::FrameOutput out{};
-  std::uint64_t digest = kFnvOffset;
+  std::uint64_t digest = fsw::kNavDigestSeed;
   std::uint32_t frames = 0, epochs = 0;
   std::uint32_t imu_ticks = 0, gnss_ticks = 0;  // since the last completed frame
   std::uint32_t errors = 0;                     // calls that returned neither kOk nor a counted rejection
@@ -110,10 +102,7 @@ struct Model {
   }
   void frame(const Board& b) {
     const fsw::NavState& n = out.nav;
-    fnv(digest, &n.t_s, sizeof n.t_s);
-    fnv(digest, n.llh.data(), 3 * sizeof(double));
-    fnv(digest, n.vel_enu_mps.data(), 3 * sizeof(double));
-    fnv(digest, n.q_b_n.coeffs().data(), 4 * sizeof(double));
+    fsw::nav_digest_add(digest, n);
     Line f("F");
     f.text(name);
     f.hex(n.t_s);

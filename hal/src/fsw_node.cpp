@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "fsw/nav_digest.hpp"
+
 namespace hal {
 
 struct FswNode::App {
@@ -37,16 +39,6 @@ struct AppOf final : FswNode::App {
   }
 };
 
-constexpr std::uint64_t kFnvOffset = 1469598103934665603ull;
-constexpr std::uint64_t kFnvPrime = 1099511628211ull;
-
-void fnv(std::uint64_t& h, const void* p, std::size_t n) {
-  const auto* b = static_cast<const unsigned char*>(p);
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= b[i];
-    h *= kFnvPrime;
-  }
-}
 
 }  // namespace
 
@@ -108,7 +100,7 @@ bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
     return false;
   }
   summary_ = FswNodeSummary{};
-  summary_.digest = kFnvOffset;
+  summary_.digest = fsw::kNavDigestSeed;
   closed_ = false;
   return true;
 }
@@ -147,10 +139,7 @@ void FswNode::on_imu(const fsw::ImuSample& s, std::int32_t counter, std::int16_t
 void FswNode::after_frame() {
   frame_done_ = true;
   const fsw::NavState& n = frame_.nav;
-  fnv(summary_.digest, &n.t_s, sizeof n.t_s);
-  fnv(summary_.digest, n.llh.data(), 3 * sizeof(double));
-  fnv(summary_.digest, n.vel_enu_mps.data(), 3 * sizeof(double));
-  fnv(summary_.digest, n.q_b_n.coeffs().data(), 4 * sizeof(double));
+  fsw::nav_digest_add(summary_.digest, n);
   if (summary_.nav_frames % static_cast<std::uint64_t>(cfg_.nav_decimation) == 0 || frame_.ekf_updated)
     sink_.write_nav(frame_);
   ++summary_.nav_frames;
