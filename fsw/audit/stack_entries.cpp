@@ -16,6 +16,7 @@
                                                     fsw::FrameOutput& out) {                                     \
     return e.tick(in, out);                                                                                       \
   }                                                                                                               \
+  extern "C" fsw::Status sdins_stack_entry_ekf_group_##L(fsw::Executive<fsw::L>& e) { return e.run_ekf_group(); }  \
   extern "C" fsw::Status sdins_stack_entry_accumulate_##L(fsw::Ekf<fsw::L>& k, const fsw::FrameIncrement& inc,   \
                                                           const fsw::NavState& nav) {                            \
     return k.accumulate(inc, nav);                                                                                \

@@ -142,9 +142,8 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   ungated_ = false;
   pvt_gated_run_.fill(0);
   Phi_.setIdentity();
-  interval_s_ = 0.0;
-  sub_frames_ = 0;
-  sub_T_ = 0.0;
+  trans_.reset(cfg.propagation_substep_frames);
+  last_f_enu_mps2_.setZero();
   clock_bias_m_ = 0.0;
   clock_drift_mps_ = 0.0;
   clock_initialised_ = false;
@@ -162,13 +161,24 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
 }
 
 template <class Layout>
-Status Ekf<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
-  if (!initialised_) return Status::kNotInitialised;
+void EkfTransition<Layout>::reset(int substep_frames) {
+  substep_frames_ = substep_frames < 1 ? 1 : substep_frames;
+  frames_ = 0;
+  phi_nav_.setIdentity();
+  interval_s_ = 0.0;
+  sub_frames_ = 0;
+  sub_T_ = 0.0;
+  sum_C_dt_.setZero();
+  sum_dv_n_.setZero();
+  sum_C_dv_.setZero();
+  sum_C_dth_.setZero();
+}
+
+template <class Layout>
+Status EkfTransition<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
   if (!(inc.dt_s > 0.0) || !inc.dv_sum_mps.allFinite() || !inc.dtheta_sum_rad.allFinite() || !nav.llh.allFinite() ||
-      !nav.vel_enu_mps.allFinite() || !nav.q_b_n.coeffs().allFinite()) {
-    ++health_.nonfinite_rejected;
+      !nav.vel_enu_mps.allFinite() || !nav.q_b_n.coeffs().allFinite())
     return Status::kBadInput;
-  }
   const Mat3 C = nav.C_b_n();
   sum_C_dt_ += C * inc.dt_s;
   sum_dv_n_ += C * inc.dv_sum_mps;
@@ -180,22 +190,35 @@ Status Ekf<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
     }
   sub_T_ += inc.dt_s;
   last_nav_ = nav;
-  if (++sub_frames_ >= cfg_.propagation_substep_frames) flush_substep(nav);
+  ++frames_;
+  if (++sub_frames_ >= substep_frames_) flush();
   return Status::kOk;
 }
 
 template <class Layout>
-void Ekf<Layout>::flush_substep(const NavState& nav) {
+Status Ekf<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
+  if (!initialised_) return Status::kNotInitialised;
+  const Status st = trans_.accumulate(inc, nav);
+  if (st != Status::kOk) {
+    ++health_.nonfinite_rejected;
+    return st;
+  }
+  last_f_enu_mps2_ = trans_.last_f_enu_mps2();
+  return Status::kOk;
+}
+
+template <class Layout>
+void EkfTransition<Layout>::flush() {
   if (sub_frames_ == 0) return;
   const double T = sub_T_;
-  const Mat9 FT = navigation_dynamics(nav, sum_dv_n_ / T) * T;
+  const Mat9 FT = navigation_dynamics(last_nav_, sum_dv_n_ / T) * T;
   Mat9 A = Mat9::Identity() + FT;
   A.noalias() += 0.5 * FT.lazyProduct(FT);  // coefficient-based: no GEMM blocking (alloca/malloc)
 
   // Phi_nav <- A Phi_nav + (I + FT / 2) B, B the integrated sensor-error columns of the
   // navigation rows (sparse: added block by block, never formed). top_ is member scratch.
   const Mat9 half = Mat9::Identity() + 0.5 * FT;
-  top_.noalias() = A.lazyProduct(Phi_.template topRows<9>());
+  top_.noalias() = A.lazyProduct(phi_nav_);
   if constexpr (Layout::has(Block::kAccelBias)) {
     top_.template middleCols<3>(Layout::offset(Block::kAccelBias)).noalias() +=
         half.template middleCols<3>(3).lazyProduct(sum_C_dt_);
@@ -230,7 +253,7 @@ void Ekf<Layout>::flush_substep(const NavState& nav) {
     constexpr int o = Layout::offset(Block::kGyroGSens);
     for (int i = 0; i < 3; ++i) top_.col(o + i).noalias() -= half.template middleCols<3>(6).lazyProduct(sum_C_dv_.col(4 * i));
   }
-  Phi_.template topRows<9>() = top_;
+  phi_nav_ = top_;
 
   interval_s_ += T;
   sub_frames_ = 0;
@@ -244,9 +267,20 @@ void Ekf<Layout>::flush_substep(const NavState& nav) {
 template <class Layout>
 Status Ekf<Layout>::propagate() {
   if (!initialised_) return Status::kNotInitialised;
-  flush_substep(last_nav_);
-  const double T = interval_s_;
+  const Status st = propagate(trans_);
+  trans_.reset(cfg_.propagation_substep_frames);
+  return st;
+}
+
+template <class Layout>
+Status Ekf<Layout>::propagate(EkfTransition<Layout>& t) {
+  if (!initialised_) return Status::kNotInitialised;
+  t.flush();
+  const double T = t.interval_s();
+  if (t.frames() > 0) last_f_enu_mps2_ = t.last_f_enu_mps2();
   if (!(T > 0.0)) return Status::kOk;
+  Phi_.setIdentity();
+  Phi_.template topRows<9>() = t.phi_nav();
   constexpr int oc = Layout::offset(Block::kClock);
   Phi_(oc, oc + 1) = T;  // the nav rows never touch the clock, whose block is still identity
   double a_range = 1.0, a_rate = 1.0;
@@ -320,8 +354,6 @@ Status Ekf<Layout>::propagate() {
   x_.template head<9>() = x_nav;
   clock_bias_m_ += clock_drift_mps_ * T;
   last_Phi_ = Phi_;
-  Phi_.setIdentity();
-  interval_s_ = 0.0;
   return Status::kOk;
 }
 
@@ -761,34 +793,44 @@ void Ekf<Layout>::track_consistency(const EkfUpdateReport& report) {
 }
 
 template <class Layout>
-Status Ekf<Layout>::feedback(Strapdown& ins, ImuCompensation& comp) {
-  if (!initialised_) return Status::kNotInitialised;
-  if (!x_.allFinite()) {
-    x_.setZero();
-    return Status::kBadInput;
-  }
-  const Status st = ins.correct(x_.template segment<3>(0), x_.template segment<3>(3), x_.template segment<3>(6));
-  if (st != Status::kOk) return st;
-  if constexpr (Layout::has(Block::kAccelBias)) comp.accel_bias_mps2 += x_.template segment<3>(Layout::offset(Block::kAccelBias));
-  if constexpr (Layout::has(Block::kGyroBias)) comp.gyro_bias_radps += x_.template segment<3>(Layout::offset(Block::kGyroBias));
+void add_sensor_correction(const Eigen::Matrix<double, Layout::kSize, 1>& x, ImuCompensation& comp) {
+  if constexpr (Layout::has(Block::kAccelBias)) comp.accel_bias_mps2 += x.template segment<3>(Layout::offset(Block::kAccelBias));
+  if constexpr (Layout::has(Block::kGyroBias)) comp.gyro_bias_radps += x.template segment<3>(Layout::offset(Block::kGyroBias));
   if constexpr (Layout::has(Block::kAccelMisalign)) {
     constexpr int o = Layout::offset(Block::kAccelMisalign);
-    for (int k = 0; k < 3; ++k) comp.accel_error(kAccelMisalignmentAxes[k].i, kAccelMisalignmentAxes[k].j) += x_(o + k);
+    for (int k = 0; k < 3; ++k) comp.accel_error(kAccelMisalignmentAxes[k].i, kAccelMisalignmentAxes[k].j) += x(o + k);
   }
   if constexpr (Layout::has(Block::kGyroMisalign)) {
     constexpr int o = Layout::offset(Block::kGyroMisalign);
-    for (int k = 0; k < 6; ++k) comp.gyro_error(kGyroMisalignmentAxes[k].i, kGyroMisalignmentAxes[k].j) += x_(o + k);
+    for (int k = 0; k < 6; ++k) comp.gyro_error(kGyroMisalignmentAxes[k].i, kGyroMisalignmentAxes[k].j) += x(o + k);
   }
   if constexpr (Layout::has(Block::kAccelScale)) {
     constexpr int o = Layout::offset(Block::kAccelScale);
-    for (int i = 0; i < 3; ++i) comp.accel_error(i, i) += x_(o + i);
+    for (int i = 0; i < 3; ++i) comp.accel_error(i, i) += x(o + i);
   }
   if constexpr (Layout::has(Block::kGyroScale)) {
     constexpr int o = Layout::offset(Block::kGyroScale);
-    for (int i = 0; i < 3; ++i) comp.gyro_error(i, i) += x_(o + i);
+    for (int i = 0; i < 3; ++i) comp.gyro_error(i, i) += x(o + i);
   }
   if constexpr (Layout::has(Block::kGyroGSens))
-    comp.gyro_g_sens_radps_per_mps2 += x_.template segment<3>(Layout::offset(Block::kGyroGSens));
+    comp.gyro_g_sens_radps_per_mps2 += x.template segment<3>(Layout::offset(Block::kGyroGSens));
+}
+
+template <class Layout>
+Status Ekf<Layout>::take_correction(Vec& x) {
+  if (!initialised_) return Status::kNotInitialised;
+  if (!x_.allFinite()) {
+    x_.setZero();
+    x.setZero();
+    return Status::kBadInput;
+  }
+  x = x_;
+  keep_correction();
+  return Status::kOk;
+}
+
+template <class Layout>
+void Ekf<Layout>::keep_correction() {
   if constexpr (Layout::has(Block::kTimeOffset)) time_offset_hat_s_ -= x_(Layout::offset(Block::kTimeOffset));
   if constexpr (Layout::has(Block::kTimeDrift)) time_drift_hat_ -= x_(Layout::offset(Block::kTimeDrift));
   if constexpr (Layout::has(Block::kLeverArm)) lever_arm_hat_b_m_ -= x_.template segment<3>(Layout::offset(Block::kLeverArm));
@@ -802,8 +844,43 @@ Status Ekf<Layout>::feedback(Strapdown& ins, ImuCompensation& comp) {
   if constexpr (Layout::has(Block::kRangeRateError))
     rate_err_hat_ -= x_.template segment<kGnssErrorChannels>(Layout::offset(Block::kRangeRateError));
   x_.setZero();
+}
+
+template <class Layout>
+Status Ekf<Layout>::feedback(Strapdown& ins, ImuCompensation& comp) {
+  if (!initialised_) return Status::kNotInitialised;
+  if (!x_.allFinite()) {
+    x_.setZero();
+    return Status::kBadInput;
+  }
+  const Status st = ins.correct(x_.template segment<3>(0), x_.template segment<3>(3), x_.template segment<3>(6));
+  if (st != Status::kOk) return st;
+  add_sensor_correction<Layout>(x_, comp);
+  keep_correction();
   return Status::kOk;
 }
+
+template <class Layout>
+void Ekf<Layout>::output(double t_s, EkfOutput<Layout>& out) const {
+  out.t_s = t_s;
+  // A negative variance gives NaN: a broken covariance is shown, not hidden.
+  for (int i = 0; i < N; ++i) out.sigma(i) = std::sqrt(P_(i, i));
+  out.clock_bias_m = clock_bias_m_;
+  out.clock_drift_mps = clock_drift_mps_;
+  out.clock_initialised = clock_initialised_;
+  out.channel_prn = slot_prn_;
+}
+
+#define FSW_EKF_INSTANTIATE(L) \
+  template class EkfTransition<L>; \
+  template void add_sensor_correction<L>(const Eigen::Matrix<double, L::kSize, 1>&, ImuCompensation&);
+FSW_EKF_INSTANTIATE(Layout15)
+FSW_EKF_INSTANTIATE(Layout24)
+FSW_EKF_INSTANTIATE(Layout15Full)
+FSW_EKF_INSTANTIATE(Layout24Full)
+FSW_EKF_INSTANTIATE(Layout15Conv)
+FSW_EKF_INSTANTIATE(LayoutDiag)
+#undef FSW_EKF_INSTANTIATE
 
 template class Ekf<Layout15>;
 template class Ekf<Layout24>;

@@ -8,8 +8,9 @@ template <class Layout>
 Status Executive<Layout>::init(const ExecutiveConfig& cfg, const NavState& initial) {
   if (cfg.imu_samples_per_frame < 1 || cfg.imu_samples_per_frame > FrameBuilder::kMaxSamplesPerFrame ||
       cfg.frames_per_ekf < 1 || cfg.gnss_wait_frames < 0 || !(cfg.nav_rate_hz > 0.0) || !(cfg.max_gnss_age_s >= 0.0) ||
-      !(cfg.frame_budget_s > 0.0))
+      !(cfg.frame_budget_s > 0.0) || cfg.ekf_latency_frames < 1 || cfg.ekf_latency_frames >= cfg.frames_per_ekf)
     return Status::kBadConfig;
+  if (group_state_.load(std::memory_order_acquire) == kReleased) return Status::kBadConfig;  // 1 Hz group running
   cfg_ = cfg;
   Status st = builder_.configure(cfg.imu_samples_per_frame);
   if (st != Status::kOk) return st;
@@ -19,18 +20,34 @@ Status Executive<Layout>::init(const ExecutiveConfig& cfg, const NavState& initi
   if (st != Status::kOk) return st;
   comp_ = ImuCompensation{};
   health_ = ExecutiveHealth{};
+  transition_[0].reset(cfg.ekf.propagation_substep_frames);
+  transition_[1].reset(cfg.ekf.propagation_substep_frames);
+  acc_ = 0;
   have_pending_ = false;
   have_pending_pvt_ = false;
   frames_since_ekf_ = 0;
+  slip_counted_ = false;
+  late_counted_ = false;
+  apply_frame_ = 0;
   have_last_sample_ = false;
   last_accel_enu_mps2_.setZero();
+  ekf_output_ = EkfOutput<Layout>{};
+  group_state_.store(kIdle, std::memory_order_release);
   initialised_ = true;
   return Status::kOk;
 }
 
 template <class Layout>
+void Executive<Layout>::note_ekf_group_exec_s(double s) {
+  if (!(s >= 0.0)) return;
+  if (s > health_.worst_ekf_s) health_.worst_ekf_s = s;
+  if (s > cfg_.ekf_latency_frames / cfg_.nav_rate_hz) ++health_.ekf_overruns;
+}
+
+template <class Layout>
 Status Executive<Layout>::tick(const FrameInput& in, FrameOutput& out) {
   out.nav_valid = false;
+  out.ekf_released = false;
   out.ekf_ran = false;
   out.ekf_updated = false;
   out.report = EkfUpdateReport{};
@@ -79,7 +96,7 @@ Status Executive<Layout>::tick(const FrameInput& in, FrameOutput& out) {
 
     const FrameIncrement& inc = builder_.frame();
     const Vec3 v_before = ins_.state().vel_enu_mps;
-    if (ins_.step(inc) != Status::kOk || ekf_.accumulate(inc, ins_.state()) != Status::kOk) {
+    if (ins_.step(inc) != Status::kOk || transition_[acc_].accumulate(inc, ins_.state()) != Status::kOk) {
       ++health_.fsw_errors;
       continue;
     }
@@ -87,22 +104,30 @@ Status Executive<Layout>::tick(const FrameInput& in, FrameOutput& out) {
     ++health_.nav_frames;
     ++frames_since_ekf_;
     out.nav_valid = true;
-    if (frames_since_ekf_ >= cfg_.frames_per_ekf) run_ekf(out);
+    // Land a finished epoch's correction at its frame (or, late, at the first frame after it).
+    const std::uint8_t state = group_state_.load(std::memory_order_acquire);
+    if (state != kIdle && health_.nav_frames >= apply_frame_) {
+      if (state == kDone) {
+        land(out);
+      } else if (!late_counted_) {
+        ++health_.ekf_late;
+        late_counted_ = true;
+      }
+    }
+    if (frames_since_ekf_ >= cfg_.frames_per_ekf) maybe_release(out);
   }
   out.nav = ins_.state();
+  if (out.ekf_released && cfg_.ekf_group_inline) (void)run_ekf_group();
   return Status::kOk;
 }
 
 template <class Layout>
-void Executive<Layout>::run_ekf(FrameOutput& out) {
+void Executive<Layout>::maybe_release(FrameOutput& out) {
   const NavState& nav = ins_.state();
   const double half_frame_s = 0.5 / cfg_.nav_rate_hz;
-  if (have_pending_) {
-    const double age_s = nav.t_s - pending_.t_s;
-    if (age_s > cfg_.max_gnss_age_s) {
-      ++health_.gnss_stale;
-      have_pending_ = false;
-    }
+  if (have_pending_ && nav.t_s - pending_.t_s > cfg_.max_gnss_age_s) {
+    ++health_.gnss_stale;
+    have_pending_ = false;
   }
   if (have_pending_pvt_ && nav.t_s - pending_pvt_.t_s > cfg_.max_gnss_age_s) {
     ++health_.pvt_stale;
@@ -111,46 +136,113 @@ void Executive<Layout>::run_ekf(FrameOutput& out) {
   const bool epoch_ready = have_pending_ && pending_.t_s <= nav.t_s + half_frame_s;
   const bool pvt_ready = have_pending_pvt_ && pending_pvt_.t_s <= nav.t_s + half_frame_s;
   if (!epoch_ready && !pvt_ready && frames_since_ekf_ < cfg_.frames_per_ekf + cfg_.gnss_wait_frames) return;
-
-  frames_since_ekf_ = 0;
-  out.ekf_ran = true;
-  ++health_.ekf_runs;
-  if (ekf_.propagate() != Status::kOk) ++health_.fsw_errors;
-  health_.ekf = ekf_.health();
-  if (!epoch_ready && !pvt_ready) {
-    ++health_.ekf_without_gnss;
+  if (group_state_.load(std::memory_order_acquire) != kIdle) {
+    // The previous epoch's correction has not landed: the interval keeps growing (the pending
+    // measurements stay pending, aged as usual) until it has.
+    if (!slip_counted_) {
+      ++health_.ekf_slips;
+      slip_counted_ = true;
+    }
     return;
   }
-  Status st = Status::kOk;
+  slip_counted_ = false;
+  frames_since_ekf_ = 0;
+
+  EkfRequest<Layout>& rq = request_;
+  rq.aid = EkfRequest<Layout>::Aid::kNone;
   if (epoch_ready) {
     if (pvt_ready) {  // both: the raw epoch wins, the solution is dropped
       ++health_.pvt_unused;
       have_pending_pvt_ = false;
     }
     have_pending_ = false;
-    // Align: the solution at the epoch's time tag.
-    st = ekf_.update(pending_, aligned(pending_.t_s), ins_.omega_ib_b_radps(), out.report);
-  } else {
+    rq.aid = EkfRequest<Layout>::Aid::kRaw;
+    rq.epoch = pending_;
+    rq.nav_at_aid = aligned(pending_.t_s);  // align: the solution at the epoch's time tag
+  } else if (pvt_ready) {
     have_pending_pvt_ = false;
-    st = ekf_.update_pvt(pending_pvt_, aligned(pending_pvt_.t_s), ins_.omega_ib_b_radps(), out.report);
+    rq.aid = EkfRequest<Layout>::Aid::kPvt;
+    rq.pvt = pending_pvt_;
+    rq.nav_at_aid = aligned(pending_pvt_.t_s);
   }
-  health_.ekf = ekf_.health();
-  if (st != Status::kOk) {
-    ++health_.fsw_errors;
-    return;
+  rq.omega_ib_b_radps = ins_.omega_ib_b_radps();
+  rq.t_s = nav.t_s;
+  rq.transition = &transition_[acc_];
+  acc_ ^= 1;
+  transition_[acc_].reset(cfg_.ekf.propagation_substep_frames);
+  apply_frame_ = health_.nav_frames + static_cast<std::uint32_t>(cfg_.ekf_latency_frames);
+  late_counted_ = false;
+  group_state_.store(kReleased, std::memory_order_release);
+  out.ekf_released = true;
+}
+
+template <class Layout>
+Status Executive<Layout>::run_ekf_group() {
+  if (group_state_.load(std::memory_order_acquire) != kReleased) return Status::kOk;
+  const EkfRequest<Layout>& rq = request_;
+  EkfResult<Layout>& r = result_;
+  r.updated = false;
+  r.correction_valid = false;
+  r.report = EkfUpdateReport{};
+  r.fsw_errors = 0;
+  if (ekf_.propagate(*rq.transition) != Status::kOk) ++r.fsw_errors;
+  Status st = Status::kOk;
+  if (rq.aid == EkfRequest<Layout>::Aid::kRaw)
+    st = ekf_.update(rq.epoch, rq.nav_at_aid, rq.omega_ib_b_radps, r.report);
+  else if (rq.aid == EkfRequest<Layout>::Aid::kPvt)
+    st = ekf_.update_pvt(rq.pvt, rq.nav_at_aid, rq.omega_ib_b_radps, r.report);
+  if (st != Status::kOk) ++r.fsw_errors;
+  if (rq.aid != EkfRequest<Layout>::Aid::kNone && st == Status::kOk) {
+    if (ekf_.take_correction(r.x) == Status::kOk)
+      r.correction_valid = true;
+    else
+      ++r.fsw_errors;
+    r.updated = true;
   }
-  health_.pr_used += static_cast<std::uint32_t>(out.report.pr_used);
-  health_.prr_used += static_cast<std::uint32_t>(out.report.prr_used);
-  health_.pr_rejected += static_cast<std::uint32_t>(out.report.pr_rejected);
-  health_.prr_rejected += static_cast<std::uint32_t>(out.report.prr_rejected);
-  health_.obs_invalid += static_cast<std::uint32_t>(out.report.obs_invalid);
-  health_.pos_used += static_cast<std::uint32_t>(out.report.pos_used);
-  health_.vel_used += static_cast<std::uint32_t>(out.report.vel_used);
-  health_.pos_rejected += static_cast<std::uint32_t>(out.report.pos_rejected);
-  health_.vel_rejected += static_cast<std::uint32_t>(out.report.vel_rejected);
-  if (ekf_.feedback(ins_, comp_) != Status::kOk) ++health_.fsw_errors;
-  ++health_.ekf_updates;
-  out.ekf_updated = true;
+  r.ekf_health = ekf_.health();
+  ekf_.output(rq.t_s, r.output);
+  group_state_.store(kDone, std::memory_order_release);
+  return Status::kOk;
+}
+
+template <class Layout>
+void Executive<Layout>::land(FrameOutput& out) {
+  const EkfRequest<Layout>& rq = request_;
+  const EkfResult<Layout>& r = result_;
+  out.ekf_ran = true;
+  out.ekf_t_s = rq.t_s;
+  ++health_.ekf_runs;
+  health_.fsw_errors += r.fsw_errors;
+  health_.ekf = r.ekf_health;
+  ekf_output_ = r.output;
+  if (rq.aid == EkfRequest<Layout>::Aid::kNone) {
+    ++health_.ekf_without_gnss;
+  } else if (r.updated) {
+    out.report = r.report;
+    health_.pr_used += static_cast<std::uint32_t>(r.report.pr_used);
+    health_.prr_used += static_cast<std::uint32_t>(r.report.prr_used);
+    health_.pr_rejected += static_cast<std::uint32_t>(r.report.pr_rejected);
+    health_.prr_rejected += static_cast<std::uint32_t>(r.report.prr_rejected);
+    health_.obs_invalid += static_cast<std::uint32_t>(r.report.obs_invalid);
+    health_.pos_used += static_cast<std::uint32_t>(r.report.pos_used);
+    health_.vel_used += static_cast<std::uint32_t>(r.report.vel_used);
+    health_.pos_rejected += static_cast<std::uint32_t>(r.report.pos_rejected);
+    health_.vel_rejected += static_cast<std::uint32_t>(r.report.vel_rejected);
+    if (r.correction_valid) {
+      // The estimate is of frame R; the transition since R carries it to this frame.
+      EkfTransition<Layout>& since = transition_[acc_];
+      since.flush();
+      const Eigen::Matrix<double, 9, 1> dx_nav = since.phi_nav() * r.x;
+      if (ins_.correct(dx_nav.template segment<3>(0), dx_nav.template segment<3>(3), dx_nav.template segment<3>(6)) ==
+          Status::kOk)
+        add_sensor_correction<Layout>(r.x, comp_);
+      else
+        ++health_.fsw_errors;
+    }
+    ++health_.ekf_updates;
+    out.ekf_updated = true;
+  }
+  group_state_.store(kIdle, std::memory_order_release);
 }
 
 template <class Layout>

@@ -13,7 +13,8 @@ Status FlightApp<Layout>::init(const FlightAppConfig& cfg) {
       cfg.levelling_samples > kMaxLevelling || !(cfg.init_pos_sigma_m > 0.0) || !(cfg.init_vel_sigma_mps > 0.0) ||
       !cfg.init_att_sigma_rad.allFinite() || !(cfg.init_att_sigma_rad.array() > 0.0).all() ||
       cfg.exec.imu_samples_per_frame < 1 || cfg.exec.imu_samples_per_frame > FrameBuilder::kMaxSamplesPerFrame ||
-      !std::isfinite(cfg.init_heading_offset_rad) || cfg.pvt_max_quality < 1)
+      !std::isfinite(cfg.init_heading_offset_rad) || cfg.pvt_max_quality < 1 || cfg.exec.frames_per_ekf < 1 ||
+      cfg.exec.ekf_latency_frames < 1 || cfg.exec.ekf_latency_frames >= cfg.exec.frames_per_ekf)
     return Status::kBadConfig;
   const bool mode_ok = cfg.init_mode == InitMode::kTrack || cfg.init_mode == InitMode::kStatic ||
                        cfg.init_mode == InitMode::kVelocityMatching || cfg.init_mode == InitMode::kGiven;
@@ -453,6 +454,7 @@ Status FlightApp<Layout>::on_imu(const ImuSample& s, FrameOutput& out) {
   out.nav_valid = false;
   out.ekf_ran = false;
   out.ekf_updated = false;
+  out.ekf_released = false;
   if (!configured_) return Status::kNotInitialised;
   ++health_.imu_received;
   if (!health_.initialised) {

@@ -1,6 +1,16 @@
 #include "hal/fsw_node.hpp"
 
+#include <pthread.h>
+#include <sched.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <cerrno>
 #include <cstring>
+#include <mutex>
+#include <thread>
 
 #include "fsw/nav_digest.hpp"
 
@@ -14,6 +24,9 @@ struct FswNode::App {
   virtual void on_gnss_pvt(const fsw::GnssPvtMeasurement& m) = 0;
   virtual fsw::Status on_imu(const fsw::ImuSample& s, fsw::FrameOutput& out) = 0;
   virtual void set_prev_tick_exec_s(double s) = 0;
+  virtual fsw::Status run_ekf_group() = 0;
+  virtual bool ekf_result_due_next_frame() const = 0;
+  virtual void note_ekf_group_exec_s(double s) = 0;
   virtual const fsw::FlightAppHealth& health() const = 0;
   virtual const fsw::ExecutiveHealth& exec_health() const = 0;
   virtual void write_ekf(LcmLogSink& sink) const = 0;
@@ -31,6 +44,9 @@ struct AppOf final : FswNode::App {
   void on_gnss_pvt(const fsw::GnssPvtMeasurement& m) override { app.on_gnss_pvt(m); }
   fsw::Status on_imu(const fsw::ImuSample& s, fsw::FrameOutput& out) override { return app.on_imu(s, out); }
   void set_prev_tick_exec_s(double s) override { app.set_prev_tick_exec_s(s); }
+  fsw::Status run_ekf_group() override { return app.run_ekf_group(); }
+  bool ekf_result_due_next_frame() const override { return app.ekf_result_due_next_frame(); }
+  void note_ekf_group_exec_s(double s) override { app.note_ekf_group_exec_s(s); }
   const fsw::FlightAppHealth& health() const override { return app.health(); }
   const fsw::ExecutiveHealth& exec_health() const override { return app.executive().health(); }
   void write_ekf(LcmLogSink& sink) const override { sink.write_ekf(app.executive()); }
@@ -39,8 +55,80 @@ struct AppOf final : FswNode::App {
   }
 };
 
-
 }  // namespace
+
+/// The 1 Hz group's thread: released by the 200 Hz group (release()), runs App::run_ekf_group once
+/// per release and times it. One release at a time: the executive releases again only after the
+/// previous result has landed, which the 200 Hz group sees after this thread finished.
+struct FswNode::GroupThread {
+  std::mutex m;
+  std::condition_variable cv_run, cv_done;
+  bool run = false, busy = false, stop = false;
+  std::vector<double> exec_s;  ///< guarded by m; moved to the node's times by the 200 Hz side
+  std::thread th;
+
+  explicit GroupThread(FswNode::App& app) {
+    // Priority below the creating (200 Hz) thread's: SCHED_FIFO/RR one level lower, else nice + 5.
+    int policy = SCHED_OTHER;
+    sched_param sp{};
+    const bool have = pthread_getschedparam(pthread_self(), &policy, &sp) == 0;
+    th = std::thread([this, &app, have, policy, sp] {
+      if (have && (policy == SCHED_FIFO || policy == SCHED_RR)) {
+        sched_param lower = sp;
+        lower.sched_priority = sp.sched_priority > sched_get_priority_min(policy) ? sp.sched_priority - 1 : sp.sched_priority;
+        (void)pthread_setschedparam(pthread_self(), policy, &lower);
+      } else {
+        errno = 0;
+        const int nice_now = getpriority(PRIO_PROCESS, 0);
+        if (errno == 0) (void)setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), nice_now + 5 > 19 ? 19 : nice_now + 5);
+      }
+      std::unique_lock<std::mutex> lk(m);
+      for (;;) {
+        cv_run.wait(lk, [this] { return run || stop; });
+        if (stop && !run) return;
+        run = false;
+        lk.unlock();
+        const auto t0 = std::chrono::steady_clock::now();
+        (void)app.run_ekf_group();
+        const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        lk.lock();
+        exec_s.push_back(dt);
+        busy = false;
+        cv_done.notify_all();
+      }
+    });
+  }
+  void release() {
+    {
+      std::lock_guard<std::mutex> lk(m);
+      run = true;
+      busy = true;
+    }
+    cv_run.notify_one();
+  }
+  /// Waits until the current run finished; returns the time waited [s].
+  double wait_idle() {
+    std::unique_lock<std::mutex> lk(m);
+    if (!busy) return 0.0;
+    const auto t0 = std::chrono::steady_clock::now();
+    cv_done.wait(lk, [this] { return !busy; });
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  /// Moves the finished runs' times out.
+  void take_times(std::vector<double>& out) {
+    std::lock_guard<std::mutex> lk(m);
+    out.insert(out.end(), exec_s.begin(), exec_s.end());
+    exec_s.clear();
+  }
+  ~GroupThread() {
+    {
+      std::lock_guard<std::mutex> lk(m);
+      stop = true;
+    }
+    cv_run.notify_one();
+    if (th.joinable()) th.join();
+  }
+};
 
 bool parse_fsw_model(const std::string& s, FswModel& out) {
   if (s == "15") out = FswModel::k15;
@@ -74,9 +162,19 @@ FswNode::FswNode() = default;
 FswNode::~FswNode() {
   std::string ignored;
   close(ignored);
+  stop_group_thread();
+}
+
+void FswNode::stop_group_thread() {
+  if (!group_) return;
+  (void)group_->wait_idle();
+  group_->take_times(group_times_.exec_s);
+  group_.reset();
 }
 
 bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
+  stop_group_thread();
+  group_times_ = EkfGroupTimes{};
   if (cfg.nav_decimation < 1) {
     error = "nav_decimation must be >= 1";
     return false;
@@ -86,7 +184,9 @@ bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
     app_ = std::make_unique<AppOf<fsw::Layout15Full>>();
   else
     app_ = std::make_unique<AppOf<fsw::Layout24Full>>();
-  const fsw::Status st = app_->init(cfg.app);
+  fsw::FlightAppConfig app_cfg = cfg.app;
+  app_cfg.exec.ekf_group_inline = cfg.ekf_group == FswNodeConfig::EkfGroup::kInline;
+  const fsw::Status st = app_->init(app_cfg);
   if (st != fsw::Status::kOk) {
     error = std::string("flight application configuration rejected: ") + fsw::to_string(st);
     app_.reset();
@@ -102,6 +202,7 @@ bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
   summary_ = FswNodeSummary{};
   summary_.digest = fsw::kNavDigestSeed;
   closed_ = false;
+  if (cfg.ekf_group == FswNodeConfig::EkfGroup::kThread) group_ = std::make_unique<GroupThread>(*app_);
   return true;
 }
 
@@ -132,7 +233,19 @@ void FswNode::on_imu(const fsw::ImuSample& s, std::int32_t counter, std::int16_t
     else
       sink_.write_imu(s, status);
   }
+  if (group_) {
+    // Lockstep: the correction lands at a fixed frame; wait for the 1 Hz thread before it.
+    if (!cfg_.realtime && app_->ekf_result_due_next_frame()) {
+      const double w = group_->wait_idle();
+      ++group_times_.waits;
+      if (w > group_times_.wait_max_s) group_times_.wait_max_s = w;
+    }
+    const std::size_t before = group_times_.exec_s.size();
+    group_->take_times(group_times_.exec_s);
+    for (std::size_t k = before; k < group_times_.exec_s.size(); ++k) app_->note_ekf_group_exec_s(group_times_.exec_s[k]);
+  }
   app_->on_imu(s, frame_);
+  if (group_ && frame_.ekf_released) group_->release();
   if (frame_.nav_valid) after_frame();
 }
 
@@ -163,6 +276,7 @@ void FswNode::set_prev_tick_exec_s(double s) {
 bool FswNode::close(std::string& error) {
   if (!app_ || closed_) return true;
   closed_ = true;
+  stop_group_thread();
   const std::uint64_t failures = sink_.telemetry().log().write_failures();
   const LcmLogStatus ls = sink_.close();
   if (ls != LcmLogStatus::kOk || failures > 0) {
@@ -177,6 +291,7 @@ bool FswNode::close(std::string& error) {
 void FswNode::abort() {
   if (!app_ || closed_) return;
   closed_ = true;
+  stop_group_thread();
   sink_.telemetry().abort_log();
   sink_.close();
 }

@@ -33,6 +33,7 @@ TEST(TimingAudit, FliesEveryLayoutAndTimesRegisteredStages) {
   sc.duration_s = 5.0;
   tools::TimingAuditConfig cfg;
   cfg.layouts = {"Layout15", "Layout24Full"};
+  cfg.init_mode = fsw::InitMode::kGiven;  // the frame count is exact from the given start
   long prepared = 0, ran = 0;
   double checksum = 0.0, seen = 0.0;
   fsw::FrameInput last{};
@@ -64,8 +65,13 @@ TEST(TimingAudit, FliesEveryLayoutAndTimesRegisteredStages) {
   for (int i = 0; i < 4; i += 2) {
     const tools::TaskTiming& m = r.tasks[static_cast<std::size_t>(i)];
     const tools::TaskTiming& e = r.tasks[static_cast<std::size_t>(i + 1)];
-    EXPECT_EQ(m.stats.n + m.preempted + e.stats.n + e.preempted, 1000) << m.name;
+    // Two groups timed apart: every frame is a 200 Hz frame; the 1 Hz group ran 5 times (released
+    // at t = 1 ... 5 s), within its deadline.
+    EXPECT_EQ(m.stats.n + m.preempted, 1000) << m.name;
     EXPECT_EQ(e.stats.n + e.preempted, 5) << e.name;
+    EXPECT_EQ(e.slips, 0) << e.name;
+    EXPECT_EQ(m.slips, 0) << m.name;
+    EXPECT_GT(e.response_max_us, 0.0) << e.name;
     EXPECT_GT(m.stats.median_us, 0.0);
     EXPECT_GT(e.stats.median_us, m.stats.median_us) << e.name;
     EXPECT_EQ(e.interval_frames_min, 200);
@@ -73,7 +79,8 @@ TEST(TimingAudit, FliesEveryLayoutAndTimesRegisteredStages) {
   }
   ASSERT_EQ(r.layouts.size(), 2u);
   for (const tools::LayoutTiming& l : r.layouts) {
-    EXPECT_EQ(l.ekf_updates, 5) << l.layout;
+    EXPECT_EQ(l.ekf_updates, 4) << l.layout;  // the 5th correction would land 10 frames after the end
+    EXPECT_EQ(l.init_frame, -1) << l.layout;
     EXPECT_EQ(l.fsw_errors, 0) << l.layout;
     EXPECT_GT(l.sats_min, 3) << l.layout;
     // The worst unpreempted minor frame, and what it did: one of the flight's frames, named work.
@@ -85,6 +92,26 @@ TEST(TimingAudit, FliesEveryLayoutAndTimesRegisteredStages) {
   }
   // The layout's share includes the stage: more than its two executive tasks alone.
   EXPECT_GE(r.layouts[0].fsw_cpu_share, r.tasks[0].cpu_share + r.tasks[1].cpu_share);
+}
+
+TEST(TimingAudit, TimesTheInFlightInitialisationAsHilFliesIt) {
+  sim::Scenario sc;
+  sc.duration_s = 4.0;
+  tools::TimingAuditConfig cfg;
+  cfg.layouts = {"Layout24Full"};
+  const tools::TimingAuditResult r = tools::run_timing_audit(sc, cfg);  // init_mode kTrack: the default
+  ASSERT_EQ(r.layouts.size(), 1u);
+  const tools::LayoutTiming& l = r.layouts[0];
+  // The first epoch (t = 1 s, after 0.2 s of levelling) initialises: frame 199 (frames before it
+  // are the levelling calls, a frame's samples each), and its work is named.
+  EXPECT_EQ(l.init_frame, 199);
+  EXPECT_GT(l.init_frame_us, 0.0);
+  EXPECT_EQ(r.frames, 800);
+  ASSERT_EQ(r.tasks.size(), 2u);
+  EXPECT_EQ(r.tasks[0].stats.n + r.tasks[0].preempted, 800);
+  EXPECT_EQ(r.tasks[1].stats.n + r.tasks[1].preempted, 3);  // released at t = 2, 3, 4 s
+  EXPECT_GE(l.worst_frame_index, 0);
+  if (l.worst_frame_index == l.init_frame) EXPECT_NE(l.worst_frame_work.find("initialising"), std::string::npos);
 }
 
 TEST(TimingAudit, RejectsWhatItCannotFly) {

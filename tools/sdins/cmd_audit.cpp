@@ -40,6 +40,7 @@ struct StackOptions {
 struct TimingOptions {
   ScenarioOptions scenario;
   std::string layouts = "Layout15,Layout24,Layout15Full,Layout24Full";
+  std::string init = "track";
   std::string json;
 } timing_opt;
 
@@ -315,6 +316,12 @@ int run_audit_timing() {
   tools::TimingAuditConfig cfg;
   cfg.layouts = split_list(timing_opt.layouts);
   if (cfg.layouts.empty()) throw std::runtime_error("--layouts: no layout given");
+  if (timing_opt.init == "track")
+    cfg.init_mode = fsw::InitMode::kTrack;
+  else if (timing_opt.init == "given")
+    cfg.init_mode = fsw::InitMode::kGiven;
+  else
+    throw std::runtime_error("--init: '" + timing_opt.init + "' is neither track nor given");
   // Bus decode (HAL issue): register the decoder as cfg.frame_stages here (tools/timing_audit.hpp).
   const tools::TimingAuditResult r = tools::run_timing_audit(sc, cfg);
 
@@ -337,6 +344,15 @@ int run_audit_timing() {
   for (const auto& l : r.layouts)
     std::printf("worst frame %-14s %9.2f us at t=%.3f s (frame %ld): %s\n", l.layout.c_str(), l.worst_frame_us,
                 l.worst_frame_t_s, l.worst_frame_index, l.worst_frame_work.c_str());
+  for (const auto& l : r.layouts)
+    if (l.init_frame >= 0)
+      std::printf("initialisation %-11s %9.2f us%s (frame %ld)\n", l.layout.c_str(), l.init_frame_us,
+                  l.init_frame_preempted ? " (preempted)" : "", l.init_frame);
+  std::printf("\n%-24s %9s %9s %9s %9s %9s %6s\n", "group [us]", "rate [Hz]", "median", "p99", "p99.9", "max", "slips");
+  for (const auto& t : r.tasks)
+    if (!t.layout.empty())
+      std::printf("%-24s %9.1f %9.2f %9.2f %9.2f %9.2f %6ld\n", t.name.c_str(), t.nominal_rate_hz, t.stats.median_us,
+                  t.stats.p99_us, t.stats.p999_us, t.stats.max_us, t.slips);
 
   if (!timing_opt.json.empty()) {
     nlohmann::json j;
@@ -373,6 +389,24 @@ int run_audit_timing() {
       jt.push_back(e);
     }
     j["tasks"] = jt;
+    // The rate groups (issue 16): one entry per group and layout.
+    nlohmann::json jg = nlohmann::json::array();
+    for (const auto& t : r.tasks) {
+      if (t.layout.empty()) continue;
+      nlohmann::json g{{"name", t.name},
+                       {"layout", t.layout},
+                       {"rate_hz", t.nominal_rate_hz},
+                       {"n", t.stats.n},
+                       {"median_us", t.stats.median_us},
+                       {"p99_us", t.stats.p99_us},
+                       {"p999_us", t.stats.p999_us},
+                       {"max_us", t.stats.max_us},
+                       {"slips", t.slips}};
+      if (t.response_max_us > 0) g["response_max_us"] = t.response_max_us;
+      jg.push_back(g);
+    }
+    j["groups"] = jg;
+    j["init_mode"] = timing_opt.init;
     nlohmann::json jl = nlohmann::json::array();
     for (const auto& l : r.layouts)
       jl.push_back({{"layout", l.layout},
@@ -381,6 +415,11 @@ int run_audit_timing() {
                     {"fsw_errors", l.fsw_errors},
                     {"satellites", {{"min", l.sats_min}, {"median", l.sats_median}, {"max", l.sats_max}}},
                     {"wall_s", l.wall_s},
+                    {"initialisation_frame", {{"index", l.init_frame},
+                                              {"us", l.init_frame_us},
+                                              {"preempted", l.init_frame_preempted}}},
+                    {"ekf_slips_counted", l.ekf_slips_counted},
+                    {"ekf_late_counted", l.ekf_late_counted},
                     {"worst_frame", {{"us", l.worst_frame_us},
                                      {"index", l.worst_frame_index},
                                      {"t_s", l.worst_frame_t_s},
@@ -438,6 +477,10 @@ void register_audit(CLI::App& app) {
       "real time.");
   add_scenario_options(g_timing, timing_opt.scenario);
   g_timing->add_option("--layouts", timing_opt.layouts, "comma-separated: Layout15, Layout24, Layout15Full, Layout24Full")
+      ->capture_default_str();
+  g_timing->add_option("--init", timing_opt.init,
+                       "track: initialise in flight from the GNSS as HIL does (timed); given: start from the Monte "
+                       "Carlo's given state")
       ->capture_default_str();
   g_timing->add_option("--json", timing_opt.json, "write the report as JSON");
   g_target = audit->add_subcommand(

@@ -227,6 +227,64 @@ struct EkfHealth {
   std::uint32_t resets = 0;           ///< navigation covariance re-inflated after a gating runaway
 };
 
+/// The 200 Hz half of the filter's propagation: the transition matrix of one interval, integrated
+/// frame by frame (accumulate(): the navigation rows' sensor-error columns, in sub-steps of
+/// substep_frames frames, second order) and handed whole to Ekf::propagate(). Only the navigation
+/// rows are dense; the rest of Phi is set by propagate(). The executive keeps two, so the 200 Hz
+/// group integrates the next interval while the 1 Hz group propagates with the last one
+/// (fsw/executive.hpp); Ekf keeps one of its own for accumulate()/propagate() on one thread.
+template <class Layout>
+class EkfTransition {
+ public:
+  static constexpr int N = Layout::kSize;
+  using NavRows = Eigen::Matrix<double, 9, N>;
+
+  /// Starts an empty interval (Phi = I).
+  void reset(int substep_frames);
+  /// One navigation frame: inc the compensated increments, nav the solution at its end. kBadInput
+  /// (nothing accumulated) for a non-positive dt or non-finite values.
+  Status accumulate(const FrameIncrement& inc, const NavState& nav);
+  /// Closes the sub-step in progress, so phi_nav() and interval_s() cover every accumulated frame.
+  void flush();
+
+  const NavRows& phi_nav() const { return phi_nav_; }  ///< rows 0..8 of Phi (flushed frames)
+  double interval_s() const { return interval_s_; }    ///< time covered by phi_nav()
+  const Vec3& last_f_enu_mps2() const { return last_f_enu_mps2_; }  ///< specific force of the last frame
+  int frames() const { return frames_; }  ///< frames accumulated since reset()
+
+ private:
+  int substep_frames_ = 10;
+  int frames_ = 0;
+  NavRows phi_nav_ = NavRows::Identity();
+  NavRows top_ = NavRows::Zero();  ///< scratch of flush(): a member, so it is not on the task's stack
+  double interval_s_ = 0.0;
+  int sub_frames_ = 0;
+  double sub_T_ = 0.0;
+  Mat3 sum_C_dt_ = Mat3::Zero();  ///< sum C_b_n dt
+  Vec3 sum_dv_n_ = Vec3::Zero();  ///< sum C_b_n dv (f_n dt)
+  Vec3 last_f_enu_mps2_ = Vec3::Zero();
+  Eigen::Matrix<double, 3, 9> sum_C_dv_ = Eigen::Matrix<double, 3, 9>::Zero();   ///< col 3i+j: sum C(:,i) dv_j
+  Eigen::Matrix<double, 3, 9> sum_C_dth_ = Eigen::Matrix<double, 3, 9>::Zero();  ///< col 3i+j: sum C(:,i) dtheta_j
+  NavState last_nav_{};  ///< the solution at the end of the last frame (linearisation point of a sub-step)
+};
+
+/// What telemetry reads of the filter after one epoch of the 1 Hz group (hal's EKF_STATE message),
+/// published by the executive so no reader reaches into the filter while the 1 Hz group runs.
+template <class Layout>
+struct EkfOutput {
+  double t_s = 0.0;  ///< INS time of the epoch (the end of the frame that released it)
+  Eigen::Matrix<double, Layout::kSize, 1> sigma = Eigen::Matrix<double, Layout::kSize, 1>::Zero();  ///< sqrt(diag P)
+  double clock_bias_m = 0.0;
+  double clock_drift_mps = 0.0;
+  bool clock_initialised = false;
+  std::array<std::uint8_t, kGnssErrorChannels> channel_prn{};
+};
+
+/// Adds the sensor-error part of a correction x (the error-state estimate, error_state.hpp signs)
+/// to the IMU compensation: biases, misalignments, scale factors, g-sensitivity.
+template <class Layout>
+void add_sensor_correction(const Eigen::Matrix<double, Layout::kSize, 1>& x, ImuCompensation& comp);
+
 template <class Layout>
 class Ekf {
   static_assert(kNavigationBlocksLead<Layout>, "position, velocity, attitude must be the first blocks");
@@ -247,6 +305,9 @@ class Ekf {
 
   /// 1 Hz: P = Phi P Phi^T + Q over the frames accumulated since the last call.
   Status propagate();
+  /// 1 Hz: the same over the interval t (closed here by t.flush()), which the caller accumulated
+  /// (the executive's 200 Hz group); the filter's own accumulator is not touched.
+  Status propagate(EkfTransition<Layout>& t);
 
   /// Measurement update with one epoch. nav: the INS solution at the frame closest to the epoch;
   /// omega_ib_b: body rate of that frame (for the lever-arm velocity).
@@ -260,8 +321,17 @@ class Ekf {
   Status update_pvt(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
                     EkfUpdateReport& report);
 
-  /// Applies the estimate to the solution and the IMU compensation and resets it to zero.
+  /// Applies the estimate to the solution and the IMU compensation and resets it to zero
+  /// (take_correction(), then the navigation and sensor parts applied at once).
   Status feedback(Strapdown& ins, ImuCompensation& comp);
+  /// The filter's half of the feedback: returns the estimate in x, applies the parts the filter
+  /// keeps itself (clock, time offset, lever arm, delay scales, channel errors) and resets the
+  /// estimate to zero. The navigation (x(0..8)) and sensor parts (add_sensor_correction) are the
+  /// caller's to apply; the executive applies them ekf_latency_frames later. kBadInput (estimate
+  /// dropped, x zero) when it is not finite.
+  Status take_correction(Vec& x);
+  /// The published output of the filter at INS time t_s.
+  void output(double t_s, EkfOutput<Layout>& out) const;
 
   /// Replaces the covariance (restoring a saved filter, tests); symmetrised and checked like every
   /// epoch's (a non-positive-definite P is repaired and counted). kBadInput for NaN/Inf.
@@ -293,11 +363,12 @@ class Ekf {
   const EkfHealth& health() const { return health_; }
 
  private:
-  void flush_substep(const NavState& nav);
   /// One gated scalar update; nu and S receive the innovation and its variance.
   bool scalar_update(const RowVec& h, double y, double r, double& nu, double& S);
   /// Symmetrises P in place and checks it is positive definite; repairs (counted) if not.
   void check_covariance();
+  /// Applies the part of the estimate the filter keeps itself and zeroes the estimate.
+  void keep_correction();
   void symmetrise();
   void track_consistency(const EkfUpdateReport& report);
   // noinline: a partially inlined clone (.part.0) folded by identical-code folding leaves the
@@ -309,10 +380,10 @@ class Ekf {
   bool initialised_ = false;
   Vec x_ = Vec::Zero();
   Mat P_ = Mat::Zero();
-  Mat Phi_ = Mat::Identity();  ///< transition since the last propagate()
+  Mat Phi_ = Mat::Identity();  ///< scratch of propagate(): the full transition of the interval
   Mat last_Phi_ = Mat::Identity();
   Mat work_ = Mat::Zero();     ///< scratch (Phi P, Cholesky): a member, so it is not on the task's stack
-  Eigen::Matrix<double, 9, N> top_ = Eigen::Matrix<double, 9, N>::Zero();  ///< scratch of flush_substep
+  EkfTransition<Layout> trans_{};  ///< accumulate() / propagate() on one thread
   EkfHealth health_{};
   static constexpr int kMaxNisWindow = 64;
   std::array<double, kMaxNisWindow> nis_hist_{};
@@ -328,16 +399,7 @@ class Ekf {
   static constexpr double kReacquirePosVar_m2 = 1.0e6;
   static constexpr double kReacquireVelVar_m2ps2 = 100.0;
   Vec init_var_ = Vec::Zero();  ///< initial variances (covariance repair, resets)
-  double interval_s_ = 0.0;    ///< time covered by Phi_
-  // Sub-step sums.
-  int sub_frames_ = 0;
-  double sub_T_ = 0.0;
-  Mat3 sum_C_dt_ = Mat3::Zero();                          ///< sum C_b_n dt
-  Vec3 sum_dv_n_ = Vec3::Zero();                          ///< sum C_b_n dv (f_n dt)
-  Vec3 last_f_enu_mps2_ = Vec3::Zero();                     ///< specific force of the last frame, ENU
-  Eigen::Matrix<double, 3, 9> sum_C_dv_ = Eigen::Matrix<double, 3, 9>::Zero();   ///< col 3i+j: sum C(:,i) dv_j
-  Eigen::Matrix<double, 3, 9> sum_C_dth_ = Eigen::Matrix<double, 3, 9>::Zero();  ///< col 3i+j: sum C(:,i) dtheta_j
-  NavState last_nav_{};
+  Vec3 last_f_enu_mps2_ = Vec3::Zero();  ///< specific force of the last frame of the last interval, ENU
   double clock_bias_m_ = 0.0;
   double clock_drift_mps_ = 0.0;
   bool clock_initialised_ = false;
@@ -352,6 +414,16 @@ class Ekf {
   Eigen::Matrix<double, kGnssErrorChannels, 1> rate_err_hat_ = Eigen::Matrix<double, kGnssErrorChannels, 1>::Zero();
 };
 
+#define FSW_EKF_EXTERN(L)                 \
+  extern template class EkfTransition<L>; \
+  extern template void add_sensor_correction<L>(const Eigen::Matrix<double, L::kSize, 1>&, ImuCompensation&);
+FSW_EKF_EXTERN(Layout15)
+FSW_EKF_EXTERN(Layout24)
+FSW_EKF_EXTERN(Layout15Full)
+FSW_EKF_EXTERN(Layout24Full)
+FSW_EKF_EXTERN(Layout15Conv)
+FSW_EKF_EXTERN(LayoutDiag)
+#undef FSW_EKF_EXTERN
 extern template class Ekf<Layout15>;
 extern template class Ekf<Layout24>;
 extern template class Ekf<Layout15Full>;

@@ -1,29 +1,52 @@
-// The rate-group executive of the flight software: one minor frame per call of tick().
+// The rate-group executive of the flight software: two rate groups with a fixed hand-off.
 //
-//   200 Hz rate group: IMU compensation -> coning/sculling frame builder -> strapdown step ->
-//                      EKF accumulation (the transition-matrix integrals)
-//   1 Hz rate group:   EKF propagate -> measurement update with the GNSS epoch -> feedback
+//   200 Hz group, tick():        IMU compensation -> coning/sculling frame builder -> strapdown
+//                                step -> accumulation of the filter's transition matrix
+//                                (EkfTransition); releases the 1 Hz group; applies its correction
+//   1 Hz group, run_ekf_group(): Ekf::propagate over the released interval -> measurement update
+//                                with the GNSS epoch (or solution) -> the correction
 //
-// The 1 Hz group runs inside the minor frame in which it falls due, after the 200 Hz group (the
-// order of a rate-monotonic schedule on one core): it is due every frames_per_ekf navigation frames
-// and runs as soon as a GNSS epoch whose time tag lies within max_gnss_age_s of the INS time is
-// available; if none arrives within gnss_wait_frames frames after it fell due, it propagates
-// without a measurement (counted). The measurement is aligned to the INS time tag: the solution
-// is extrapolated from the frame end to the epoch's time with the frame's velocity and
-// acceleration.
+// RELEASE. The 1 Hz group falls due every frames_per_ekf navigation frames and is released as
+// soon as a GNSS epoch whose time tag lies within max_gnss_age_s of the INS time is available; if
+// none arrives within gnss_wait_frames frames after it fell due, it is released without a
+// measurement (propagation only, counted). At the release frame R the 200 Hz group fills the
+// request (EkfRequest: the closed transition interval, the measurement, the INS solution aligned
+// to the measurement's time tag: extrapolated from the frame end with the frame's velocity and
+// acceleration, and the frame's body rate) and switches to its second transition accumulator, so
+// it integrates the next interval while the 1 Hz group works on this one. Nothing the 1 Hz group
+// reads is written by the 200 Hz group until the correction has landed, and vice versa.
+//
+// CORRECTION. The 1 Hz group returns the estimate x at frame R (EkfResult) and resets its own.
+// The 200 Hz group applies it at frame R + ekf_latency_frames (L): the navigation part propagated
+// over the L frames by the transition accumulated since R (dx_nav(R+L) = Phi_nav(R -> R+L) x,
+// which carries the sensor-error states' effect on those frames), the sensor part added to the
+// IMU compensation. So the correction lands at a frame fixed by the release, not by when the 1 Hz
+// group happened to finish: with the same inputs every harness gets bit-identical outputs,
+// whether the 1 Hz group runs inside tick() (ekf_group_inline: lockstep on one thread: Monte
+// Carlo, diagnosis, tests, the Cortex-M replay) or on its own lower-priority thread or interrupt
+// that the 200 Hz group waits for at frame R + L in lockstep (hal::FswNode). In real time, a
+// correction not ready at R + L is counted (ekf_late) and lands at the first frame after it is
+// ready, propagated over the longer span (still consistent, no longer bit-identical); a release
+// that falls due while the previous correction has not landed is deferred (ekf_slips) and its
+// interval keeps growing until the release can happen.
+//
+// FrameOutput reports the 1 Hz group in the frame its correction landed (ekf_ran, ekf_updated,
+// report; ekf_t_s is the epoch's release time); ekf_output() is what telemetry reads of it.
 //
 // A GNSS position/velocity solution (FrameInput::pvt, the loosely coupled update) has its own
 // pending slot, handled like the raw epoch's (aligned to the INS time, stale/replaced/invalid
-// counted): a due EKF step runs as soon as either is ready. When both are ready the raw epoch is
-// used and the solution is dropped (pvt_unused); a solution that is ready while the raw epoch is
-// not (yet) is used. With frames_per_ekf = nav rate / solution rate (50 for 4 Hz) the EKF follows
-// the solutions, one update per solution.
+// counted): a due release happens as soon as either is ready. When both are ready the raw epoch
+// is used and the solution is dropped (pvt_unused); a solution that is ready while the raw epoch
+// is not (yet) is used. With frames_per_ekf = nav rate / solution rate (50 for 4 Hz) the EKF
+// follows the solutions, one update per solution.
 //
-// Everything arrives through FrameInput and leaves through FrameOutput and Health: no clocks, no
-// I/O, no allocation; the same inputs give bit-identical outputs. Frame overruns are measured by
-// the caller (HAL), which passes the previous tick's execution time in.
+// Everything arrives through FrameInput and leaves through FrameOutput, ekf_output() and Health:
+// no clocks, no I/O, no allocation, no locks (the hand-off is one atomic state word, single
+// producer / single consumer). Execution times are measured by the caller (HAL), which passes
+// them in (prev_tick_exec_s, note_ekf_group_exec_s).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 
 #include "fsw/ekf.hpp"
@@ -45,6 +68,12 @@ struct ExecutiveConfig {
   int gnss_wait_frames = 40;        ///< how long a due EKF step waits for its epoch (0.2 s)
   double max_gnss_age_s = 0.25;     ///< epochs older than this at use are stale
   double frame_budget_s = 0.005;    ///< a tick that took longer is an overrun
+  /// Frames after its release at which the 1 Hz group's correction lands (1 <= L < frames_per_ekf;
+  /// 10 frames = 50 ms: the 1 Hz group's deadline; see the file header).
+  int ekf_latency_frames = 10;
+  /// true: tick() runs the 1 Hz group itself right after releasing it (one thread, lockstep);
+  /// false: the caller runs run_ekf_group() (its own thread or interrupt) after out.ekf_released.
+  bool ekf_group_inline = true;
   EkfConfig ekf{};
 };
 
@@ -75,7 +104,11 @@ struct ExecutiveConfig {
   X(std::uint32_t, obs_invalid, "observations with invalid values")                                 \
   X(std::uint32_t, overruns, "ticks that took longer than frame_budget_s")                          \
   X(double, worst_tick_s, "longest measured tick [s]")                                              \
-  X(std::uint32_t, fsw_errors, "fsw calls that returned an unexpected status")
+  X(std::uint32_t, fsw_errors, "fsw calls that returned an unexpected status")                     \
+  X(std::uint32_t, ekf_slips, "1 Hz releases deferred: the previous correction had not landed")     \
+  X(std::uint32_t, ekf_late, "corrections not ready at their frame (landed later)")                 \
+  X(std::uint32_t, ekf_overruns, "1 Hz runs longer than their deadline (ekf_latency_frames)")       \
+  X(double, worst_ekf_s, "longest measured 1 Hz run [s]")
 /// GNSS position/velocity solutions (loosely coupled update).
 #define FSW_EXECUTIVE_PVT_COUNTERS(X)                                                               \
   X(std::uint32_t, pvt_received, "solutions received")                                              \
@@ -118,44 +151,106 @@ struct FrameInput {
 
 struct FrameOutput {
   bool nav_valid = false;     ///< a navigation frame completed in this tick
-  NavState nav{};             ///< solution at the end of the last completed frame (after feedback)
-  bool ekf_ran = false;
-  bool ekf_updated = false;
+  NavState nav{};             ///< solution at the end of the last completed frame (after any correction)
+  bool ekf_released = false;  ///< this tick released the 1 Hz group (not inline: run run_ekf_group())
+  bool ekf_ran = false;       ///< a 1 Hz group's result landed in this tick ...
+  bool ekf_updated = false;   ///< ... with a measurement update
+  double ekf_t_s = 0.0;       ///< ... of the epoch released at this INS time
+  EkfUpdateReport report{};   ///< ... and what its update did
+};
+
+/// The 200 Hz -> 1 Hz hand-off: what one filter epoch needs, written by the 200 Hz group before it
+/// releases the 1 Hz group (statically allocated in the executive).
+template <class Layout>
+struct EkfRequest {
+  enum class Aid : std::uint8_t { kNone, kRaw, kPvt };
+  Aid aid = Aid::kNone;
+  EkfTransition<Layout>* transition = nullptr;  ///< the closed interval (the executive's accumulator)
+  GnssEpoch epoch{};
+  GnssPvtMeasurement pvt{};
+  NavState nav_at_aid{};   ///< the INS solution aligned to the aid's time tag
+  Vec3 omega_ib_b_radps = Vec3::Zero();
+  double t_s = 0.0;        ///< INS time of the release frame
+};
+
+/// The 1 Hz -> 200 Hz hand-off: the correction and what the epoch did.
+template <class Layout>
+struct EkfResult {
+  bool updated = false;
+  bool correction_valid = false;  ///< x holds a finite estimate to apply
+  Eigen::Matrix<double, Layout::kSize, 1> x = Eigen::Matrix<double, Layout::kSize, 1>::Zero();  ///< estimate at the release frame
   EkfUpdateReport report{};
+  EkfOutput<Layout> output{};
+  EkfHealth ekf_health{};
+  std::uint32_t fsw_errors = 0;
 };
 
 template <class Layout>
 class Executive {
  public:
   Status init(const ExecutiveConfig& cfg, const NavState& initial);
+  /// The 200 Hz group: one minor frame.
   Status tick(const FrameInput& in, FrameOutput& out);
+  /// The 1 Hz group: runs the released epoch (kOk and nothing done when none is released). With
+  /// ekf_group_inline tick() calls it; otherwise the caller does, once per out.ekf_released, on
+  /// any one thread other than tick()'s or between two ticks.
+  Status run_ekf_group();
+  /// The 1 Hz group has been released and not finished.
+  bool ekf_group_busy() const { return group_state_.load(std::memory_order_acquire) == kReleased; }
+  /// The next navigation frame is the one at which a released epoch's correction must land
+  /// (a lockstep caller waits for run_ekf_group() to finish before the tick that completes it).
+  bool ekf_result_due_next_frame() const {
+    return group_state_.load(std::memory_order_acquire) != kIdle && health_.nav_frames + 1 >= apply_frame_;
+  }
+  /// Measured execution time of a 1 Hz run (caller's clock): worst_ekf_s, ekf_overruns.
+  void note_ekf_group_exec_s(double s);
 
   const ExecutiveHealth& health() const { return health_; }
+  /// What telemetry reads of the filter: valid after an out.ekf_ran.
+  const EkfOutput<Layout>& ekf_output() const { return ekf_output_; }
+  /// The filter itself: read it only between run_ekf_group() calls (lockstep callers).
   const Ekf<Layout>& ekf() const { return ekf_; }
   const Strapdown& ins() const { return ins_; }
   const ImuCompensation& compensation() const { return comp_; }
   const ExecutiveConfig& config() const { return cfg_; }
 
  private:
-  void run_ekf(FrameOutput& out);
+  enum : std::uint8_t { kIdle = 0, kReleased = 1, kDone = 2 };
+  /// Release decision of a due frame; fills the request and releases when ready.
+  void maybe_release(FrameOutput& out);
+  /// Lands the 1 Hz group's result in this frame.
+  void land(FrameOutput& out);
   /// The solution at time t_s, extrapolated back (or forward) from the frame end.
   NavState aligned(double t_s) const;
 
   ExecutiveConfig cfg_{};
   bool initialised_ = false;
+  // 200 Hz group.
   FrameBuilder builder_{};
   Strapdown ins_{};
   ImuCompensation comp_{};
-  Ekf<Layout> ekf_{};
   ExecutiveHealth health_{};
+  EkfTransition<Layout> transition_[2]{};
+  int acc_ = 0;  ///< transition_[acc_] accumulates; the other is the 1 Hz group's while released
   GnssEpoch pending_{};
   bool have_pending_ = false;
   GnssPvtMeasurement pending_pvt_{};
   bool have_pending_pvt_ = false;
   int frames_since_ekf_ = 0;
+  bool slip_counted_ = false;
+  std::uint32_t apply_frame_ = 0;
+  bool late_counted_ = false;
   bool have_last_sample_ = false;
   double last_sample_t_s_ = 0.0;
   Vec3 last_accel_enu_mps2_ = Vec3::Zero();
+  EkfOutput<Layout> ekf_output_{};
+  // The hand-off (one atomic state word; the request is the 200 Hz group's to write while idle,
+  // the result the 1 Hz group's while released).
+  std::atomic<std::uint8_t> group_state_{kIdle};
+  EkfRequest<Layout> request_{};
+  EkfResult<Layout> result_{};
+  // 1 Hz group.
+  Ekf<Layout> ekf_{};
 };
 
 extern template class Executive<Layout15>;

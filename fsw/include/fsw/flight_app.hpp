@@ -7,7 +7,9 @@
 //   on_gnss_pvt(GnssPvtMeasurement) -> a position/velocity solution (loosely coupled update);
 //                               before initialisation: may initialise (land vehicles)
 //   on_imu(ImuSample)        -> before initialisation: levelling; after: batched into the
-//                               executive's minor frames (200 Hz mechanization, 1 Hz EKF)
+//                               executive's minor frames (the 200 Hz group; it releases the 1 Hz
+//                               group, which runs inside on_imu or, with exec.ekf_group_inline
+//                               false, in run_ekf_group() on the caller's other thread)
 //
 // In-motion initialisation (no host, no ground alignment): at the first epoch with at least
 // min_satellites_for_init satellites, PDOP <= max_init_pdop and a speed >= min_init_speed_mps,
@@ -190,6 +192,13 @@ class FlightApp {
   Status start_given(const NavState& nav);
   /// Measured execution time of the previous tick, passed to the executive (real-time mode).
   void set_prev_tick_exec_s(double s) { prev_tick_exec_s_ = s; }
+  /// The 1 Hz group (Executive::run_ekf_group): with exec.ekf_group_inline = false the caller runs
+  /// it after an out.ekf_released, on its own thread or between two on_imu calls.
+  Status run_ekf_group() { return exec_.run_ekf_group(); }
+  /// A lockstep caller running the 1 Hz group elsewhere waits for it while this is true.
+  bool ekf_result_due_next_frame() const { return health_.initialised && exec_.ekf_result_due_next_frame(); }
+  /// Measured execution time of a 1 Hz run (real-time mode).
+  void note_ekf_group_exec_s(double s) { exec_.note_ekf_group_exec_s(s); }
 
   bool initialised() const { return health_.initialised; }
   const Executive<Layout>& executive() const { return exec_; }

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fsw/flight_app.hpp"
 #include "hal/lcm_log_sink.hpp"
@@ -26,6 +27,22 @@ struct FswNodeConfig {
   LcmTelemetryConfig telemetry{};  ///< network URL ("none": off) and the log path ("": no log)
   int nav_decimation = 10;         ///< NAV_SOLUTION every n-th 200 Hz frame (10: 20 Hz)
   bool log_inputs = true;          ///< write IMU, GNSS_RAW, GPS_ALMANAC (makes the log replayable)
+  /// Where the 1 Hz group runs (fsw/executive.hpp): on its own thread at a lower priority than the
+  /// caller's (the 200 Hz group), or inline in the 200 Hz tick.
+  enum class EkfGroup : std::uint8_t { kThread, kInline };
+  EkfGroup ekf_group = EkfGroup::kThread;
+  /// false (lockstep, virtual time): before the frame at which a 1 Hz correction lands, the 200 Hz
+  /// group waits for the 1 Hz thread, so the outputs are bit-identical to kInline and to every other
+  /// lockstep harness. true (real time): it never waits; a late correction is counted (ekf_late)
+  /// and lands when ready.
+  bool realtime = false;
+};
+
+/// Execution times of the 1 Hz group's runs on its thread (steady clock) [s].
+struct EkfGroupTimes {
+  std::vector<double> exec_s;
+  std::uint64_t waits = 0;       ///< lockstep: frames at which the 200 Hz group waited for it
+  double wait_max_s = 0.0;       ///< ... the longest wait
 };
 
 /// The default flight configuration: the paper's sensor class (fsw::EkfConfig defaults), the
@@ -73,12 +90,19 @@ class FswNode {
   /// Whether the last on_imu() completed a minor frame, and its output.
   const fsw::FrameOutput& last_frame() const { return frame_; }
   bool frame_completed() const { return frame_done_; }
+  /// The 1 Hz thread's execution times (empty with EkfGroup::kInline).
+  const EkfGroupTimes& ekf_group_times() const { return group_times_; }
 
   struct App;  ///< the flight app of the chosen layout (defined in the .cpp)
+  struct GroupThread;  ///< the 1 Hz group's thread (defined in the .cpp)
 
  private:
   void after_frame();
+  /// Stops the 1 Hz thread after its current run (close, abort, destructor).
+  void stop_group_thread();
   std::unique_ptr<App> app_;
+  std::unique_ptr<GroupThread> group_;
+  EkfGroupTimes group_times_{};
   FswNodeConfig cfg_{};
   LcmLogSink sink_;
   fsw::FrameOutput frame_{};

@@ -183,16 +183,17 @@ void reference_to_msg(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu
 /// The non-template part of the EKF state: the accumulated IMU compensation.
 void compensation_to_msg(const fsw::ImuCompensation& comp, sdins::ekf_state_t& out);
 
-/// EKF model, estimates (IMU compensation, clock) and the 1-sigma of every state at time t_s.
+/// EKF model, estimates (IMU compensation, clock) and the 1-sigma of every state: the executive's
+/// published output of one epoch (fsw::EkfOutput, time out.t_s).
 template <class Layout>
-void to_msg(const fsw::Ekf<Layout>& ekf, const fsw::ImuCompensation& comp, double t_s, sdins::ekf_state_t& out) {
+void to_msg(const fsw::EkfOutput<Layout>& ekf, const fsw::ImuCompensation& comp, sdins::ekf_state_t& out) {
   constexpr int N = Layout::kSize;
   static_assert(N <= static_cast<int>(sizeof(out.sigma) / sizeof(out.sigma[0])), "ekf_state_t.sigma too small");
   static_assert(fsw::kBlockCount == static_cast<int>(sizeof(out.block_offset) / sizeof(out.block_offset[0])));
   static_assert(fsw::kGnssErrorChannels == static_cast<int>(sizeof(out.channel_prn) / sizeof(out.channel_prn[0])));
   out = sdins::ekf_state_t{};
-  out.utime = utime_from_t_s(t_s);
-  out.t_s = t_s;
+  out.utime = utime_from_t_s(ekf.t_s);
+  out.t_s = ekf.t_s;
   out.n_states = N;
   out.consider_mask = 0;
   for (int b = 0; b < fsw::kBlockCount; ++b) {
@@ -200,13 +201,20 @@ void to_msg(const fsw::Ekf<Layout>& ekf, const fsw::ImuCompensation& comp, doubl
     out.block_offset[b] = static_cast<std::int16_t>(Layout::offset(blk));
     if (Layout::has(blk) && Layout::is_consider(blk)) out.consider_mask |= (1 << b);
   }
-  // A negative variance gives NaN: a broken covariance is shown, not hidden.
-  for (int i = 0; i < N; ++i) out.sigma[i] = std::sqrt(ekf.P()(i, i));
+  for (int i = 0; i < N; ++i) out.sigma[i] = ekf.sigma(i);  // NaN for a broken covariance: shown, not hidden
   compensation_to_msg(comp, out);
-  out.clock_bias_m = ekf.clock_bias_m();
-  out.clock_drift_mps = ekf.clock_drift_mps();
-  out.clock_initialised = ekf.clock_initialised() ? 1 : 0;
-  for (int s = 0; s < fsw::kGnssErrorChannels; ++s) out.channel_prn[s] = ekf.channel_prn()[s];
+  out.clock_bias_m = ekf.clock_bias_m;
+  out.clock_drift_mps = ekf.clock_drift_mps;
+  out.clock_initialised = ekf.clock_initialised ? 1 : 0;
+  for (int s = 0; s < fsw::kGnssErrorChannels; ++s) out.channel_prn[s] = ekf.channel_prn[s];
+}
+
+/// The same from a filter read directly at time t_s (tools that run their own Ekf).
+template <class Layout>
+void to_msg(const fsw::Ekf<Layout>& ekf, const fsw::ImuCompensation& comp, double t_s, sdins::ekf_state_t& out) {
+  fsw::EkfOutput<Layout> o;
+  ekf.output(t_s, o);
+  to_msg(o, comp, out);
 }
 
 /// Executive health, conversion counters and the EKF report of the last run (frame.report,

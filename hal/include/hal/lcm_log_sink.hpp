@@ -65,7 +65,7 @@ class LcmLogSink {
   /// The EKF state after a run of the 1 Hz group (call when frame.ekf_ran).
   template <class Layout>
   LcmLogStatus write_ekf(const fsw::Executive<Layout>& exec) {
-    to_msg(exec.ekf(), exec.compensation(), exec.ins().state().t_s, ekf_msg_);
+    to_msg(exec.ekf_output(), exec.compensation(), ekf_msg_);
     return publish(kLcmChannelEkfState, ekf_msg_);
   }
   template <class Layout>
@@ -78,7 +78,7 @@ class LcmLogSink {
   template <class Layout>
   LcmLogStatus write_health(const fsw::Executive<Layout>& exec, const fsw::FrameOutput& frame,
                             const fsw::GnssConversionStats& conversion) {
-    return write_health(exec.ins().state().t_s, exec.health(), conversion, frame, exec.config().ekf.gate_chi2);
+    return write_health(frame.ekf_t_s, exec.health(), conversion, frame, exec.config().ekf.gate_chi2);
   }
   LcmLogStatus write_health(double t_s, const fsw::ExecutiveHealth& health, const fsw::GnssConversionStats& conversion,
                             const fsw::FrameOutput& frame, double gate_chi2);

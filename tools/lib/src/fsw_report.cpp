@@ -1,5 +1,7 @@
 #include "tools/fsw_report.hpp"
 
+#include "tools/timing_audit.hpp"
+
 #include <cinttypes>
 #include <cstdio>
 
@@ -79,6 +81,14 @@ json fsw_summary_json(const hal::FswNode& node) {
   j["last_nav"] = last_nav_json(s.last_nav);
   j["app"] = app_json(a);
   j["executive"] = executive_json(node.exec_health());
+  {  // the 1 Hz group's thread (lockstep: the 200 Hz group is not timed here; sdins fsw --realtime does)
+    const hal::EkfGroupTimes& g = node.ekf_group_times();
+    const TimingStats t = timing_stats(g.exec_s);
+    const fsw::ExecutiveHealth& e = node.exec_health();
+    j["ekf_group"] = {{"thread", !g.exec_s.empty()}, {"runs", t.n},           {"median_us", t.median_us},
+                      {"p99_us", t.p99_us},          {"max_us", t.max_us},    {"slips", e.ekf_slips},
+                      {"late", e.ekf_late},          {"lockstep_waits", g.waits}, {"lockstep_wait_max_s", g.wait_max_s}};
+  }
   j["telemetry"] = {{"network", tel.network_active()}, {"url", tel.url()},         {"published", tel.published()},
                     {"logged", tel.logged()},          {"send_failures", tel.send_failures()},
                     {"log_failures", tel.log_failures()}};

@@ -565,23 +565,30 @@ void fsw_task_specs(const CallGraph& g, long budget_bytes, long red_zone_bytes, 
     const std::string update_pvt = single_callee(g, w + "update_pvt_" + l);
     const std::string feedback = single_callee(g, w + "feedback_" + l);
     const std::string accumulate = single_callee(g, w + "accumulate_" + l);
+    const std::string ekf_group = single_callee(g, w + "ekf_group_" + l);
     TaskSpec mech;
     mech.name = "mech_200hz/" + l;
     mech.root = tick;
-    mech.cut = {propagate, update, update_pvt, feedback};
+    mech.cut = {ekf_group};
     mech.budget_bytes = budget_bytes;
     mech.red_zone_bytes = red_zone_bytes;
-    mech.description =
-        "Executive<" + l + ">::tick without the 1 Hz group (Ekf::propagate/update/update_pvt/feedback cut)";
+    mech.description = "the 200 Hz group: Executive<" + l +
+                       ">::tick (compensation, strapdown, transition accumulation, release, landing a correction; "
+                       "the inline call of the 1 Hz group cut: it is the next task)";
     tasks.push_back(mech);
     TaskSpec ekf;
     ekf.name = "ekf_1hz/" + l;
-    ekf.root = tick;
+    ekf.root = ekf_group;
     ekf.budget_bytes = budget_bytes;
     ekf.red_zone_bytes = red_zone_bytes;
-    ekf.description = "Executive<" + l +
-                      ">::tick of the minor frame that runs the 1 Hz group (propagate, update or update_pvt, feedback)";
+    ekf.description = "the 1 Hz group: Executive<" + l +
+                      ">::run_ekf_group (Ekf::propagate over the released interval, update or update_pvt, the "
+                      "correction), on its own stack when it runs as its own task";
     tasks.push_back(ekf);
+    (void)propagate;
+    (void)update;
+    (void)update_pvt;
+    (void)feedback;
     for (const auto& [what, id] : {std::pair<std::string, std::string>{"accumulate", accumulate},
                                    {"propagate", propagate}, {"update", update}, {"update_pvt", update_pvt},
                                    {"feedback", feedback}}) {

@@ -56,117 +56,148 @@ double timed(F&& f, double overhead_s, unsigned char& preempted) {
   return std::max(0.0, to_s(b - a) - overhead_s);
 }
 
-/// Everything one layout's pass records, per minor frame.
+/// Everything one layout's pass records, per minor frame (200 Hz group) and per 1 Hz run.
 struct Pass {
-  std::vector<double> tick_s;               ///< the frame's flight-application calls (on_gnss, on_imu)
+  std::vector<double> tick_s;               ///< the frame's 200 Hz group calls (on_gnss, on_imu)
   std::vector<unsigned char> tick_pre;
-  std::vector<unsigned char> ekf_ran;       ///< the 1 Hz group ran in this frame
-  std::vector<std::string> work;            ///< what the frame did (filled for the EKF frames only)
-  std::vector<double> t_s;                  ///< navigation time at the frame's end
+  std::vector<unsigned char> landed;        ///< a 1 Hz correction landed in this frame
+  std::vector<unsigned char> initialised;   ///< the flight application was initialised at the frame's end
+  std::vector<std::string> work;            ///< what the frame did (filled for frames with GNSS or 1 Hz work)
+  std::vector<double> t_s;                  ///< navigation time at the frame's end (before init: the IMU's)
   std::vector<std::vector<double>> stage_s; ///< [stage][tick]
   std::vector<std::vector<unsigned char>> stage_pre;
+  std::vector<double> ekf_s;                ///< each 1 Hz run (run_ekf_group), apart from the frames
+  std::vector<unsigned char> ekf_pre;
+  std::vector<std::size_t> ekf_release;     ///< the frame that released it
   std::vector<int> sats;                    ///< satellites of each epoch the EKF used
+  long init_frame = -1;                     ///< the frame in which the flight application initialised
   long ekf_updates = 0;
   long fsw_errors = 0;
+  long ekf_slips = 0, ekf_late = 0;         ///< the executive's own counters (lockstep: both 0)
   double wall_s = 0;
 };
 
-/// One line on what a minor frame did, from its output.
-std::string frame_work(const fsw::FrameOutput& out, bool had_epoch, int epoch_sats) {
+/// One line on what a minor frame's 200 Hz group did, from its output.
+std::string frame_work(const fsw::FrameOutput& out, bool had_epoch, int epoch_sats, bool init_now) {
   std::string w;
-  if (had_epoch) w = "FlightApp::on_gnss (raw epoch, " + std::to_string(epoch_sats) + " satellites from the almanac); ";
+  if (had_epoch)
+    w = std::string(init_now ? "FlightApp::on_gnss initialising (single-point fix, levelling, heading from the track; "
+                             : "FlightApp::on_gnss (raw epoch, ") +
+        std::to_string(epoch_sats) + " satellites from the almanac); ";
   w += "200 Hz group";
+  if (out.ekf_released) w += " releasing the 1 Hz group (transition closed, request filled)";
   if (out.ekf_ran) {
-    w += " + 1 Hz group: propagate";
+    w += std::string(out.ekf_released ? "," : "") + " landing a 1 Hz correction";
     if (out.ekf_updated)
-      w += ", update (" + std::to_string(out.report.pr_used + out.report.pr_rejected) + " pseudoranges, " +
-           std::to_string(out.report.prr_used + out.report.prr_rejected) + " rates" +
-           (out.report.clock_initialised ? "; receiver clock set from the epoch" : "") + "), feedback";
+      w += " (" + std::to_string(out.report.pr_used + out.report.pr_rejected) + " pseudoranges, " +
+           std::to_string(out.report.prr_used + out.report.prr_rejected) + " rates)";
     else
-      w += " only (no epoch)";
+      w += " (propagation only)";
   }
   return w;
 }
 
-/// Flies the scenario through the flight application (as the Monte Carlo does: FlightApp started
-/// from the run's given state, raw receiver epochs, IMU samples) and times every call it makes.
+/// Flies the scenario through the flight application (the Monte Carlo's sensors: raw receiver
+/// epochs, IMU samples) with its two rate groups timed apart: every 200 Hz frame (its on_gnss and
+/// on_imu calls) and every run of the 1 Hz group (run_ekf_group, called after the frame that
+/// released it, as a lower-priority task would run). Initialisation as cfg.init_mode: kTrack is what
+/// HIL flies (in-motion initialisation from the first good epoch; the frames before it are the
+/// levelling calls, grouped by the frame's IMU samples), kGiven the Monte Carlo's start.
 template <class Layout>
 Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
          const MonteCarloConfig& mc, const TimingAuditConfig& cfg, double overhead_s) {
   const auto w0 = Clock::now();
   const std::uint64_t seed = sc.seed + static_cast<std::uint64_t>(cfg.run);
   RunSensors sensors(sc, truth, almanac, seed);
-  const fsw::FlightAppConfig acfg = flight_app_config(sc, mc);
+  fsw::FlightAppConfig acfg = flight_app_config(sc, mc);
+  acfg.exec.ekf_group_inline = false;  // the 1 Hz group is run (and timed) apart
+  acfg.init_mode = cfg.init_mode;
   auto app = std::make_unique<fsw::FlightApp<Layout>>();  // the 56-state executives are ~100 KB
   fsw::Status st0 = app->init(acfg);
   if (st0 == fsw::Status::kOk) {
     for (const sim::AlmanacEntry& a : sensors.almanac()) (void)app->on_almanac(a);  // a rejected element is counted
-    st0 = app->start_given(initial_nav_state(truth, sensors.errors(), mc, seed));
+    if (cfg.init_mode == fsw::InitMode::kGiven) st0 = app->start_given(initial_nav_state(truth, sensors.errors(), mc, seed));
   }
   if (st0 != fsw::Status::kOk) throw std::runtime_error("timing audit: flight application init failed");
 
   Pass p;
-  const std::size_t n_frames = truth.imu.size() / static_cast<std::size_t>(acfg.exec.imu_samples_per_frame);
-  p.tick_s.reserve(n_frames);
-  p.ekf_ran.reserve(n_frames);
-  p.tick_pre.reserve(n_frames);
+  const int spf = acfg.exec.imu_samples_per_frame;
+  const std::size_t n_frames = truth.imu.size() / static_cast<std::size_t>(spf);
+  for (auto* v : {&p.tick_s, &p.t_s}) v->reserve(n_frames);
+  for (auto* v : {&p.tick_pre, &p.landed, &p.initialised}) v->reserve(n_frames);
   p.work.reserve(n_frames);
-  p.t_s.reserve(n_frames);
   p.stage_s.assign(cfg.frame_stages.size(), {});
   p.stage_pre.assign(cfg.frame_stages.size(), {});
   for (auto& s : p.stage_s) s.reserve(n_frames);
   for (auto& s : p.stage_pre) s.reserve(n_frames);
 
-  std::array<fsw::ImuSample, fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
+  std::array<fsw::ImuSample, 2 * fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
   int n_in_frame = 0;
   fsw::FrameOutput out;
-  bool frame_has_epoch = false;
+  bool frame_has_epoch = false, frame_init = false;
   double frame_s = 0.0;
   unsigned char frame_pre = 0;
   fsw::Status status = fsw::Status::kOk;
   for (std::size_t j = 0; j < truth.imu.size(); ++j) {
     fsw::ImuSample sample;
     const bool is_epoch = sensors.measure(j, sample) != nullptr;
-    frame[static_cast<std::size_t>(n_in_frame++)] = sample;
+    if (n_in_frame < static_cast<int>(frame.size())) frame[static_cast<std::size_t>(n_in_frame++)] = sample;
     unsigned char pre = 0;
     if (is_epoch) {  // delivered before the IMU sample of its time, as the Monte Carlo does
       frame_has_epoch = true;
+      const bool before = app->initialised();
       frame_s += timed([&] { status = app->on_gnss(sensors.raw()); }, overhead_s, pre);
       frame_pre |= pre;
+      if (!before && app->initialised()) frame_init = true;
       if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_gnss failed");
-    }
-    if (n_in_frame == acfg.exec.imu_samples_per_frame) {  // the frame's stages see its input first
-      fsw::FrameInput in;
-      in.imu = frame.data();
-      in.n_imu = n_in_frame;
-      in.gnss = frame_has_epoch ? &sensors.epoch() : nullptr;
-      for (std::size_t s = 0; s < cfg.frame_stages.size(); ++s) {
-        const FrameStage& stg = cfg.frame_stages[s];
-        if (stg.prepare) stg.prepare(in);
-        unsigned char spre = 0;
-        p.stage_s[s].push_back(timed([&stg] { stg.run(); }, overhead_s, spre));
-        p.stage_pre[s].push_back(spre);
-      }
     }
     frame_s += timed([&] { status = app->on_imu(sample, out); }, overhead_s, pre);
     frame_pre |= pre;
     if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_imu failed");
-    if (n_in_frame < acfg.exec.imu_samples_per_frame) continue;
-    if (!out.nav_valid) throw std::runtime_error("timing audit: a full minor frame produced no solution");
+    // A frame ends with a navigation frame, or (before initialisation) with a frame's worth of samples.
+    const bool closes = out.nav_valid || (!app->initialised() && n_in_frame >= spf) || n_in_frame >= static_cast<int>(frame.size());
+    if (!closes) continue;
+    fsw::FrameInput in;  // the frame's stages see its input (untimed prepare), timed apart
+    in.imu = frame.data();
+    in.n_imu = n_in_frame;
+    in.gnss = frame_has_epoch ? &sensors.epoch() : nullptr;
+    for (std::size_t s = 0; s < cfg.frame_stages.size(); ++s) {
+      const FrameStage& stg = cfg.frame_stages[s];
+      if (stg.prepare) stg.prepare(in);
+      unsigned char spre = 0;
+      p.stage_s[s].push_back(timed([&stg] { stg.run(); }, overhead_s, spre));
+      p.stage_pre[s].push_back(spre);
+    }
+    const std::size_t k = p.tick_s.size();
     p.tick_s.push_back(frame_s);
     p.tick_pre.push_back(frame_pre);
-    p.ekf_ran.push_back(out.ekf_ran ? 1 : 0);
-    p.t_s.push_back(out.nav.t_s);
-    p.work.push_back(out.ekf_ran || frame_has_epoch ? frame_work(out, frame_has_epoch, sensors.epoch().n_obs)
-                                                    : std::string());
-    if (out.ekf_updated) p.sats.push_back(sensors.epoch().n_obs);
+    p.landed.push_back(out.ekf_ran ? 1 : 0);
+    p.initialised.push_back(app->initialised() ? 1 : 0);
+    p.t_s.push_back(out.nav_valid ? out.nav.t_s : sample.t_s);
+    if (frame_init) p.init_frame = static_cast<long>(k);
+    p.work.push_back(out.ekf_ran || out.ekf_released || frame_has_epoch
+                         ? frame_work(out, frame_has_epoch, sensors.epoch().n_obs, frame_init)
+                         : std::string());
+    if (out.ekf_updated) p.sats.push_back(out.report.n_obs);
+    if (out.ekf_released) {  // the 1 Hz group, after the frame that released it
+      unsigned char epre = 0;
+      p.ekf_s.push_back(timed([&] { status = app->run_ekf_group(); }, overhead_s, epre));
+      p.ekf_pre.push_back(epre);
+      p.ekf_release.push_back(k);
+      if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::run_ekf_group failed");
+    }
     n_in_frame = 0;
     frame_has_epoch = false;
+    frame_init = false;
     frame_s = 0.0;
     frame_pre = 0;
   }
-  p.ekf_updates = app->executive().health().ekf_updates;
-  p.fsw_errors = app->executive().health().fsw_errors;
+  if (!app->initialised()) throw std::runtime_error("timing audit: the flight application never initialised");
+  const fsw::ExecutiveHealth& h = app->executive().health();
+  p.ekf_updates = h.ekf_updates;
+  p.fsw_errors = h.fsw_errors;
+  p.ekf_slips = h.ekf_slips;
+  p.ekf_late = h.ekf_late;
   p.wall_s = to_s(Clock::now() - w0);
   return p;
 }
@@ -286,30 +317,23 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
     r.frames = static_cast<long>(p.tick_s.size());
     const double period_s = 1.0 / ecfg.nav_rate_hz;
 
-    std::vector<std::size_t> mech_k, ekf_k, all_k;
-    int min_iv = 0, max_iv = 0;
-    long last = -1;
+    std::vector<std::size_t> nav_k, all_k;
     for (std::size_t k = 0; k < p.tick_s.size(); ++k) {
       all_k.push_back(k);
-      if (p.ekf_ran[k]) {
-        ekf_k.push_back(k);
-        if (last >= 0) {
-          const int iv = static_cast<int>(static_cast<long>(k) - last);
-          min_iv = min_iv == 0 ? iv : std::min(min_iv, iv);
-          max_iv = std::max(max_iv, iv);
-        }
-        last = static_cast<long>(k);
-      } else {
-        mech_k.push_back(k);
-      }
+      if (p.initialised[k]) nav_k.push_back(k);
     }
-    // The schedule: each tick's stages and tick; a preempted sample counts as its task's largest
-    // unpreempted one.
-    const double mech_cap = max_unpreempted(p.tick_s, p.tick_pre, mech_k);
-    const double ekf_cap = max_unpreempted(p.tick_s, p.tick_pre, ekf_k);
+    int min_iv = 0, max_iv = 0;
+    for (std::size_t i = 1; i < p.ekf_release.size(); ++i) {
+      const int iv = static_cast<int>(p.ekf_release[i] - p.ekf_release[i - 1]);
+      min_iv = min_iv == 0 ? iv : std::min(min_iv, iv);
+      max_iv = std::max(max_iv, iv);
+    }
+    // The single-core schedule: the 200 Hz group (and the frame stages) first in every frame; a
+    // preempted sample counts as its task's largest unpreempted one.
+    const double nav_cap = max_unpreempted(p.tick_s, p.tick_pre, all_k);
     std::vector<double> exec(p.tick_s.size(), 0.0);
     for (std::size_t k = 0; k < exec.size(); ++k) {
-      exec[k] = p.tick_pre[k] ? (p.ekf_ran[k] ? ekf_cap : mech_cap) : p.tick_s[k];
+      exec[k] = p.tick_pre[k] ? nav_cap : p.tick_s[k];
       for (std::size_t s = 0; s < p.stage_s.size(); ++s)
         exec[k] += p.stage_pre[s][k] ? max_unpreempted(p.stage_s[s], p.stage_pre[s], all_k) : p.stage_s[s][k];
     }
@@ -317,27 +341,53 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
     TaskTiming tm;
     tm.name = "mech_200hz/" + l;
     tm.layout = l;
-    tm.description = "FlightApp::on_imu calls of a minor frame without the 1 Hz group (batching; on the frame's last "
-                     "sample Executive::tick: IMU compensation, coning/sculling, strapdown step, Ekf::accumulate, every "
-                     "10th frame a transition-matrix sub-step)";
+    tm.description = "the 200 Hz group: every minor frame's FlightApp calls (on_gnss with a raw epoch: satellite "
+                     "positions from the almanac, and the initialisation attempt before it succeeds; the frame's "
+                     "on_imu calls: levelling before initialisation, after it Executive::tick: IMU compensation, "
+                     "coning/sculling, strapdown step, transition accumulation, releasing the 1 Hz group and landing "
+                     "its correction); initialisation included";
     tm.nominal_rate_hz = ecfg.nav_rate_hz;
-    fill_stats(tm, p.tick_s, p.tick_pre, mech_k);
-    // Share of one core: the mean unpreempted time at the task's rate (preempted samples say
-    // nothing about the task).
-    tm.cpu_share = tm.stats.mean_us * 1e-6 * static_cast<double>(mech_k.size()) / r.flight_s;
-    add_schedule(tm, sch, mech_k);
+    fill_stats(tm, p.tick_s, p.tick_pre, all_k);
+    tm.cpu_share = tm.stats.mean_us * 1e-6 * static_cast<double>(all_k.size()) / r.flight_s;
+    add_schedule(tm, sch, all_k);
+    tm.slips = tm.deadline_misses;
     TaskTiming te;
     te.name = "ekf_1hz/" + l;
     te.layout = l;
-    te.description = "FlightApp calls of the minor frame that runs the 1 Hz group: on_gnss with the raw epoch "
-                     "(satellite positions from the almanac), the frame's on_imu calls with its 200 Hz work, then "
-                     "Ekf::propagate, update with the epoch (pseudorange and rate per satellite) and feedback";
+    te.description = "the 1 Hz group: one run of FlightApp::run_ekf_group (Ekf::propagate over the released interval, "
+                     "update with the epoch: pseudorange and rate per satellite, the correction), run after the frame "
+                     "that released it; its deadline is the frame at which the correction lands (ekf_latency_frames)";
     te.nominal_rate_hz = ecfg.nav_rate_hz / ecfg.frames_per_ekf;
-    fill_stats(te, p.tick_s, p.tick_pre, ekf_k);
-    te.cpu_share = te.stats.mean_us * 1e-6 * static_cast<double>(ekf_k.size()) / r.flight_s;
+    {
+      std::vector<std::size_t> ek(p.ekf_s.size());
+      for (std::size_t i = 0; i < ek.size(); ++i) ek[i] = i;
+      fill_stats(te, p.ekf_s, p.ekf_pre, ek);
+      const double ekf_cap = max_unpreempted(p.ekf_s, p.ekf_pre, ek);
+      // Preemptive schedule: a run released at frame R gets what the 200 Hz group leaves of frames
+      // R, R+1, ...; it slips when it has not finished before frame R + L's 200 Hz work.
+      for (std::size_t i = 0; i < p.ekf_s.size(); ++i) {
+        double left = p.ekf_pre[i] ? ekf_cap : p.ekf_s[i];
+        const std::size_t R = p.ekf_release[i];
+        const std::size_t L = static_cast<std::size_t>(ecfg.ekf_latency_frames);
+        double finish_s = -1.0;
+        for (std::size_t f = R; f < R + L && f < exec.size(); ++f) {
+          const double release = static_cast<double>(f) * period_s;
+          const double busy_until = release + sch.jitter_s[f] + exec[f];
+          const double idle = std::max(0.0, release + period_s - busy_until);
+          if (left <= idle) {
+            finish_s = busy_until + left - static_cast<double>(R) * period_s;
+            break;
+          }
+          left -= idle;
+        }
+        if (finish_s < 0.0) ++te.slips;
+        else te.response_max_us = std::max(te.response_max_us, finish_s * 1e6);
+      }
+    }
+    te.cpu_share = te.stats.mean_us * 1e-6 * static_cast<double>(p.ekf_s.size()) / r.flight_s;
     te.interval_frames_min = min_iv;
     te.interval_frames_max = max_iv;
-    add_schedule(te, sch, ekf_k);
+    te.deadline_misses = te.slips;
     r.tasks.push_back(tm);
     r.tasks.push_back(te);
 
@@ -355,6 +405,13 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
     }
     lt.ekf_updates = p.ekf_updates;
     lt.fsw_errors = p.fsw_errors;
+    lt.ekf_slips_counted = p.ekf_slips;
+    lt.ekf_late_counted = p.ekf_late;
+    lt.init_frame = p.init_frame;
+    if (p.init_frame >= 0) {
+      lt.init_frame_us = p.tick_s[static_cast<std::size_t>(p.init_frame)] * 1e6;
+      lt.init_frame_preempted = p.tick_pre[static_cast<std::size_t>(p.init_frame)] != 0;
+    }
     if (!p.sats.empty()) {
       std::vector<int> s = p.sats;
       std::sort(s.begin(), s.end());
@@ -369,7 +426,8 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
         lt.worst_frame_us = p.tick_s[k] * 1e6;
         lt.worst_frame_index = static_cast<long>(k);
         lt.worst_frame_t_s = p.t_s[k];
-        lt.worst_frame_work = p.work[k].empty() ? "200 Hz group only" : p.work[k];
+        lt.worst_frame_work = p.work[k].empty() ? (p.initialised[k] ? "200 Hz group only" : "levelling before initialisation")
+                                                : p.work[k];
       }
     r.layouts.push_back(lt);
   }

@@ -105,6 +105,8 @@ struct FswRunResult {
   std::string sched_note;
   std::uint64_t minor_frames_timed = 0;
   double exec_mean_s = 0.0, exec_max_s = 0.0;
+  std::vector<double> frame_exec_s;  ///< real time: each minor frame's execution [s] (the 200 Hz group)
+  hal::EkfGroupTimes ekf_group{};    ///< the 1 Hz thread's runs
   std::uint64_t imu_lateness_n = 0, imu_late = 0;
   double imu_lateness_mean_s = 0.0, imu_lateness_max_s = 0.0, late_threshold_s = 0.0;
 };

@@ -1,20 +1,25 @@
-// Timing audit of the flight-software tasks (`sdins audit timing`, docs/audits.md): the flight
-// application flies a whole scenario on the wiring of the Monte Carlo (truth simulator -> IMU and
-// GPS error models -> raw receiver epochs and IMU samples -> fsw::FlightApp<Layout>, started from
-// run 0's given state) and every call into it is timed with the steady clock; a minor frame's time
-// is the sum of its calls (FlightApp::on_gnss when an epoch arrived in it, and its on_imu calls,
-// the last of which runs Executive::tick). The worst unpreempted frame of each layout is reported
-// with the work it did (LayoutTiming::worst_frame_*).
+// Timing audit of the flight-software rate groups (`sdins audit timing`, docs/audits.md): the
+// flight application flies a whole scenario on the wiring of the Monte Carlo (truth simulator ->
+// IMU and GPS error models -> raw receiver epochs and IMU samples -> fsw::FlightApp<Layout>),
+// initialised in flight from the GNSS as HIL is (TimingAuditConfig::init_mode), and every call
+// into it is timed with the steady clock. The two rate groups are timed apart (the 1 Hz group runs
+// with exec.ekf_group_inline = false, after the frame that released it).
 //
-// Tasks, per layout:
-//   mech_200hz/<L>  ticks that do not run the 1 Hz group: IMU compensation, coning/sculling,
-//                   strapdown step, Ekf::accumulate (every 10th frame also a transition sub-step);
-//   ekf_1hz/<L>     ticks that run the 1 Hz group: the same 200 Hz work of that minor frame, then
-//                   Ekf::propagate, update with the epoch (up to 12 satellites, pseudorange and rate)
-//                   and feedback (the executive runs both groups in one tick, so this is what the
-//                   frame that carries the EKF costs).
+// Tasks (the `groups` of the JSON), per layout:
+//   mech_200hz/<L>  the 200 Hz group: every minor frame of the whole flight, initialisation
+//                   included: its on_gnss call when an epoch arrived in it (satellite positions;
+//                   before initialisation the initialisation attempt) and its on_imu calls (before
+//                   initialisation levelling, grouped by a frame's samples; after it
+//                   Executive::tick: compensation, coning/sculling, strapdown, transition
+//                   accumulation, release of the 1 Hz group, landing of its correction).
+//   ekf_1hz/<L>     the 1 Hz group: each run_ekf_group() (propagate, update, correction).
 // and any per-frame stage registered in TimingAuditConfig::frame_stages (the extension point for
-// the HAL's bus decode, see there).
+// the HAL's bus decode, see there). The worst unpreempted 200 Hz frame of each layout is reported
+// with the work it did (LayoutTiming::worst_frame_*), and the initialisation frame apart.
+//
+// Slips. 200 Hz: frames not finished before the next frame's release in the single-core schedule
+// below. 1 Hz: runs that, given only the time the 200 Hz group leaves in each frame after their
+// release, do not finish before the frame at which their correction lands (ekf_latency_frames).
 //
 // Each layout flies in its own pass over identical inputs (same seed), so no executive evicts
 // another's state from the cache between ticks. The timer's own cost (median of back-to-back
@@ -42,6 +47,7 @@
 #include <vector>
 
 #include "fsw/executive.hpp"
+#include "fsw/flight_app.hpp"
 #include "sim/scenario.hpp"
 
 namespace tools {
@@ -72,6 +78,9 @@ struct TimingAuditConfig {
   std::vector<std::string> layouts{"Layout15", "Layout24", "Layout15Full", "Layout24Full"};
   std::vector<FrameStage> frame_stages;
   int run = 0;  ///< Monte Carlo run index whose seed draws the errors (seed = scenario seed + run)
+  /// kTrack: in-motion initialisation from the GNSS as HIL flies (the frames before and at it are
+  /// timed too); kGiven: the Monte Carlo's start from the run's given state.
+  fsw::InitMode init_mode = fsw::InitMode::kTrack;
 };
 
 struct TaskTiming {
@@ -85,7 +94,10 @@ struct TaskTiming {
   double cpu_share = 0;             ///< total execution time / flight duration: fraction of one core at real time
   double release_jitter_max_us = 0; ///< single-core schedule at real time (see the file comment)
   double release_jitter_p99_us = 0;
-  long deadline_misses = 0;         ///< releases whose tick finished after the next frame's release
+  long deadline_misses = 0;         ///< releases whose run finished after its deadline (= slips)
+  long slips = 0;                   ///< 200 Hz: frames not finished at the next frame's release; 1 Hz: runs
+                                    ///< not finished before the frame at which their correction lands
+  double response_max_us = 0;       ///< ekf_1hz: longest release-to-finish time in the single-core schedule
   int interval_frames_min = 0;      ///< ekf_1hz only: navigation frames between runs
   int interval_frames_max = 0;
 };
@@ -100,7 +112,12 @@ struct LayoutTiming {
   double worst_frame_us = 0;       ///< the longest minor frame without a context switch
   long worst_frame_index = -1;     ///< its index (0: the first frame)
   double worst_frame_t_s = 0;      ///< its navigation time at the frame end
-  std::string worst_frame_work;    ///< what it did (raw-epoch conversion, 200 Hz group, 1 Hz group with counts)
+  std::string worst_frame_work;    ///< what it did (raw-epoch conversion, 200 Hz group, release, landing)
+  long init_frame = -1;            ///< the frame in which the flight application initialised (-1: given start)
+  double init_frame_us = 0;        ///< its execution time
+  bool init_frame_preempted = false;
+  long ekf_slips_counted = 0;      ///< the executive's ekf_slips / ekf_late (lockstep: 0)
+  long ekf_late_counted = 0;
 };
 
 struct TimingAuditResult {
