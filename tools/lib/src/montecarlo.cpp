@@ -201,8 +201,8 @@ fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloC
   e.gyro_scale_sigma = paper ? std::max(s.gyro_scale_factor_ppm * 1e-6, 1e-9) : 1e-9;
   e.clock_bias_sigma_m = 10.0;
   e.clock_drift_sigma_mps = 0.5;
-  e.clock_bias_psd_m2ps = std::max(fsw::clock_bias_psd_m2ps(sc.gps.clock_h0), 1e-4);
-  e.clock_drift_psd_m2ps3 = std::max(fsw::clock_drift_psd_m2ps3(sc.gps.clock_h_minus2), 1e-4);
+  e.clock_bias_psd_m2ps = std::max(fsw::clock_bias_psd_m2ps(sc.gps.clock_h0_s), 1e-4);
+  e.clock_drift_psd_m2ps3 = std::max(fsw::clock_drift_psd_m2ps3(sc.gps.clock_h_minus2_per_s), 1e-4);
   if (mc.model_gps_errors) {
     // Correlated part as channel states; the white part (with a floor that keeps P well
     // conditioned when the simulator adds none) as measurement noise.
