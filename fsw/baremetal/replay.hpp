@@ -7,7 +7,7 @@
 // INPUT (little-endian, written by `sdins_target record` from an LCM log of `sdins sil`):
 //   header   "SDTR", u32 version, u32 n_fingerprint, n_fingerprint x u32 (layout of the structs
 //            below, layout_fingerprint()), then sizeof(FlightAppConfig) bytes: the configuration
-//            (hal::default_flight_config(), the one HIL uses), the same object bytes on both ABIs
+//            (the shipped config/default.toml, the one HIL uses), the same object bytes on both ABIs
 //            (double, uint64 and Eigen's fixed-size vectors are 8-aligned on AAPCS and x86-64; the
 //            fingerprint proves the layouts equal before any byte is used).
 //   events   u32 tag ('A' almanac, 'G' raw GNSS epoch, 'I' IMU sample), u32 payload size, then the

@@ -250,10 +250,10 @@ Status VelocityMatchAlignment::solve(Mat3& C_b0_n, Vec3& att_sigma_enu_rad, doub
   cov_b = 0.5 * (cov_b + cov_b.transpose());
   const double tr = cov_b.trace();
   if (!(tr > 0.0) || !std::isfinite(tr)) return Status::kNotConverged;
-  const Mat3 cov_n = C * cov_b * C.transpose();
+  const Mat3 cov_enu_rad2 = C * cov_b * C.transpose();
   const double dof = 3.0 * n_ - 12.0;
   const double factor = dof > 0.0 ? std::max(1.0, chi2_ / dof) : 1.0;
-  att_sigma_enu_rad = (cov_n.diagonal() * factor).cwiseMax(0.0).cwiseSqrt();
+  att_sigma_enu_rad = (cov_enu_rad2.diagonal() * factor).cwiseMax(0.0).cwiseSqrt();
   C_b0_n = C;
   return Status::kOk;
 }

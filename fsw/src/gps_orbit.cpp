@@ -181,8 +181,8 @@ Status gnss_epoch_from_raw(const GnssRawEpoch& raw, const GpsAlmanacTable& alman
     o.pseudorange_m = m.pseudorange_m + kSpeedOfLight_mps * dt_sat_s;
     o.pseudorange_rate_mps = m.pseudorange_rate_mps + kSpeedOfLight_mps * sat->af1_sps;
     if (have_hint) {
-      const Vec3 los_n = C_e_n * (o.sat_pos_ecef_m - r_rx);
-      o.elevation_rad = std::atan2(los_n.z(), std::hypot(los_n.x(), los_n.y()));
+      const Vec3 los_enu = C_e_n * (o.sat_pos_ecef_m - r_rx);
+      o.elevation_rad = std::atan2(los_enu.z(), std::hypot(los_enu.x(), los_enu.y()));
     }
     ++n;
   }

@@ -92,12 +92,12 @@ Status Strapdown::step(const FrameIncrement& inc) {
 
   // Velocity update.
   const Mat3 C_b_n_k1 = k1.C_b_n();
-  const Vec3 dv_sf_n = (Mat3::Identity() - 0.5 * skew(zeta)) * (C_b_n_k1 * inc.dv_sf_b_mps);
-  const Vec3 g_n = gravity_enu_mps2(llh_mid.x(), llh_mid.z());
-  const Vec3 dv_cor_g = (g_n - (2.0 * w_ie + w_en).cross(vel_mid)) * T;
+  const Vec3 dv_sf_enu_mps = (Mat3::Identity() - 0.5 * skew(zeta)) * (C_b_n_k1 * inc.dv_sf_b_mps);
+  const Vec3 g_enu_mps2 = gravity_enu_mps2(llh_mid.x(), llh_mid.z());
+  const Vec3 dv_cor_g = (g_enu_mps2 - (2.0 * w_ie + w_en).cross(vel_mid)) * T;
   NavState k = k1;
   k.t_s = inc.t_s;
-  k.vel_enu_mps = k1.vel_enu_mps + dv_sf_n + dv_cor_g;
+  k.vel_enu_mps = k1.vel_enu_mps + dv_sf_enu_mps + dv_cor_g;
 
   // Position update (trapezoidal velocity, midpoint radii).
   const Vec3 v_avg = 0.5 * (k1.vel_enu_mps + k.vel_enu_mps);
@@ -117,7 +117,7 @@ Status Strapdown::step(const FrameIncrement& inc) {
   k.q_b_n = q_nn * k1.q_b_n * q_bb;
   k.q_b_n.normalize();
 
-  f_enu_mps2_ = dv_sf_n / T;
+  f_enu_mps2_ = dv_sf_enu_mps / T;
   omega_ib_b_radps_ = inc.dtheta_sum_rad / T;
   prev_ = k1;
   have_prev_ = true;

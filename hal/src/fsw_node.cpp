@@ -130,34 +130,6 @@ struct FswNode::GroupThread {
   }
 };
 
-bool parse_fsw_model(const std::string& s, FswModel& out) {
-  if (s == "15") out = FswModel::k15;
-  else if (s == "24") out = FswModel::k24;
-  else return false;
-  return true;
-}
-
-const char* to_string(FswModel m) { return m == FswModel::k15 ? "15" : "24"; }
-
-fsw::FlightAppConfig default_flight_config() {
-  fsw::FlightAppConfig c;
-  fsw::EkfConfig& e = c.exec.ekf;
-  // The simulated receiver class (sim::GpsConfig defaults): TCXO h0 = 2e-19, h-2 = 2e-20; GPS
-  // errors 8 m / 60 s and 0.2 m/s / 10 s Gauss-Markov, with a small white floor.
-  e.clock_bias_psd_m2ps = fsw::clock_bias_psd_m2ps(2e-19);
-  e.clock_drift_psd_m2ps3 = fsw::clock_drift_psd_m2ps3(2e-20);
-  e.clock_bias_sigma_m = 10.0;
-  e.clock_drift_sigma_mps = 0.5;
-  e.range_gm_sigma_m = 8.0;
-  e.range_gm_tau_s = 60.0;
-  e.range_rate_gm_sigma_mps = 0.2;
-  e.range_rate_gm_tau_s = 10.0;
-  e.pseudorange_sigma_m = 0.3;
-  e.pseudorange_rate_sigma_mps = 0.01;
-  e.arw_rad_per_rts = 2e-7;
-  return c;
-}
-
 FswNode::FswNode() = default;
 FswNode::~FswNode() {
   std::string ignored;
@@ -180,10 +152,14 @@ bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
     return false;
   }
   cfg_ = cfg;
-  if (cfg.model == FswModel::k15)
+  if (cfg.model == fsw::FilterModel::k15)
     app_ = std::make_unique<AppOf<fsw::Layout15Full>>();
-  else
+  else if (cfg.model == fsw::FilterModel::k24)
     app_ = std::make_unique<AppOf<fsw::Layout24Full>>();
+  else {
+    error = std::string("the flight-software node flies the models 15 and 24, not ") + fsw::to_string(cfg.model);
+    return false;
+  }
   fsw::FlightAppConfig app_cfg = cfg.app;
   app_cfg.exec.ekf_group_inline = cfg.ekf_group == FswNodeConfig::EkfGroup::kInline;
   const fsw::Status st = app_->init(app_cfg);

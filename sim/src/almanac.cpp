@@ -214,10 +214,10 @@ AlmanacParseResult parse_yuma_file(const std::string& path) {
 
 LookAngles look_angles(const Vec3& receiver_llh, const Vec3& r_target_ecef_m) {
   const Vec3 los_e = r_target_ecef_m - fsw::ecef_from_llh(receiver_llh);
-  const Vec3 los_n = fsw::C_n_e(receiver_llh.x(), receiver_llh.y()).transpose() * los_e;  // ENU
+  const Vec3 los_enu = fsw::C_n_e(receiver_llh.x(), receiver_llh.y()).transpose() * los_e;  // ENU
   LookAngles out;
-  out.elevation_rad = std::atan2(los_n.z(), std::hypot(los_n.x(), los_n.y()));
-  double az = std::atan2(los_n.x(), los_n.y());
+  out.elevation_rad = std::atan2(los_enu.z(), std::hypot(los_enu.x(), los_enu.y()));
+  double az = std::atan2(los_enu.x(), los_enu.y());
   if (az < 0.0) az += 2.0 * fsw::kPi;
   out.azimuth_rad = az;
   return out;

@@ -2,7 +2,10 @@
 #include "sim/filter_config.hpp"
 
 #include <cmath>
+#include <tuple>
 
+#include "fsw/gnss.hpp"
+#include "sim/data_dir.hpp"
 #include "sim/effects.hpp"
 #include "sim/text_file.hpp"
 #include "toml_schema.hpp"
@@ -23,7 +26,9 @@ using toml_schema::Range;
 /// Values read in the file's units; converted into the FlightAppConfig after the whole file parsed.
 struct Units {
   std::optional<double> nav_rate_hz, ekf_rate_hz, gnss_wait_s;
-  std::optional<double> vrw_mps_per_rthr, arw_deg_per_rthr, accel_bias_sigma_mg, gyro_bias_sigma_degph;
+  std::optional<double> vrw_mps_per_rthr, arw_deg_per_rthr, vrw_mps_per_rts, arw_rad_per_rts;
+  std::optional<double> accel_bias_sigma_mg, gyro_bias_sigma_degph;
+  std::optional<double> clock_h0_s, clock_h_minus2_per_s;
   std::optional<double> accel_scale_ppm, gyro_scale_ppm, accel_mis_arcsec, gyro_mis_arcsec;
   std::optional<double> heading_offset_deg, roll_pitch_sigma_deg, heading_sigma_deg;
   std::optional<double> static_max_rate_dev_dps, vm_max_heading_sigma_deg;
@@ -48,6 +53,9 @@ class Parser : public toml_schema::Reader {
                {"ekf_rate_hz", opt(u.ekf_rate_hz, left_open(0.0, 100.0))},
                {"gnss_wait_s", opt(u.gnss_wait_s, closed(0.0, 10.0))},
                {"max_gnss_age_s", number(x.max_gnss_age_s, closed(0.0, 10.0))},
+               {"frame_budget_s", number(x.frame_budget_s, left_open(0.0, 1.0))},
+               {"propagation_substep_frames", integer(e.propagation_substep_frames, 1, 1000)},
+               {"ekf_latency_frames", integer(x.ekf_latency_frames, 1, 1000)},
            });
          }},
         {"gnss", [&](const toml::node& n, const std::string& p) {
@@ -66,6 +74,10 @@ class Parser : public toml_schema::Reader {
                {"range_rate_error_sigma_mps", number(e.range_rate_gm_sigma_mps, positive())},
                {"range_rate_error_tau_s", number(e.range_rate_gm_tau_s, positive())},
                {"gate_chi2", number(e.gate_chi2, positive())},
+               {"clock_bias_sigma_m", number(e.clock_bias_sigma_m, positive())},
+               {"clock_drift_sigma_mps", number(e.clock_drift_sigma_mps, positive())},
+               {"clock_h0_s", opt(u.clock_h0_s, non_negative())},
+               {"clock_h_minus2_per_s", opt(u.clock_h_minus2_per_s, non_negative())},
            });
          }},
         {"imu", [&](const toml::node& n, const std::string& p) {
@@ -73,6 +85,8 @@ class Parser : public toml_schema::Reader {
            return t && fields(*t, p + ".", {
                {"vrw_mps_per_rthr", opt(u.vrw_mps_per_rthr, non_negative())},
                {"arw_deg_per_rthr", opt(u.arw_deg_per_rthr, non_negative())},
+               {"vrw_mps_per_rts", opt(u.vrw_mps_per_rts, non_negative())},
+               {"arw_rad_per_rts", opt(u.arw_rad_per_rts, non_negative())},
                {"accel_bias_sigma_mg", opt(u.accel_bias_sigma_mg, non_negative())},
                {"gyro_bias_sigma_degph", opt(u.gyro_bias_sigma_degph, non_negative())},
                {"accel_bias_rw_mps2_per_rts", number(e.accel_bias_rw_mps2_per_rts, non_negative())},
@@ -112,6 +126,13 @@ class Parser : public toml_schema::Reader {
         {"mounting", [&](const toml::node& n, const std::string& p) {
            const toml::table* t = table(n, p);
            return t && fields(*t, p + ".", {{"lever_arm_b_m", vector3(e.lever_arm_b_m, closed(-100.0, 100.0))}});
+         }},
+        {"health", [&](const toml::node& n, const std::string& p) {
+           const toml::table* t = table(n, p);
+           return t && fields(*t, p + ".", {
+               {"nis_window_epochs", integer(e.nis_window, 1, 1000)},
+               {"runaway_epochs", integer(e.runaway_epochs, 0, 1000)},
+           });
          }},
         {"diagnosis", [&](const toml::node& n, const std::string& p) { return diagnosis(n, p, c); }},
     });
@@ -177,13 +198,28 @@ FilterConfigParseResult parse_filter_config_text(const std::string& toml_text, c
     x.frames_per_ekf = static_cast<int>(std::round(frames));
   }
   if (u.gnss_wait_s) x.gnss_wait_frames = static_cast<int>(std::lround(*u.gnss_wait_s * x.nav_rate_hz));
+  // One value, two units: the datasheet's per sqrt(h) or SI per sqrt(s) (which states the paper's
+  // values exactly), never both.
+  for (const auto& [per_rthr, per_rts, rthr_key, rts_key] :
+       {std::tuple{u.vrw_mps_per_rthr, u.vrw_mps_per_rts, "imu.vrw_mps_per_rthr", "imu.vrw_mps_per_rts"},
+        std::tuple{u.arw_deg_per_rthr, u.arw_rad_per_rts, "imu.arw_deg_per_rthr", "imu.arw_rad_per_rts"}}) {
+    if (per_rthr && per_rts)
+      return {false, source_name + ": '" + rthr_key + "' and '" + rts_key + "' set the same value; give one of them"};
+  }
   constexpr double kRth = 60.0;  // sqrt(3600 s / h)
   if (u.vrw_mps_per_rthr) e.vrw_mps_per_rts = *u.vrw_mps_per_rthr / kRth;
   if (u.arw_deg_per_rthr) e.arw_rad_per_rts = *u.arw_deg_per_rthr * fsw::kDegToRad / kRth;
+  if (u.vrw_mps_per_rts) e.vrw_mps_per_rts = *u.vrw_mps_per_rts;
+  if (u.arw_rad_per_rts) e.arw_rad_per_rts = *u.arw_rad_per_rts;
+  // The clock's Allan-variance coefficients become the filter's process noise through the one
+  // formula the simulated receiver draws with (fsw/gnss.hpp).
+  if (u.clock_h0_s) e.clock_bias_psd_m2ps = fsw::clock_bias_psd_m2ps(*u.clock_h0_s);
+  if (u.clock_h_minus2_per_s) e.clock_drift_psd_m2ps3 = fsw::clock_drift_psd_m2ps3(*u.clock_h_minus2_per_s);
   if (u.accel_bias_sigma_mg) e.accel_bias_sigma_mps2 = *u.accel_bias_sigma_mg * 1e3 * fsw::kMicroG_mps2;
   if (u.gyro_bias_sigma_degph) e.gyro_bias_sigma_radps = *u.gyro_bias_sigma_degph * fsw::kDegPerHourToRadps;
-  if (u.accel_scale_ppm) e.accel_scale_sigma = *u.accel_scale_ppm * 1e-6;
-  if (u.gyro_scale_ppm) e.gyro_scale_sigma = *u.gyro_scale_ppm * 1e-6;
+  // Divided, not multiplied by 1e-6: 100 ppm is exactly the double 1e-4.
+  if (u.accel_scale_ppm) e.accel_scale_sigma = *u.accel_scale_ppm / 1e6;
+  if (u.gyro_scale_ppm) e.gyro_scale_sigma = *u.gyro_scale_ppm / 1e6;
   if (u.accel_mis_arcsec) e.accel_misalign_sigma_rad = *u.accel_mis_arcsec * fsw::kArcsecToRad;
   if (u.gyro_mis_arcsec) e.gyro_misalign_sigma_rad = *u.gyro_mis_arcsec * fsw::kArcsecToRad;
   if (u.heading_offset_deg) a.init_heading_offset_rad = *u.heading_offset_deg * fsw::kDegToRad;
@@ -206,6 +242,23 @@ FilterConfigParseResult parse_filter_config_file(const std::string& path, Filter
   const std::optional<std::string> text = read_text_file(path);
   if (!text) return {false, path + ": cannot open filter configuration: " + text_file_problem(path)};
   return parse_filter_config_text(*text, path, cfg);
+}
+
+std::string default_filter_config_path() { return data_file("config/default.toml"); }
+
+FilterConfigParseResult load_filter_config(const std::string& path, FilterConfig& out) {
+  FilterConfig c;  // the schema's field defaults, then the shipped file, then the data set's
+  FilterConfigParseResult r = parse_filter_config_file(default_filter_config_path(), c);
+  if (!r.ok) {
+    r.error = "the shipped flight configuration: " + r.error;
+    return r;
+  }
+  if (!path.empty()) {
+    r = parse_filter_config_file(path, c);
+    if (!r.ok) return r;
+  }
+  out = std::move(c);
+  return r;
 }
 
 }  // namespace sim

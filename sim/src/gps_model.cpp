@@ -82,7 +82,7 @@ GpsModel::GpsModel(const GpsConfig& cfg, std::vector<AlmanacEntry> almanac, cons
               finite_non_negative(cfg_.pseudorange_white_sigma_m) &&
               finite_non_negative(cfg_.pseudorange_rate_white_sigma_mps) &&
               finite_non_negative(cfg_.clock_bias_sigma_m) && finite_non_negative(cfg_.clock_drift_sigma_mps) &&
-              finite_non_negative(cfg_.clock_h0) && finite_non_negative(cfg_.clock_h_minus2),
+              finite_non_negative(cfg_.clock_h0_s) && finite_non_negative(cfg_.clock_h_minus2_per_s),
           "sigmas and clock coefficients must be finite and >= 0");
   require(finite_positive(cfg_.pseudorange_gm_tau_s) && finite_positive(cfg_.pseudorange_rate_gm_tau_s),
           "Gauss-Markov correlation times must be finite and > 0");
@@ -128,8 +128,8 @@ void GpsModel::propagate(double dt_s) {
     gm_prr_mps_[i] = a_prr * gm_prr_mps_[i] + q_prr * rng_gm_.normal();
   }
   // Two-state clock: exact discretisation, process noise drawn through the Cholesky factor of Q.
-  const double s_bias = fsw::clock_bias_psd_m2ps(cfg_.clock_h0);          // [m^2/s]
-  const double s_drift = fsw::clock_drift_psd_m2ps3(cfg_.clock_h_minus2);  // [m^2/s^3]
+  const double s_bias = fsw::clock_bias_psd_m2ps(cfg_.clock_h0_s);                // [m^2/s]
+  const double s_drift = fsw::clock_drift_psd_m2ps3(cfg_.clock_h_minus2_per_s);  // [m^2/s^3]
   const double T = dt_s;
   const double q11 = s_bias * T + s_drift * T * T * T / 3.0;
   const double q12 = s_drift * T * T / 2.0;

@@ -238,8 +238,10 @@ class Parser : public toml_schema::Reader {
         {"pseudorange_rate_white_sigma_mps", number(g.pseudorange_rate_white_sigma_mps, non_negative())},
         {"clock_bias_sigma_m", number(g.clock_bias_sigma_m, non_negative())},
         {"clock_drift_sigma_mps", number(g.clock_drift_sigma_mps, non_negative())},
-        {"clock_h0", number(g.clock_h0, non_negative())},
-        {"clock_h_minus2", number(g.clock_h_minus2, non_negative())},
+        {"clock_h0_s", number(g.clock_h0_s, non_negative())},
+        {"clock_h_minus2_per_s", number(g.clock_h_minus2_per_s, non_negative())},
+        {"clock_h0", renamed("clock_h0_s")},
+        {"clock_h_minus2", renamed("clock_h_minus2_per_s")},
         {"max_channels", integer(g.max_channels, 1, fsw::kMaxGnssChannels)},
     });
   }

@@ -152,6 +152,17 @@ class Reader {
     };
   }
 
+  /// A key that was renamed: rejected with a message that names its new spelling (the old name
+  /// lacked its unit, say), so a file written for the old schema fails clearly instead of as an
+  /// unknown key.
+  Handler renamed(std::string_view new_key) {
+    return [this, new_key](const toml::node& n, const std::string& p) {
+      const std::size_t dot = p.rfind('.');
+      const std::string new_path = (dot == std::string::npos ? "" : p.substr(0, dot + 1)) + std::string(new_key);
+      return fail(n, "'" + p + "' was renamed to '" + new_path + "' (the same value and unit)");
+    };
+  }
+
   /// An array of three numbers, each in range.
   template <typename Vec>
   Handler vector3(Vec& out, Range range) {

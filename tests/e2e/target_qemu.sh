@@ -31,7 +31,8 @@ elf="$src/build/arm-cortex-m7/fsw/baremetal/sdins_fsw_mps2.elf"
 # 2. The recorded input: a simulated flight through HIL's CAN path, its LCM log, HIL's replay digests.
 "$sdins" sil --duration "$duration" --seed 4 --log "$out/sil.lcmlog" --lcm-url none --json "$out/sil.json" > "$out/sil.txt"
 for m in 24 15; do "$sdins" replay "$out/sil.lcmlog" --model $m --json "$out/replay$m.json" > /dev/null; done
-"$sdins_target" record "$out/sil.lcmlog" "$out/input.bin"
+# The flight configuration HIL flies: the shipped config/default.toml of sdins' data directory.
+SDINS_DATA_DIR="$(dirname "$sdins")/../share/sdins" "$sdins_target" record "$out/sil.lcmlog" "$out/input.bin"
 
 # 3. The host replay and the image under QEMU (1 instruction = 1 ns of virtual time; SysTick at the
 #    board's 25 MHz processor clock counts every 40 instructions).

@@ -313,9 +313,9 @@ TEST(Diagnosis, MisalignmentIsAFindingFor15AndPartOfTheModelFor24) {
   bool zy = std::string(fsw::effect_info(f.effect).name) == "gyro_misalignment" && f.component == "zy";
   for (const auto& c : f.confounded_with) zy = zy || c.first == "gyro_misalignment.zy";
   EXPECT_TRUE(zy);
-  ASSERT_TRUE(tools::set_diagnosis_baseline(cfg, "24"));
-  EXPECT_FALSE(tools::set_diagnosis_baseline(cfg, "16"));
-  ASSERT_TRUE(tools::set_diagnosis_baseline(cfg, "24"));
+  ASSERT_TRUE(tools::set_diagnosis_baseline(cfg, fsw::FilterModel::k24));
+  EXPECT_FALSE(tools::set_diagnosis_baseline(cfg, fsw::FilterModel::k15c));  // not a diagnosis baseline
+  EXPECT_EQ(cfg.baseline, fsw::FilterModel::k24);                           // ... and left unchanged
   const tools::DiagnosisResult r24 = tools::diagnose(data, cfg);
   EXPECT_EQ(r24.baseline, "24");
   for (const tools::Finding& g : r24.findings) EXPECT_NE(g.effect, fsw::Effect::kGyroMisalignment);

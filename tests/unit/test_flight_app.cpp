@@ -35,7 +35,7 @@ TEST(GnssPvt, ErrorFreeEpochGivesTheReceiverStateAndClock) {
   sim::GpsConfig c;
   c.pseudorange_gm_sigma_m = c.pseudorange_rate_gm_sigma_mps = 0.0;
   c.pseudorange_white_sigma_m = c.pseudorange_rate_white_sigma_mps = 0.0;
-  c.clock_h0 = c.clock_h_minus2 = 0.0;  // clock bias/drift drawn once (30 m, 1 m/s sigma), constant
+  c.clock_h0_s = c.clock_h_minus2_per_s = 0.0;  // clock bias/drift drawn once (30 m, 1 m/s sigma), constant
   sim::GpsModel gps(c, *alm.almanac, sim::EffectSet{}, 5);
   const Vec3 llh(35.0 * kDegToRad, 127.0 * kDegToRad, 5000.0), v(180.0, 170.0, -3.0);
   fsw::GnssEpoch e;

@@ -55,8 +55,8 @@ GpsConfig error_free() {
   c.pseudorange_rate_white_sigma_mps = 0.0;
   c.clock_bias_sigma_m = 0.0;
   c.clock_drift_sigma_mps = 0.0;
-  c.clock_h0 = 0.0;
-  c.clock_h_minus2 = 0.0;
+  c.clock_h0_s = 0.0;
+  c.clock_h_minus2_per_s = 0.0;
   return c;
 }
 
@@ -439,10 +439,10 @@ TEST(GpsClock, VarianceGrowthMatchesTwoStateModel) {
   // Ensemble over seeds from a perfect clock: Var b(t) = S_b t + S_d t^3/3, Var d(t) = S_d t,
   // Cov(b, d) = S_d t^2/2; with epochs at irregular times (exact discretisation) and at 1 Hz.
   GpsConfig cfg = error_free();
-  cfg.clock_h0 = 2e-19;
-  cfg.clock_h_minus2 = 2e-20;
+  cfg.clock_h0_s = 2e-19;
+  cfg.clock_h_minus2_per_s = 2e-20;
   const double c2 = kSpeedOfLight_mps * kSpeedOfLight_mps;
-  const double sb = cfg.clock_h0 / 2.0 * c2, sd = 2.0 * fsw::kPi * fsw::kPi * cfg.clock_h_minus2 * c2;
+  const double sb = cfg.clock_h0_s / 2.0 * c2, sd = 2.0 * fsw::kPi * fsw::kPi * cfg.clock_h_minus2_per_s * c2;
   const std::vector<sim::AlmanacEntry> one = {entry(shipped(), 1)};  // cheap epochs
   constexpr int kRuns = 4000;
   const std::vector<double> times = {0.0, 0.5, 3.0, 20.0};
@@ -676,7 +676,7 @@ TEST(GpsConfigCheck, RejectsInvalidConfigurations) {
   c.pseudorange_rate_gm_tau_s = 0.0;
   rejects(c);
   c = GpsConfig{};
-  c.clock_h0 = std::nan("");
+  c.clock_h0_s = std::nan("");
   rejects(c);
   c = GpsConfig{};
   c.start_tow_s = sim::kSecondsPerWeek;

@@ -37,9 +37,9 @@ TEST(MonteCarlo, ShortRunFiltersAreConsistentAndConverge) {
   ASSERT_EQ(results.size(), 12u);
   for (std::size_t m = 0; m < mc.models.size(); ++m) {
     const tools::ModelStats s = tools::reduce(results, m, mc.models[m], f.truth);
-    SCOPED_TRACE(tools::model_name(mc.models[m]));
+    SCOPED_TRACE(fsw::to_string(mc.models[m]));
     std::printf("model %s: mean NEES %.2f in [%.2f, %.2f]; attitude NEES %.2f in [%.2f, %.2f]; final U sigma %.1f arcsec\n",
-                tools::model_name(mc.models[m]), s.mean_nees, s.nees_bounds[0], s.nees_bounds[1], s.mean_nees_att,
+                fsw::to_string(mc.models[m]), s.mean_nees, s.nees_bounds[0], s.nees_bounds[1], s.mean_nees_att,
                 s.nees_att_bounds[0], s.nees_att_bounds[1], s.att_std_rad.back()[2] * fsw::kRadToArcsec);
     EXPECT_GT(s.mean_nees, s.nees_bounds[0]);
     EXPECT_LT(s.mean_nees, s.nees_bounds[1]);

@@ -12,6 +12,7 @@
 #include "tools/interrupt.hpp"
 #include "tools/output_file.hpp"
 #include "tools/diagnosis.hpp"
+#include "tools/flight_config.hpp"
 
 namespace sdins {
 namespace {
@@ -51,7 +52,7 @@ nlohmann::json nav_json(const tools::NavErrorStats& s) {
           {"heading_final_deg", s.heading_final_deg}};
 }
 
-void write_traces(const std::string& path, const tools::ModelRun& r) {
+void write_traces(const std::string& path, const tools::DiagnosisRun& r) {
   tools::TextOutput out(path);  // docs/faults.md: complete or not there
   std::ostream& f = out.os();
   const auto& cands = tools::diagnosis_candidates();
@@ -91,17 +92,16 @@ void register_diagnose(CLI::App& app) {
   sub->add_option("--log", opt.log, "LCM log to diagnose")->required()->check(CLI::ExistingFile);
   sub->add_option("--json", opt.json, "write the result as JSON (docs/diagnosis.md)")->required();
   sub->add_option("--report", opt.report, "write a markdown report with plots and CSV traces into this directory");
-  sub->add_option("--baseline", opt.baseline,
-                  "baseline model: 15 (position, velocity, attitude, biases) or 24 (plus the 9 misalignments)")
-      ->check(CLI::IsMember({"15", "24"}))
+  sub->add_option("--baseline", opt.baseline, "baseline model: " + model_help(kFlightModels))
+      ->check(CLI::IsMember(model_names(kFlightModels)))
       ->capture_default_str();
   sub->add_option("--alpha", opt.alpha, "family-wise false-alarm rate of the diagnosis")
       ->check(CLI::Range(1e-9, 0.5))
       ->capture_default_str();
   sub->add_option("--filter-config", opt.filter_config,
                   "filter configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
-                  "(raw or solutions), initialisation, priors and outage pattern of the diagnosis (default: none, the "
-                  "simulated aircraft's configuration)");
+                  "(raw or solutions), initialisation, priors and outage pattern of the diagnosis, applied on top of the "
+                  "shipped flight configuration <data dir>/config/default.toml (default: none, the shipped file alone)");
 }
 
 int run_diagnose() {
@@ -111,16 +111,12 @@ int run_diagnose() {
   std::string err, load_report;
   if (!tools::load_recorded_data(opt.log, data, err, load_report)) throw std::runtime_error(err);
   std::printf("diagnose: %s: %s\n", opt.log.c_str(), load_report.c_str());
-  tools::DiagnosisConfig cfg = tools::default_diagnosis_config();
-  if (!opt.filter_config.empty()) {
-    sim::FilterConfig f;
-    f.app = cfg.app;
-    const sim::FilterConfigParseResult fr = sim::parse_filter_config_file(opt.filter_config, f);
-    if (!fr.ok) throw std::runtime_error(fr.error);
-    tools::apply_filter_config(cfg, f);
-  }
+  // The shipped config/default.toml with --filter-config on top: filter, GNSS input, priors, outages.
+  tools::DiagnosisConfig cfg;
+  tools::apply_filter_config(cfg, tools::filter_config(opt.filter_config));
   cfg.alpha = opt.alpha;
-  if (!tools::set_diagnosis_baseline(cfg, opt.baseline)) throw std::runtime_error("unknown baseline " + opt.baseline);
+  if (!tools::set_diagnosis_baseline(cfg, parse_model(opt.baseline, "--baseline", kFlightModels)))
+    throw std::runtime_error("--baseline: " + opt.baseline + " is not a diagnosis baseline");
   const tools::DiagnosisResult r =
       tools::diagnose(data, cfg, [](const std::string& m) {
         std::printf("  %s\n", m.c_str());

@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/trajectory.hpp"
+#include "tools/flight_config.hpp"
 #include "tools/free_inertial.hpp"
 #include "tools/output_file.hpp"
 
@@ -22,8 +23,9 @@ struct Options {
 
 void register_fly(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
-      "fly", "Free-inertial flight of a scenario: truth simulator -> IMU error model -> fsw 200 Hz mechanization, "
-             "no aiding. Prints position/velocity/attitude error against truth every 60 s.");
+      "fly", "Free-inertial flight of a scenario: truth simulator -> IMU error model -> fsw mechanization at the "
+             "navigation rate of config/default.toml (200 Hz), no aiding. Prints position/velocity/attitude error "
+             "against truth every 60 s.");
   add_scenario_options(sub, opt.scenario);
   sub->add_option("--errors", opt.errors, "override the IMU error set (default: the scenario's)")->check(CLI::IsMember({"paper", "baseline", "none"}));
   sub->add_option("--csv", opt.csv, "write the 1 Hz error history to this CSV file");
@@ -48,6 +50,8 @@ int run_fly() {
   tools::FreeInertialConfig cfg;
   cfg.duration_s = sc.duration_s;
   cfg.imu_rate_hz = sc.imu.rate_hz;
+  cfg.nav_rate_hz = tools::shipped_filter_config().app.exec.nav_rate_hz;  // config/default.toml
+  const int frames_per_s = static_cast<int>(std::lround(cfg.nav_rate_hz));
   std::printf("%8s %10s %10s %12s %12s %12s\n", "t [s]", "horiz [m]", "vert [m]", "phi_E [\"]", "phi_N [\"]",
               "phi_U [\"]");
   int frame = 0;
@@ -56,7 +60,7 @@ int run_fly() {
       *motion, &imu, cfg,
       [&](const sim::TruthSample& truth, const fsw::NavState& nav) {
         ++frame;
-        if (frame % 200 != 0) return;
+        if (frame % frames_per_s != 0) return;
         const tools::NavErrors e = tools::nav_errors(nav, truth);
         const fsw::Vec3 phi = e.att_phi_enu_rad * fsw::kRadToArcsec;
         if (csv_out) {
@@ -64,7 +68,7 @@ int run_fly() {
               << e.vel_enu_mps.x() << "," << e.vel_enu_mps.y() << "," << e.vel_enu_mps.z() << "," << phi.x() << ","
               << phi.y() << "," << phi.z() << "\n";
         }
-        if (frame % (200 * 60) == 0) {
+        if (frame % (frames_per_s * 60) == 0) {
           std::printf("%8.0f %10.2f %10.2f %12.3f %12.3f %12.3f\n", truth.t_s, e.pos_enu_m.head<2>().norm(),
                       e.pos_enu_m.z(), phi.x(), phi.y(), phi.z());
         }

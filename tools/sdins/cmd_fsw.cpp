@@ -17,13 +17,10 @@ namespace {
 
 struct Options {
   std::string bus;
-  std::string model = "24";
-  std::string log;
-  std::string lcm_url;
+  FswRunOptions run;  ///< --model, --log, --lcm-url, --nav-decimation, --json, --filter-config
   bool realtime = false;
   double idle_timeout_s = 5.0;
   int fifo_priority = 50;
-  std::string json;
 } opt;
 
 void warn(const std::string& m) { std::fprintf(stderr, "sdins fsw: %s\n", m.c_str()); }
@@ -36,10 +33,7 @@ void register_fsw(CLI::App& app) {
              "telemetry and log; answers `sdins bus-sim` with FSW_ACK. Exit 0: end of run; 2: silent bus; 130/143: "
              "stopped by SIGINT/SIGTERM (summary, log and --json complete).");
   sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT")->required();
-  sub->add_option("--model", opt.model, "filter model: 15 or 24")->check(CLI::IsMember({"15", "24"}))->capture_default_str();
-  sub->add_option("--log", opt.log, "write an LCM log (inputs and outputs)");
-  sub->add_option("--lcm-url", opt.lcm_url,
-                  "LCM telemetry URL (default $LCM_DEFAULT_URL or udpm://239.255.76.67:7667?ttl=0; none: off)");
+  add_fsw_run_options(sub, opt.run, "");
   sub->add_flag("--realtime", opt.realtime,
                 "real-time mode: SCHED_FIFO when permitted, minor-frame execution times (overruns), IMU lateness");
   sub->add_option("--fifo-priority", opt.fifo_priority, "realtime: SCHED_FIFO priority")
@@ -48,22 +42,22 @@ void register_fsw(CLI::App& app) {
   sub->add_option("--idle-timeout", opt.idle_timeout_s, "stop after this long without frames [s]")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  sub->add_option("--json", opt.json, "write the summary as JSON (fields: docs/running.md)");
 }
 
 int run_fsw() {
+  tools::require_distinct({opt.run.log, opt.run.json}, {opt.run.filter_config});
   tools::FswRunConfig cfg;
-  if (!hal::parse_fsw_model(opt.model, cfg.node.model)) throw std::runtime_error("--model must be 15 or 24");
-  cfg.node.app = hal::default_flight_config();
-  cfg.node.telemetry.log_path = opt.log;
-  if (!opt.lcm_url.empty()) cfg.node.telemetry.lcm_url = opt.lcm_url;
+  const sim::FilterConfig filter = opt.run.filter();  // the shipped config/default.toml, --filter-config on top
+  if (filter.gnss_source != sim::GnssSource::kRaw)
+    throw std::runtime_error("--filter-config: gnss.source = \"" + std::string(sim::to_string(filter.gnss_source)) +
+                             "\", but the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc); use \"raw\"");
+  cfg.node = opt.run.node_config(filter);
   cfg.realtime = opt.realtime;
   cfg.fifo_priority = opt.fifo_priority;
   cfg.idle_timeout_s = opt.idle_timeout_s;
-  tools::require_distinct({opt.log, opt.json}, {});
   hal::CanBus bus;
   if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
-  std::fprintf(stderr, "sdins fsw: %s-state model listening on %s\n", opt.model.c_str(), opt.bus.c_str());
+  std::fprintf(stderr, "sdins fsw: %s-state model listening on %s\n", opt.run.model.c_str(), opt.bus.c_str());
   // SIGINT/SIGTERM (docs/faults.md): the loop stops, the log is closed complete, the summary and
   // --json are written, exit 128 + signal.
   const tools::InterruptPolling polling;
@@ -112,7 +106,7 @@ int run_fsw() {
                 r.exec_max_s, e.overruns, r.imu_lateness_mean_s, r.imu_lateness_max_s, r.late_threshold_s,
                 static_cast<unsigned long long>(r.imu_late), r.rx.imu_missing);
   std::printf("wall time: %.3f s\n", r.wall_s);
-  if (!opt.json.empty()) tools::write_json_file(opt.json, tools::to_json(r));
+  if (!opt.run.json.empty()) tools::write_json_file(opt.run.json, tools::to_json(r));
   if (r.exit == tools::FswExit::kStopped) return tools::interrupt_exit_code();
   return r.exit == tools::FswExit::kEndOfRun ? 0 : 2;
 }

@@ -25,22 +25,11 @@ struct Options {
 
 }  // namespace
 
-std::vector<tools::Model> parse_models(const std::string& text) {
-  std::vector<tools::Model> models;
+std::vector<fsw::FilterModel> parse_models(const std::string& text) {
+  std::vector<fsw::FilterModel> models;
   std::stringstream ss(text);
   std::string item;
-  while (std::getline(ss, item, ',')) {
-    if (item == "15")
-      models.push_back(tools::Model::k15);
-    else if (item == "24")
-      models.push_back(tools::Model::k24);
-    else if (item == "15c")
-      models.push_back(tools::Model::k15c);
-    else if (item == "15t")
-      models.push_back(tools::Model::k15t);
-    else
-      throw std::runtime_error("--models: unknown model '" + item + "' (use 15, 15c, 15t, 24 or a list such as 15,24)");
-  }
+  while (std::getline(ss, item, ',')) models.push_back(parse_model(item, "--models", kMonteCarloModels));
   if (models.empty()) throw std::runtime_error("--models: no model given");
   return models;
 }
@@ -54,7 +43,9 @@ void register_montecarlo(CLI::App& app) {
       "under mpirun -np K the runs are split across the K ranks and rank 0 writes the (identical) results.");
   add_scenario_options(sub, opt.scenario);
   sub->add_option("--runs", opt.runs, "number of runs")->check(CLI::Range(1, 100000))->capture_default_str();
-  sub->add_option("--models", opt.models, "filters to run on the same data: 15, 24 or 15,24")->capture_default_str();
+  sub->add_option("--models", opt.models,
+                  "filters to run on the same data, a comma-separated list of: " + model_help(kMonteCarloModels))
+      ->capture_default_str();
   sub->add_option("--threads", opt.threads,
                   "worker threads per process (0: all cores; under mpirun with more than one rank: 1 per rank)")
       ->check(CLI::Range(0, 1024))

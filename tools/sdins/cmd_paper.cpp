@@ -16,6 +16,7 @@
 
 #include "commands.hpp"
 #include "montecarlo_case.hpp"
+#include "tools/flight_config.hpp"
 #include "tools/interrupt.hpp"
 #include "tools/output_file.hpp"
 #include "fsw/effect_catalogue.hpp"
@@ -254,6 +255,7 @@ int run_paper_body() {
   bool root = true;
   double wall_total = 0.0;
   const tools::MonteCarloConfig defaults;
+  const double paper_arw = tools::shipped_filter_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
   std::vector<tools::paper::LevelSummary> levels;
   const std::vector<tools::paper::TurnKick> kicks = root_rank ? kicks_of(base) : std::vector<tools::paper::TurnKick>{};
   for (double level : opt.levels) {
@@ -261,7 +263,7 @@ int run_paper_body() {
     tools::MonteCarloConfig mc;
     mc.runs = opt.runs;
     mc.threads = opt.threads;
-    mc.models = {tools::Model::k15, tools::Model::k15c, tools::Model::k15t, tools::Model::k24};
+    mc.models = {fsw::FilterModel::k15, fsw::FilterModel::k15c, fsw::FilterModel::k15t, fsw::FilterModel::k24};
     mc.tuned15t_arw_rad_per_rts = tools::paper::tuned15t_arw_rad_per_rts(level);
     const std::string dir = level_dir(level);
     if (root_rank) fs::create_directories(out / dir);
@@ -306,7 +308,7 @@ int run_paper_body() {
       per.push_back({{"misalignment_arcsec", level}, {"arw_rad_per_rts", tools::paper::tuned15t_arw_rad_per_rts(level)}});
     summary["tuned15t"] = {{"arw_rad_per_rts", per},
                            {"gyro_bias_rw_radps_per_rts", defaults.tuned15t_gyro_bias_rw_radps_per_rts},
-                           {"paper_arw_rad_per_rts", defaults.arw_rad_per_rts},
+                           {"paper_arw_rad_per_rts", paper_arw},
                            {"how", "set once per misalignment specification by `sdins paper --tune-15t` "
                                    "(docs/paper-verdict.md), not per run"}};
   }
@@ -364,7 +366,7 @@ int run_patterns_body() {
     tools::MonteCarloConfig mc;
     mc.runs = opt.runs;
     mc.threads = opt.threads;
-    mc.models = {tools::Model::k15, tools::Model::k24};
+    mc.models = {fsw::FilterModel::k15, fsw::FilterModel::k24};
     if (root_rank) fs::create_directories(out / p.name);
     std::printf("pattern %s (%s): %d runs at %.0f arcsec, filters 15, 24\n", p.name.c_str(), p.description.c_str(),
                 opt.runs, opt.pattern_level);
@@ -445,7 +447,7 @@ int run_tune_body() {
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(base.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
   const tools::TruthTrack truth = tools::TruthTrack::generate(base);
-  const tools::MonteCarloConfig defaults;
+  const double paper_arw = tools::shipped_filter_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
   json levels = json::array();
   bool all_found = true;
   // Per misalignment level (the IMU's specification), grid: the paper's ARW times 2^(k/2) for
@@ -456,18 +458,18 @@ int run_tune_body() {
     json trials = json::array();
     double chosen = 0.0;
     for (int k = opt.tune_first; k <= 40 && chosen == 0.0; k += opt.tune_step) {
-      const double arw = defaults.arw_rad_per_rts * std::pow(std::sqrt(2.0), k);
+      const double arw = paper_arw * std::pow(std::sqrt(2.0), k);
       tools::MonteCarloConfig mc;
       mc.runs = opt.runs;
       mc.threads = opt.threads;
-      mc.models = {tools::Model::k15t};
+      mc.models = {fsw::FilterModel::k15t};
       mc.tuned15t_arw_rad_per_rts = arw;
       mc.tuned15t_gyro_bias_rw_radps_per_rts = 0.0;
       const auto results = tools::run_many(sc, truth, *alm.almanac, mc);
-      const tools::ModelStats s = tools::reduce(results, 0, tools::Model::k15t, truth);
+      const tools::ModelStats s = tools::reduce(results, 0, fsw::FilterModel::k15t, truth);
       const bool ok = s.mean_nees >= s.nees_bounds[0] && s.mean_nees <= s.nees_bounds[1];
       std::printf("  %4.0f arcsec: arw %.3e rad/sqrt(s) (%5.1fx the paper's): mean NEES %9.2f [%.2f, %.2f]%s, resets %llu\n",
-                  level, arw, arw / defaults.arw_rad_per_rts, s.mean_nees, s.nees_bounds[0], s.nees_bounds[1],
+                  level, arw, arw / paper_arw, s.mean_nees, s.nees_bounds[0], s.nees_bounds[1],
                   ok ? " inside" : "", static_cast<unsigned long long>(s.health.ekf.resets));
       std::fflush(stdout);
       trials.push_back({{"arw_rad_per_rts", arw},
@@ -486,7 +488,7 @@ int run_tune_body() {
   }
   tools::write_json_file((out / "tune_15t.json").string(),
                          json{{"runs", opt.runs}, {"duration_s", base.duration_s},
-                              {"paper_arw_rad_per_rts", defaults.arw_rad_per_rts}, {"levels", levels}});
+                              {"paper_arw_rad_per_rts", paper_arw}, {"levels", levels}});
   std::printf("wrote %s\n", (out / "tune_15t.json").string().c_str());
   return all_found ? 0 : 1;
 }

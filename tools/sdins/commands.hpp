@@ -4,7 +4,9 @@
 
 #include <CLI/CLI.hpp>
 #include <string>
+#include <vector>
 
+#include "fsw/filter_model.hpp"
 #include "hal/fsw_node.hpp"
 #include "sim/filter_config.hpp"
 #include "sim/scenario.hpp"
@@ -57,17 +59,30 @@ struct ScenarioOptions {
 };
 void add_scenario_options(CLI::App* sub, ScenarioOptions& opt);
 
+/// The filter models (fsw/filter_model.hpp) a command accepts: their names for CLI::IsMember, the
+/// --help text that lists them with their meaning, and the parser (throws naming the option and
+/// the accepted names). Every command's --model / --models / --baseline goes through these.
+using ModelSet = std::vector<fsw::FilterModel>;
+/// What the flight-software node flies (sil, replay, fsw) and the diagnosis' baselines.
+inline const ModelSet kFlightModels{fsw::FilterModel::k15, fsw::FilterModel::k24};
+/// What the Monte Carlo flies: every model.
+inline const ModelSet kMonteCarloModels{fsw::FilterModel::k15, fsw::FilterModel::k24, fsw::FilterModel::k15c,
+                                        fsw::FilterModel::k15t};
+std::vector<std::string> model_names(const ModelSet& accepted);
+std::string model_help(const ModelSet& accepted);
+fsw::FilterModel parse_model(const std::string& name, const std::string& option, const ModelSet& accepted);
+
 /// The options of every command that runs the flight software (sil, replay, fsw): --model,
-/// --log, --lcm-url, --nav-decimation, --json.
+/// --log, --lcm-url, --nav-decimation, --json, --filter-config.
 struct FswRunOptions {
   std::string model = "24";
   std::string log;
   std::string lcm_url;  ///< "": $LCM_DEFAULT_URL or LCM's default group; "none": no network
   std::string json;
   int nav_decimation = 10;
-  std::string filter_config;  ///< --filter-config FILE: applied on top of hal::default_flight_config()
-  /// The filter configuration: hal::default_flight_config() with --filter-config applied; throws
-  /// with the file's error.
+  std::string filter_config;  ///< --filter-config FILE: applied on top of the shipped config/default.toml
+  /// The filter configuration: the shipped config/default.toml with --filter-config applied
+  /// (tools::filter_config); throws with the file's error.
   sim::FilterConfig filter() const;
   /// The flight-software node's configuration (filter()); throws on a bad model or configuration.
   hal::FswNodeConfig node_config() const { return node_config(filter()); }

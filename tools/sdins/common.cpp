@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -6,6 +7,7 @@
 
 #include "commands.hpp"
 #include "sim/data_dir.hpp"
+#include "tools/flight_config.hpp"
 
 namespace sdins {
 
@@ -28,19 +30,35 @@ void add_scenario_options(CLI::App* sub, ScenarioOptions& opt) {
       ->check(CLI::Range(0LL, std::numeric_limits<long long>::max()));
 }
 
-sim::FilterConfig FswRunOptions::filter() const {
-  sim::FilterConfig f;
-  f.app = hal::default_flight_config();
-  if (!filter_config.empty()) {
-    const sim::FilterConfigParseResult r = sim::parse_filter_config_file(filter_config, f);
-    if (!r.ok) throw std::runtime_error(r.error);
-  }
-  return f;
+std::vector<std::string> model_names(const ModelSet& accepted) {
+  std::vector<std::string> names;
+  for (fsw::FilterModel m : accepted) names.emplace_back(fsw::to_string(m));
+  return names;
 }
+
+std::string model_help(const ModelSet& accepted) {
+  std::string h;
+  for (std::size_t i = 0; i < accepted.size(); ++i) {
+    const fsw::FilterModelInfo& m = fsw::filter_model_info(accepted[i]);
+    h += (i == 0 ? "" : ", ") + std::string(m.name) + " (" + m.description + ")";
+  }
+  return h;
+}
+
+fsw::FilterModel parse_model(const std::string& name, const std::string& option, const ModelSet& accepted) {
+  fsw::FilterModel m{};
+  if (fsw::parse_filter_model(name.c_str(), m) && std::find(accepted.begin(), accepted.end(), m) != accepted.end())
+    return m;
+  std::string names;
+  for (const std::string& n : model_names(accepted)) names += (names.empty() ? "" : ", ") + n;
+  throw std::runtime_error(option + ": unknown model '" + name + "' (use " + names + ")");
+}
+
+sim::FilterConfig FswRunOptions::filter() const { return tools::filter_config(filter_config); }
 
 hal::FswNodeConfig FswRunOptions::node_config(const sim::FilterConfig& f) const {
   hal::FswNodeConfig cfg;
-  if (!hal::parse_fsw_model(model, cfg.model)) throw std::runtime_error("--model: 15 or 24");
+  cfg.model = parse_model(model, "--model", kFlightModels);
   cfg.app = f.app;
   cfg.telemetry.lcm_url = lcm_url;
   cfg.telemetry.log_path = log;
@@ -50,7 +68,9 @@ hal::FswNodeConfig FswRunOptions::node_config(const sim::FilterConfig& f) const 
 
 void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& default_lcm_url) {
   opt.lcm_url = default_lcm_url;
-  sub->add_option("--model", opt.model, "filter model")->check(CLI::IsMember({"15", "24"}))->capture_default_str();
+  sub->add_option("--model", opt.model, "filter model: " + model_help(kFlightModels))
+      ->check(CLI::IsMember(model_names(kFlightModels)))
+      ->capture_default_str();
   sub->add_option("--log", opt.log, "write an LCM log of the run (inputs and outputs)");
   sub->add_option("--lcm-url", opt.lcm_url,
                   "LCM URL for live telemetry (empty: $LCM_DEFAULT_URL or udpm://239.255.76.67:7667?ttl=0; "
@@ -62,7 +82,8 @@ void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& d
   sub->add_option("--json", opt.json, "write the end-of-run summary as JSON");
   sub->add_option("--filter-config", opt.filter_config,
                   "filter configuration TOML (config/README.md; e.g. config/datasets/gnss-imu-drive.toml) applied on "
-                  "top of the simulated aircraft's defaults (default: none, the defaults alone)");
+                  "top of the shipped flight configuration <data dir>/config/default.toml (default: none, the "
+                  "shipped file alone)");
 }
 
 std::string shell_quote(const std::string& s) {

@@ -318,7 +318,7 @@ CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig&
   }
   for (std::size_t m = 0; m < mc.models.size(); ++m) {
     tools::ModelStats s = tools::reduce(results, m, mc.models[m], truth);
-    const std::string csv = prefix + "stats_" + tools::model_name(mc.models[m]) + ".csv";
+    const std::string csv = prefix + "stats_" + fsw::to_string(mc.models[m]) + ".csv";
     tools::write_stats_csv(s, (std::filesystem::path(out_dir) / csv).string());
     const std::size_t last = s.t_s.size() - 1, aft = after_first_turn(s);
     json sensors = json::array();
@@ -343,7 +343,7 @@ CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig&
                         {"rms_residual", c.rms_residual},
                         {"observable", c.observable}});
     }
-    r.models.push_back({{"model", tools::model_name(mc.models[m])},
+    r.models.push_back({{"model", fsw::to_string(mc.models[m])},
                         {"runs", s.runs},
                         {"final_residual_sigma_deg", enu(s.att_std_rad[last], fsw::kRadToDeg)},
                         {"final_residual_mean_deg", enu(s.att_mean_rad[last], fsw::kRadToDeg)},

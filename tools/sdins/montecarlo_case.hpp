@@ -47,6 +47,7 @@ CaseResult run_case(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, 
 /// Prints the per-model table of a case.
 void print_case(const CaseResult& r);
 
-std::vector<tools::Model> parse_models(const std::string& text);
+/// "15,24" -> the models (commands.hpp parse_model: the names of fsw/filter_model.hpp). Throws naming --models.
+std::vector<fsw::FilterModel> parse_models(const std::string& text);
 
 }  // namespace sdins

@@ -1,7 +1,10 @@
 // sdins_target (docs/baremetal-qemu.md): the host side of the Cortex-M7 image's QEMU run.
-//   sdins_target record LOG INPUT   an LCM log's inputs (IMU, GNSS_RAW, GPS_ALMANAC in time order,
-//                                   as `sdins replay` reads them) and hal::default_flight_config(),
-//                                   the configuration HIL uses, into the target replay's input
+//   sdins_target record LOG INPUT [FILTER_CONFIG]
+//                                   an LCM log's inputs (IMU, GNSS_RAW, GPS_ALMANAC in time order,
+//                                   as `sdins replay` reads them) and the flight configuration HIL
+//                                   uses (the shipped config/default.toml of the data directory,
+//                                   sim/data_dir.hpp, with FILTER_CONFIG on top as `sdins replay
+//                                   --filter-config` applies it) into the target replay's input
 //                                   (fsw/baremetal/replay.hpp)
 //   sdins_target replay INPUT OUT   the host replay of that input: fsw/baremetal/replay.cpp, the
 //                                   source the image runs, linked with the host's sdins_fsw
@@ -13,6 +16,7 @@
 #include "hal/fsw_node.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "replay.hpp"
+#include "sim/filter_config.hpp"
 
 namespace {
 
@@ -33,7 +37,13 @@ bool put_event(std::FILE* f, std::uint32_t tag, const T& obj) {
   return put(f, head) && std::fwrite(&obj, sizeof obj, 1, f) == 1;
 }
 
-int record(const std::string& log, const std::string& path) {
+int record(const std::string& log, const std::string& path, const std::string& filter_config) {
+  sim::FilterConfig filter;
+  const sim::FilterConfigParseResult fr = sim::load_filter_config(filter_config, filter);
+  if (!fr.ok) {
+    std::fprintf(stderr, "sdins_target: %s\n", fr.error.c_str());
+    return 1;
+  }
   hal::LcmReplayReader reader;
   if (reader.open(log) != hal::LcmLogStatus::kOk) {
     std::fprintf(stderr, "sdins_target: cannot read %s: %s\n", log.c_str(), reader.error().c_str());
@@ -46,7 +56,7 @@ int record(const std::string& log, const std::string& path) {
   }
   std::uint32_t fp[sdins_target::kFingerprintWords];
   sdins_target::layout_fingerprint(fp);
-  const fsw::FlightAppConfig cfg = hal::default_flight_config();
+  const fsw::FlightAppConfig& cfg = filter.app;
   bool ok = std::fwrite("SDTR", 1, 4, f) == 4 && put(f, sdins_target::kFormatVersion) &&
             put(f, static_cast<std::uint32_t>(sdins_target::kFingerprintWords)) && put(f, fp) && put(f, cfg);
   std::uint64_t n_imu = 0, n_gnss = 0, n_alm = 0;
@@ -106,9 +116,10 @@ int libm(const std::string& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 4 && std::strcmp(argv[1], "record") == 0) return record(argv[2], argv[3]);
+  if ((argc == 4 || argc == 5) && std::strcmp(argv[1], "record") == 0)
+    return record(argv[2], argv[3], argc == 5 ? argv[4] : "");
   if (argc == 4 && std::strcmp(argv[1], "replay") == 0) return replay(argv[2], argv[3]);
   if (argc == 3 && std::strcmp(argv[1], "libm") == 0) return libm(argv[2]);
-  std::fprintf(stderr, "usage: sdins_target record LOG INPUT | replay INPUT OUTPUT | libm OUTPUT\n");
+  std::fprintf(stderr, "usage: sdins_target record LOG INPUT [FILTER_CONFIG] | replay INPUT OUTPUT | libm OUTPUT\n");
   return 64;
 }

@@ -11,18 +11,17 @@
 #include <string>
 #include <vector>
 
+#include "fsw/filter_model.hpp"
 #include "fsw/flight_app.hpp"
 #include "hal/lcm_log_sink.hpp"
 
 namespace hal {
 
-enum class FswModel : std::uint8_t { k15, k24 };
-/// "15" or "24" -> model; false for anything else.
-bool parse_fsw_model(const std::string& s, FswModel& out);
-const char* to_string(FswModel m);
-
 struct FswNodeConfig {
-  FswModel model = FswModel::k24;
+  /// 15 or 24 (fsw/filter_model.hpp), flown as Layout15Full / Layout24Full; open() refuses others.
+  fsw::FilterModel model = fsw::FilterModel::k24;
+  /// The flight configuration: what sim::load_filter_config reads (config/default.toml and a data
+  /// set's file on top); the initialiser is only the schema's field defaults.
   fsw::FlightAppConfig app{};
   LcmTelemetryConfig telemetry{};  ///< network URL ("none": off) and the log path ("": no log)
   int nav_decimation = 10;         ///< NAV_SOLUTION every n-th 200 Hz frame (10: 20 Hz)
@@ -44,10 +43,6 @@ struct EkfGroupTimes {
   std::uint64_t waits = 0;       ///< lockstep: frames at which the 200 Hz group waited for it
   double wait_max_s = 0.0;       ///< ... the longest wait
 };
-
-/// The default flight configuration: the paper's sensor class (fsw::EkfConfig defaults), the
-/// TCXO clock and the GPS error model of the built-in scenario, the 56-state filter layouts.
-fsw::FlightAppConfig default_flight_config();
 
 struct FswNodeSummary {
   bool initialised = false;

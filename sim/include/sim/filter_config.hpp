@@ -1,5 +1,8 @@
-// Filter configuration files (TOML): the estimator's settings for one data set or sensor class,
-// applied on top of a base fsw::FlightAppConfig (the caller's, usually hal::default_flight_config()).
+// Filter configuration files (TOML): the flight configuration. One schema, one set of defaults
+// shipped as a file: config/default.toml, installed as <data dir>/config/default.toml
+// (sim/data_dir.hpp), sets every key and is what `sdins sil`, `fsw`, `replay`, `montecarlo`, `paper`,
+// `diagnose` and `fly` fly with (load_filter_config). The struct initialisers of fsw::FlightAppConfig
+// and FilterConfig are only the schema's field defaults for a key a file leaves out.
 // Recorded data come from sensors unlike the simulated aircraft's navigation-grade IMU: a MEMS IMU
 // at 100-200 Hz with turn-on biases of a tenth of a degree per second, a GNSS receiver that gives
 // position/velocity solutions at 4 Hz, an antenna and IMU mounted at an angle to the direction of
@@ -46,5 +49,12 @@ FilterConfigParseResult parse_filter_config_text(const std::string& toml_text, c
                                                  FilterConfig& cfg);
 /// The same for a file ("<path>: cannot open filter configuration" when it cannot be read).
 FilterConfigParseResult parse_filter_config_file(const std::string& path, FilterConfig& cfg);
+
+/// The shipped flight configuration: "<data directory>/config/default.toml".
+std::string default_filter_config_path();
+/// The configuration a command flies: the schema's field defaults, the shipped file on top, then
+/// `path` on top of that (a data set's file; empty: the shipped file alone). On error (either file)
+/// out is unchanged and the error names the file.
+FilterConfigParseResult load_filter_config(const std::string& path, FilterConfig& out);
 
 }  // namespace sim

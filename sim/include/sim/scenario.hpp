@@ -96,8 +96,8 @@ struct GpsConfig {
   double pseudorange_rate_white_sigma_mps = 0.0;
   double clock_bias_sigma_m = 30.0;             ///< initial receiver clock bias (c * dt), 1-sigma
   double clock_drift_sigma_mps = 1.0;           ///< initial receiver clock drift (c * ddt), 1-sigma
-  double clock_h0 = 2e-19;                      ///< white-frequency coefficient h0 [s] (TCXO)
-  double clock_h_minus2 = 2e-20;                ///< random-walk-frequency coefficient h_-2 [1/s] (TCXO)
+  double clock_h0_s = 2e-19;                    ///< white-frequency coefficient h0 [s] (TCXO)
+  double clock_h_minus2_per_s = 2e-20;          ///< random-walk-frequency coefficient h_-2 [1/s] (TCXO)
   int max_channels = 12;  ///< [1, fsw::kMaxGnssChannels]; the highest satellites are kept when more are visible
 };
 

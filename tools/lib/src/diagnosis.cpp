@@ -15,6 +15,7 @@
 #include "hal/lcm_convert.hpp"
 #include "hal/lcm_log.hpp"
 #include "hal/lcm_log_sink.hpp"
+#include "tools/flight_config.hpp"
 #include "tools/sensor_stream.hpp"
 
 namespace tools {
@@ -152,34 +153,22 @@ std::string candidate_name(const Candidate& c) {
   return s;
 }
 
-bool set_diagnosis_baseline(DiagnosisConfig& cfg, const std::string& name) {
+bool set_diagnosis_baseline(DiagnosisConfig& cfg, fsw::FilterModel model) {
+  if (model != fsw::FilterModel::k15 && model != fsw::FilterModel::k24) return false;
   cfg.baseline_states.clear();
-  if (name == "24") {
+  if (model == fsw::FilterModel::k24) {
     for (std::size_t c = 0; c < diagnosis_candidates().size(); ++c) {
       const Effect e = diagnosis_candidates()[c].effect;
       if (e == Effect::kGyroMisalignment || e == Effect::kAccelMisalignment) cfg.baseline_states.push_back(static_cast<int>(c));
     }
-  } else if (name != "15") {
-    return false;
   }
-  cfg.baseline_name = name;
+  cfg.baseline = model;
   return true;
 }
 
 DiagnosisConfig default_diagnosis_config() {
   DiagnosisConfig c;
-  c.app = hal::default_flight_config();
-  auto set = [&c](Effect e, double v) { c.prior[static_cast<std::size_t>(e)] = v; };
-  set(Effect::kGyroMisalignment, 60.0);     // arcsec
-  set(Effect::kAccelMisalignment, 60.0);    // arcsec
-  set(Effect::kGyroScaleFactor, 1000.0);    // ppm
-  set(Effect::kAccelScaleFactor, 1000.0);   // ppm
-  set(Effect::kGyroGSensitivity, 10.0);     // deg/h/g
-  set(Effect::kImuGnssTimeOffset, 0.05);    // s
-  set(Effect::kAntennaLeverArm, 2.0);       // m
-  set(Effect::kTroposphericDelay, 1.0);     // scale
-  set(Effect::kIonosphericDelay, 1.0);      // scale
-  set(Effect::kImuClockDrift, 100.0);       // ppm
+  apply_filter_config(c, shipped_filter_config());  // config/default.toml sets every prior
   return c;
 }
 
@@ -370,10 +359,10 @@ RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double
 }
 
 // ---------------------------------------------------------------------------------------------
-ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
+DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
                              bool with_outages) {
   const std::vector<Candidate>& cands = diagnosis_candidates();
-  ModelRun run;
+  DiagnosisRun run;
   run.active = active;
   const int na = static_cast<int>(active.size());
 
@@ -536,7 +525,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
         await_reacquisition = false;
       }
     }
-    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * fsw::kNavRate_hz));
+    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * app_cfg.exec.nav_rate_hz));
     double epr = 0.0, eprr = 0.0, epos = 0.0, evel = 0.0;
     int npr = 0, nprr = 0, npos = 0, nvel = 0;
     if (rep.pvt) {
@@ -618,7 +607,7 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
   run.innovations.pos_rms_m = run.innovations.pos_used > 0 ? std::sqrt(pos_ss / run.innovations.pos_used) : 0.0;
   run.innovations.vel_rms_mps = run.innovations.vel_used > 0 ? std::sqrt(vel_ss / run.innovations.vel_used) : 0.0;
   run.innovations.log_likelihood = 0.0;
-  for (const ModelRun::Scalar& s : run.scalars)
+  for (const DiagnosisRun::Scalar& s : run.scalars)
     run.innovations.log_likelihood -= 0.5 * (std::log(2.0 * fsw::kPi * s.S) + s.nu * s.nu / s.S);
   run.innovations.common = static_cast<int>(run.scalars.size());
   if (run.nav.samples > 0) {
@@ -654,8 +643,8 @@ ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cf
   return run;
 }
 
-void compare_likelihood(ModelRun& a, ModelRun& b) {
-  auto by_key = [](const ModelRun::Scalar& x, const ModelRun::Scalar& y) { return x.key < y.key; };
+void compare_likelihood(DiagnosisRun& a, DiagnosisRun& b) {
+  auto by_key = [](const DiagnosisRun::Scalar& x, const DiagnosisRun::Scalar& y) { return x.key < y.key; };
   std::sort(a.scalars.begin(), a.scalars.end(), by_key);
   std::sort(b.scalars.begin(), b.scalars.end(), by_key);
   double la = 0.0, lb = 0.0;
@@ -684,9 +673,9 @@ void compare_likelihood(ModelRun& a, ModelRun& b) {
 namespace {
 
 /// Runs the models in parallel (one per extension set), results in input order.
-std::vector<ModelRun> run_models(const RecordedData& data, const DiagnosisConfig& cfg,
+std::vector<DiagnosisRun> run_models(const RecordedData& data, const DiagnosisConfig& cfg,
                                  const std::vector<std::vector<int>>& models, bool with_outages = false) {
-  std::vector<ModelRun> out(models.size());
+  std::vector<DiagnosisRun> out(models.size());
   std::atomic<std::size_t> next{0};
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
   const unsigned n_threads = std::min<unsigned>(hw, static_cast<unsigned>(std::max<std::size_t>(1, models.size())));
@@ -701,7 +690,7 @@ std::vector<ModelRun> run_models(const RecordedData& data, const DiagnosisConfig
 }
 
 /// Position of candidate c in a run's active list, or -1.
-int position(const ModelRun& run, int c) {
+int position(const DiagnosisRun& run, int c) {
   for (std::size_t a = 0; a < run.active.size(); ++a)
     if (run.active[a] == c) return static_cast<int>(a);
   return -1;
@@ -753,7 +742,7 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     if (progress) progress(s);
   };
   DiagnosisResult res;
-  res.baseline = cfg.baseline_name;
+  res.baseline = fsw::to_string(cfg.baseline);
   const std::vector<int>& base = cfg.baseline_states;
   auto in = [](const std::vector<int>& v, int c) { return std::find(v.begin(), v.end(), c) != v.end(); };
   std::vector<Group> groups;
@@ -798,7 +787,7 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     if (models.empty()) break;
     say("step " + std::to_string(step) + ": " + std::to_string(models.size()) + " candidate models of " +
         std::to_string(m0.size() - base.size() + 1) + " extension states");
-    std::vector<ModelRun> runs = run_models(data, cfg, models);
+    std::vector<DiagnosisRun> runs = run_models(data, cfg, models);
     if (!screened) {
       res.screening_z2.assign(at(nc), 0.0);
       res.screening_ratio.assign(at(nc), 1.0);
@@ -809,7 +798,7 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     std::string grown;
     for (std::size_t k = 0; k < runs.size(); ++k) {
       const int c = which[k];
-      const ModelRun& r = runs[k];
+      const DiagnosisRun& r = runs[k];
       const int a = position(r, c);
       if (!r.initialised || a < 0) continue;
       const std::size_t ua = static_cast<std::size_t>(a);
@@ -925,7 +914,7 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
   if (cfg.outage_length_s > 0.0) {  // with a reference: the coasting error; always: the re-acquisition NIS
     say("GNSS outages: " + std::to_string(cfg.outage_length_s) + " s every " + std::to_string(cfg.outage_period_s) +
         " s, baseline and extended model coasting");
-    std::vector<ModelRun> o = run_models(data, cfg, {base, res.extended.active}, true);
+    std::vector<DiagnosisRun> o = run_models(data, cfg, {base, res.extended.active}, true);
     res.base.outages = o[0].outages;
     res.extended.outages = o[1].outages;
   }

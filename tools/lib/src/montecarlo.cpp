@@ -21,6 +21,7 @@
 #include "sim/gps_model.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/rng.hpp"
+#include "tools/flight_config.hpp"
 #include "tools/free_inertial.hpp"
 #include "tools/run_sensors.hpp"
 
@@ -176,10 +177,10 @@ TruthTrack TruthTrack::generate(const sim::Scenario& sc) {
 }
 
 fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloConfig& mc) {
-  fsw::ExecutiveConfig cfg;
-  cfg.imu_samples_per_frame = static_cast<int>(sc.imu.rate_hz / fsw::kNavRate_hz);
-  cfg.nav_rate_hz = fsw::kNavRate_hz;
-  cfg.frames_per_ekf = static_cast<int>(std::lround(fsw::kNavRate_hz / sc.gps.rate_hz));
+  // The shipped flight configuration, then the scenario overlay (the header says what it sets).
+  fsw::ExecutiveConfig cfg = shipped_filter_config().app.exec;
+  cfg.imu_samples_per_frame = static_cast<int>(sc.imu.rate_hz / cfg.nav_rate_hz);
+  cfg.frames_per_ekf = static_cast<int>(std::lround(cfg.nav_rate_hz / sc.gps.rate_hz));
   const sim::ImuErrorSigmas& s = sc.imu.sigmas;
   fsw::EkfConfig& e = cfg.ekf;
   e.pos_sigma_m = std::max(mc.init_pos_sigma_m, 1.0);
@@ -199,32 +200,29 @@ fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloC
   e.gyro_misalign_sigma_rad = paper ? std::max(s.gyro_misalignment_arcsec * fsw::kArcsecToRad, 1e-8) : 1e-8;
   e.accel_scale_sigma = paper ? std::max(s.accel_scale_factor_ppm * 1e-6, 1e-9) : 1e-9;
   e.gyro_scale_sigma = paper ? std::max(s.gyro_scale_factor_ppm * 1e-6, 1e-9) : 1e-9;
-  e.clock_bias_sigma_m = 10.0;
-  e.clock_drift_sigma_mps = 0.5;
-  e.clock_bias_psd_m2ps = std::max(fsw::clock_bias_psd_m2ps(sc.gps.clock_h0), 1e-4);
-  e.clock_drift_psd_m2ps3 = std::max(fsw::clock_drift_psd_m2ps3(sc.gps.clock_h_minus2), 1e-4);
+  e.clock_bias_psd_m2ps = std::max(fsw::clock_bias_psd_m2ps(sc.gps.clock_h0_s), 1e-4);
+  e.clock_drift_psd_m2ps3 = std::max(fsw::clock_drift_psd_m2ps3(sc.gps.clock_h_minus2_per_s), 1e-4);
   if (mc.model_gps_errors) {
-    // Correlated part as channel states; the white part (with a floor that keeps P well
-    // conditioned when the simulator adds none) as measurement noise.
+    // Correlated part as channel states; the white part as measurement noise, at least the shipped
+    // file's white noise (which keeps P well conditioned when the simulator adds none).
+    const fsw::EkfConfig& shipped = shipped_filter_config().app.exec.ekf;
     e.range_gm_sigma_m = std::max(sc.gps.pseudorange_gm_sigma_m, 0.01);
     e.range_gm_tau_s = sc.gps.pseudorange_gm_tau_s;
     e.range_rate_gm_sigma_mps = std::max(sc.gps.pseudorange_rate_gm_sigma_mps, 0.001);
     e.range_rate_gm_tau_s = sc.gps.pseudorange_rate_gm_tau_s;
-    e.pseudorange_sigma_m = std::max(sc.gps.pseudorange_white_sigma_m, 0.3);
-    e.pseudorange_rate_sigma_mps = std::max(sc.gps.pseudorange_rate_white_sigma_mps, 0.01);
+    e.pseudorange_sigma_m = std::max(sc.gps.pseudorange_white_sigma_m, shipped.pseudorange_sigma_m);
+    e.pseudorange_rate_sigma_mps = std::max(sc.gps.pseudorange_rate_white_sigma_mps, shipped.pseudorange_rate_sigma_mps);
   } else {
+    // The total error as white measurement noise (the paper's plain layouts), with its own floor.
     e.pseudorange_sigma_m = std::max(std::hypot(sc.gps.pseudorange_gm_sigma_m, sc.gps.pseudorange_white_sigma_m), 0.1);
     e.pseudorange_rate_sigma_mps =
         std::max(std::hypot(sc.gps.pseudorange_rate_gm_sigma_mps, sc.gps.pseudorange_rate_white_sigma_mps), 0.005);
   }
-  e.vrw_mps_per_rts = mc.vrw_mps_per_rts;
-  e.arw_rad_per_rts = mc.arw_rad_per_rts;
-  e.gate_chi2 = mc.gate_chi2;
   return cfg;
 }
 
 fsw::FlightAppConfig flight_app_config(const sim::Scenario& sc, const MonteCarloConfig& mc) {
-  fsw::FlightAppConfig c;
+  fsw::FlightAppConfig c = shipped_filter_config().app;
   c.exec = executive_config(sc, mc);
   c.init_mode = fsw::InitMode::kGiven;
   c.init_pos_sigma_m = c.exec.ekf.pos_sigma_m;
@@ -235,9 +233,9 @@ fsw::FlightAppConfig flight_app_config(const sim::Scenario& sc, const MonteCarlo
 
 /// The configuration of one model: the tuned conventional 15-state filter (k15t) takes its raised
 /// gyro noise (MonteCarloConfig::tuned15t_*); every other model flies the common configuration.
-fsw::FlightAppConfig model_config(const fsw::FlightAppConfig& base, const MonteCarloConfig& mc, Model model) {
+fsw::FlightAppConfig model_config(const fsw::FlightAppConfig& base, const MonteCarloConfig& mc, fsw::FilterModel model) {
   fsw::FlightAppConfig cfg = base;
-  if (model == Model::k15t) {
+  if (model == fsw::FilterModel::k15t) {
     cfg.exec.ekf.arw_rad_per_rts = mc.tuned15t_arw_rad_per_rts;
     cfg.exec.ekf.gyro_bias_rw_radps_per_rts = mc.tuned15t_gyro_bias_rw_radps_per_rts;
   }
@@ -281,8 +279,8 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   res.epochs.assign(n_models, {});
   std::vector<std::unique_ptr<ModelRunner>> runners;
   for (std::size_t m = 0; m < n_models; ++m) {
-    const bool is15 = mc.models[m] == Model::k15;
-    if (mc.models[m] == Model::k15c || mc.models[m] == Model::k15t)
+    const bool is15 = mc.models[m] == fsw::FilterModel::k15;
+    if (mc.models[m] == fsw::FilterModel::k15c || mc.models[m] == fsw::FilterModel::k15t)
       runners.push_back(std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout15Conv>));
     else if (mc.model_gps_errors)
       runners.push_back(is15 ? std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout15Full>)
@@ -293,7 +291,7 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
     res.epochs[m].reserve(truth.epochs.size());
     runners[m]->records = &res.epochs[m];
     if (runners[m]->init(model_config(app_cfg, mc, mc.models[m]), sensors.almanac(), init) != fsw::Status::kOk)
-      throw std::runtime_error(std::string("flight application init failed for model ") + model_name(mc.models[m]));
+      throw std::runtime_error(std::string("flight application init failed for model ") + fsw::to_string(mc.models[m]));
   }
 
   // The flight application batches the samples into its minor frames; the receiver's raw epoch
@@ -383,7 +381,7 @@ std::array<double, 2> chi2_mean_bounds(int dof, int runs) {
           fsw::chi2_quantile_wilson_hilferty(k, 1.959963985) / runs};
 }
 
-ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, Model model, const TruthTrack& truth) {
+ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, fsw::FilterModel model, const TruthTrack& truth) {
   ModelStats s;
   s.model = model;
   s.runs = static_cast<int>(results.size());

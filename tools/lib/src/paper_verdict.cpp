@@ -1,3 +1,4 @@
+#include "tools/flight_config.hpp"
 #include "tools/paper_verdict.hpp"
 
 #include <algorithm>
@@ -31,7 +32,7 @@ double coef(const MisalignmentCombination& c, const std::string& state) {
 
 ModelSummary summarize(const ModelStats& s) {
   ModelSummary m;
-  m.model = model_name(s.model);
+  m.model = fsw::to_string(s.model);
   m.runs = s.runs;
   if (s.t_s.empty()) return m;
   const std::size_t last = s.t_s.size() - 1;
@@ -584,7 +585,7 @@ double tuned15t_arw_rad_per_rts(double misalignment_arcsec) {
   const Tuned* best = &kTuned[0];
   for (const Tuned& t : kTuned)
     if (std::abs(t.level_arcsec - misalignment_arcsec) < std::abs(best->level_arcsec - misalignment_arcsec)) best = &t;
-  return MonteCarloConfig{}.arw_rad_per_rts * std::pow(2.0, 0.5 * best->k);
+  return shipped_filter_config().app.exec.ekf.arw_rad_per_rts * std::pow(2.0, 0.5 * best->k);
 }
 
 }  // namespace tools::paper

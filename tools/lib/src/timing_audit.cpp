@@ -307,7 +307,7 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
   for (const std::string& l : cfg.layouts) {
     MonteCarloConfig mc;
     mc.model_gps_errors = l == "Layout15Full" || l == "Layout24Full";
-    mc.models = {l == "Layout15" || l == "Layout15Full" ? Model::k15 : Model::k24};
+    mc.models = {l == "Layout15" || l == "Layout15Full" ? fsw::FilterModel::k15 : fsw::FilterModel::k24};
     const fsw::ExecutiveConfig ecfg = flight_app_config(sc, mc).exec;
     Pass p;
     if (l == "Layout15") p = fly<fsw::Layout15>(sc, truth, *alm.almanac, mc, cfg, overhead_s);

@@ -43,6 +43,7 @@
 #include "fsw/chi_square.hpp"
 #include "fsw/effect_catalogue.hpp"
 #include "fsw/error_state.hpp"
+#include "fsw/filter_model.hpp"
 #include "fsw/flight_app.hpp"
 #include "fsw/gps_orbit.hpp"
 #include "fsw/strapdown.hpp"
@@ -117,20 +118,20 @@ struct DiagnosisConfig {
   int max_confirmation_passes = 3;
   int max_findings = 4;              ///< forward-selection rounds
   double gain_skip_s = 60.0;         ///< navigation errors are scored from initialisation + this
-  /// The baseline: "15" (no extension) or "24" (the paper's 24-state model: the 9 misalignments are
-  /// part of the baseline, never candidates). Set with set_diagnosis_baseline().
   // Gain on coasting, the way the field measures it: GNSS withheld for outage_length_s every
   // outage_period_s, from init + outage_first_s; 0 length: no outage runs.
   double outage_length_s = 15.0;
   double outage_period_s = 60.0;
   double outage_first_s = 120.0;
-  std::string baseline_name = "15";
+  /// The baseline (fsw/filter_model.hpp): 15 (no extension) or 24 (the paper's 24-state model: the
+  /// 9 misalignments are part of the baseline, never candidates). Set with set_diagnosis_baseline().
+  fsw::FilterModel baseline = fsw::FilterModel::k15;
   std::vector<int> baseline_states;  ///< candidates that are always in the model
 };
-/// Sets the baseline model by name ("15", "24"); false for an unknown name.
-bool set_diagnosis_baseline(DiagnosisConfig& cfg, const std::string& name);
-/// The defaults: the simulated receiver and IMU of the project (hal::default_flight_config) and
-/// priors that cover the realistic range of each effect.
+/// Sets the baseline model (15 or 24); false for a model that is not a diagnosis baseline.
+bool set_diagnosis_baseline(DiagnosisConfig& cfg, fsw::FilterModel model);
+/// The defaults: the shipped flight configuration (config/default.toml: the simulated receiver and
+/// IMU of the project, priors that cover the realistic range of each effect, the outage pattern).
 DiagnosisConfig default_diagnosis_config();
 
 /// A data set's filter configuration (sim::FilterConfig, config/README.md): the filter, its GNSS
@@ -181,8 +182,8 @@ struct OutageStats {
   double reacquisition_nis_mean = 0.0;
 };
 
-/// One run of the diagnosis model with a set of active candidates.
-struct ModelRun {
+/// One run of the diagnosis model (fsw::LayoutDiag) with a set of active candidates.
+struct DiagnosisRun {
   std::vector<int> active;  ///< indices into diagnosis_candidates()
   bool initialised = false;
   double init_t_s = 0.0;
@@ -205,12 +206,12 @@ struct ModelRun {
 
 /// Runs the diagnosis model on the data with the given candidates active. with_outages: GNSS is
 /// withheld over the configured windows and the coasting error scored (needs truth).
-ModelRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
+DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
                              bool with_outages = false);
 
 /// Log-likelihood of both runs over the scalar measurements both used: fills a.innovations and
 /// b.innovations' log_likelihood and common.
-void compare_likelihood(ModelRun& a, ModelRun& b);
+void compare_likelihood(DiagnosisRun& a, DiagnosisRun& b);
 
 /// One member of a confounded group (Finding::group).
 struct GroupMember {
@@ -266,7 +267,7 @@ struct DiagnosisResult {
   std::vector<std::string> extended_model;  ///< "effect.component" states added to the baseline
   std::vector<double> screening_z2;     ///< per candidate: z^2 in the baseline + that component alone
   std::vector<double> screening_ratio;  ///< per candidate: posterior / prior variance there
-  ModelRun base, extended;
+  DiagnosisRun base, extended;
 };
 
 /// The whole diagnosis. progress (optional) receives one line per step.

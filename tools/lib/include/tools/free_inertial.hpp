@@ -4,6 +4,7 @@
 
 #include <functional>
 
+#include "fsw/executive.hpp"
 #include "fsw/strapdown.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/trajectory.hpp"
@@ -22,7 +23,7 @@ NavErrors nav_errors(const fsw::NavState& nav, const sim::TruthSample& truth);
 struct FreeInertialConfig {
   double duration_s = 1800.0;
   double imu_rate_hz = 1000.0;
-  double nav_rate_hz = 200.0;
+  double nav_rate_hz = fsw::kNavRate_hz;  ///< the 200 Hz rate group (`sdins fly`: config/default.toml's)
   /// Initial attitude error phi applied to the truth attitude at t = 0 (e.g. from alignment).
   fsw::Vec3 initial_phi_enu_rad = fsw::Vec3::Zero();
   /// Reset height and vertical velocity to truth after every frame (an ideal altimeter): the

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "fsw/executive.hpp"
+#include "fsw/filter_model.hpp"
 #include "fsw/flight_app.hpp"
 #include "sim/almanac.hpp"
 #include "sim/imu_model.hpp"
@@ -40,27 +41,18 @@ struct TruthTrack {
   static TruthTrack generate(const sim::Scenario& sc);
 };
 
-/// k15: the 15-state model with the misalignments as Schmidt consider states (consistent);
-/// k15c: the conventional 15-state model that ignores them, with the paper's sensor noise only
-/// (untuned: grossly overconfident); k15t: the same conventional model tuned once the way a
-/// practitioner would, its gyro noise raised (MonteCarloConfig::tuned15t_*) until its NEES is
-/// consistent; k24: 24 states.
-enum class Model { k15, k24, k15c, k15t };
-inline const char* model_name(Model m) {
-  return m == Model::k15 ? "15" : m == Model::k24 ? "24" : m == Model::k15c ? "15c" : "15t";
-}
-
+/// The models (fsw/filter_model.hpp): k15, the 15-state model with the misalignments as Schmidt
+/// consider states (consistent); k15c, the conventional 15-state model that ignores them, with the
+/// paper's sensor noise only (untuned: grossly overconfident); k15t, the same conventional model
+/// tuned once the way a practitioner would, its gyro noise raised (MonteCarloConfig::tuned15t_*)
+/// until its NEES is consistent; k24: 24 states.
 struct MonteCarloConfig {
   int runs = 100;
   int first_run = 0;               ///< run indices first_run .. first_run + runs - 1
-  std::vector<Model> models{Model::k15, Model::k24};
+  std::vector<fsw::FilterModel> models{fsw::FilterModel::k15, fsw::FilterModel::k24};
   int threads = 0;                 ///< 0: all hardware threads
   double init_pos_sigma_m = 5.0;   ///< per axis, drawn per run
   double init_vel_sigma_mps = 0.1; ///< per axis, drawn per run
-  /// The filter's tuning beyond what follows from the scenario (sigmas, measurement noise).
-  double vrw_mps_per_rts = 1e-4;
-  double arw_rad_per_rts = 2e-7;
-  double gate_chi2 = 10.83;
   /// The tuned conventional 15-state filter (k15t): angle random walk and gyro-bias random walk
   /// that replace arw_rad_per_rts / the zero bias random walk for that model only. Set once per
   /// misalignment specification by `sdins paper --tune-15t` (docs/paper-verdict.md), not per run;
@@ -72,17 +64,25 @@ struct MonteCarloConfig {
   bool model_gps_errors = true;
 };
 
-/// The executive configuration a scenario implies for a model (rates, initial sigmas from the
-/// scenario's sensor sigmas and the alignment formulas, measurement noise from the GPS model).
+/// The executive configuration the Monte Carlo flies for a scenario: the shipped flight
+/// configuration (config/default.toml, tools::shipped_filter_config) with the scenario overlay on
+/// top, the one place where a harness departs from that file (listed in config/README.md). The
+/// overlay is what follows from the scenario the runs draw their sensors from: the IMU samples per
+/// frame and the EKF rate (the scenario's IMU and GPS rates), the initial sigmas (the drawn initial
+/// errors, the scenario's bias sigmas through the self-alignment formulas), the misalignment and
+/// scale-factor sigmas (the scenario's, per misalignment level), the receiver clock's process noise
+/// (the scenario's h0 / h_-2) and the GPS error model (the scenario's Gauss-Markov and white parts).
+/// Everything else (the navigation rate, noise, gate, clock sigmas, guards) is the file's.
 fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloConfig& mc);
-/// The configuration of one model: executive_config, with the k15t tuning for Model::k15t.
-fsw::ExecutiveConfig model_config(const fsw::ExecutiveConfig& base, const MonteCarloConfig& mc, Model model);
 
 /// The flight application's configuration for the Monte Carlo (and the paper and the timing
-/// audit): executive_config's executive, InitMode::kGiven with its initial sigmas, so every run
-/// starts from initial_nav_state through FlightApp::start_given and then flies the same flight
-/// application as SIL, HIL and replay.
+/// audit): the shipped file's, with executive_config's executive and InitMode::kGiven with its
+/// initial sigmas, so every run starts from initial_nav_state through FlightApp::start_given and
+/// then flies the same flight application as SIL, HIL and replay.
 fsw::FlightAppConfig flight_app_config(const sim::Scenario& sc, const MonteCarloConfig& mc);
+/// The configuration of one model: `base` (flight_app_config), with the k15t tuning
+/// (MonteCarloConfig::tuned15t_*) for FilterModel::k15t.
+fsw::FlightAppConfig model_config(const fsw::FlightAppConfig& base, const MonteCarloConfig& mc, fsw::FilterModel model);
 
 /// The executive's initial solution for a run: truth at t = 0 with the attitude error that
 /// self-alignment leaves for the run's IMU biases and drawn position / velocity errors (seed: the
@@ -137,7 +137,7 @@ std::vector<RunResult> run_many(const sim::Scenario& sc, const TruthTrack& truth
 
 /// Statistics across runs for one model.
 struct ModelStats {
-  Model model = Model::k15;
+  fsw::FilterModel model = fsw::FilterModel::k15;
   int runs = 0;
   std::vector<double> t_s;
   std::vector<int> turning;                    ///< 1 while the aircraft turns
@@ -172,7 +172,8 @@ inline constexpr double kObservableSigmaRatio = 0.5;
 /// the model estimates no misalignment.
 std::vector<MisalignmentCombination> misalignment_combinations(const ModelStats& s);
 
-ModelStats reduce(const std::vector<RunResult>& results, std::size_t model_index, Model model, const TruthTrack& truth);
+ModelStats reduce(const std::vector<RunResult>& results, std::size_t model_index, fsw::FilterModel model,
+                  const TruthTrack& truth);
 
 /// Two-sided 95% bounds of the average of `runs` independent chi-square(dof) variables.
 std::array<double, 2> chi2_mean_bounds(int dof, int runs);
