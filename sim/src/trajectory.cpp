@@ -328,6 +328,75 @@ MotionPhase FlightMotion::phase(double t_s) const {
 }
 
 // ------------------------------------------------------------------------------------------------
+// Unrolled segments
+// ------------------------------------------------------------------------------------------------
+
+namespace {
+/// The phases FlightMotion::create makes of one segment.
+std::size_t phase_count(const Segment& s) {
+  switch (s.type) {
+    case SegmentType::kStraight:
+    case SegmentType::kSpeedChange: return 1;
+    case SegmentType::kTurn: return 3;
+    case SegmentType::kClimb:
+    case SegmentType::kRoll: return s.duration_s > 0.0 ? 3 : 2;
+  }
+  return 1;
+}
+}  // namespace
+
+bool flown_segments(const Scenario& sc, FlownSegments& out, std::string& error) {
+  out = FlownSegments{};
+  const std::unique_ptr<FlightMotion> m = FlightMotion::create(sc, error);
+  if (!m) return false;
+  const std::vector<FlightPhase>& ph = m->timeline();
+  // The last phase is the open-ended straight after the timeline; the others are the segments'
+  // phases, segment after segment in the order create() walked the list.
+  const std::size_t n = ph.size() - 1;
+  std::size_t p = 0, idx = 0;
+  while (p < n) {
+    if (idx >= sc.segments.size()) {
+      if (!sc.repeat_from) break;
+      idx = *sc.repeat_from;
+    }
+    const Segment& s = sc.segments[idx];
+    const std::size_t k = phase_count(s);
+    if (p + k > n || ph[p].segment != static_cast<int>(idx)) {
+      error = "internal error: the timeline does not follow the segment list at segment " + std::to_string(idx);
+      return false;
+    }
+    out.segments.push_back(s);
+    p += k;
+    out.end_s = ph[p - 1].t1_s;
+    ++idx;
+  }
+  if (out.end_s < sc.duration_s) {  // no repeat: straight until duration_s
+    Segment fill;
+    fill.type = SegmentType::kStraight;
+    fill.duration_s = sc.duration_s - out.end_s;
+    out.segments.push_back(fill);
+    out.end_s = sc.duration_s;
+  }
+  return true;
+}
+
+bool append_segments(const Scenario& sc, const std::vector<Segment>& extra, Scenario& out, std::string& error) {
+  FlownSegments flown;
+  if (!flown_segments(sc, flown, error)) return false;
+  out = sc;
+  out.segments = flown.segments;
+  out.segments.insert(out.segments.end(), extra.begin(), extra.end());
+  out.repeat_from = std::nullopt;
+  // The end of the new timeline: build it past any length and read where its segments end.
+  Scenario probe = out;
+  probe.duration_s = 1e12;
+  const std::unique_ptr<FlightMotion> m = FlightMotion::create(probe, error);
+  if (!m) return false;
+  out.duration_s = m->timeline().back().t0_s;
+  return true;
+}
+
+// ------------------------------------------------------------------------------------------------
 // TableMotion
 // ------------------------------------------------------------------------------------------------
 

@@ -63,8 +63,20 @@ assert abs(sum(m["plausibility"] for m in gf["group"]) - 1) < 1e-9, gf["group"]
 assert sorted(gj["extended_model"]["added_states"]) == sorted(members), gj["extended_model"]
 assert "A group, not one cause" in open(f"{out}/group/report.md").read()
 assert "a group this data cannot separate" in open(f"{out}/group.txt").read()
+# The manoeuvre that separates it (docs/diagnosis-separation.md): predicted from the sidecar's scenario.
+sep = gf["separation"]
+assert sep["predicted"] and sep["members"] == [m["candidate"] for m in gf["group"]], sep
+assert sep["segments"].startswith("[[trajectory.segment]]") and sep["segment_list"], sep
+assert 0 <= sep["predicted_correlation"] <= 1 and sep["separates"] == (sep["predicted_correlation"] < 0.9), sep
+assert sep["scenario_toml"] == open(f"{out}/group/separation-1.toml").read()
+assert "The manoeuvre that separates them" in open(f"{out}/group/report.md").read()
+assert "separated by:" in open(f"{out}/group.txt").read()
+assert "separation" not in f, f  # a separable finding has nothing to separate
 print("diagnose e2e: OK", f["estimate"], "+-", f["sigma"], "z^2", f["statistic"], "; group", sorted(members))
 PY
+
+# The scenario file it wrote is accepted by `sdins sim --scenario` as it is (a short stretch flown).
+"$sdins" sim --scenario "$out/group/separation-1.toml" --seed 13 --duration 2 --log "$out/separation.lcmlog" > /dev/null
 
 head -c 5000 /dev/urandom > "$out/junk.lcmlog"
 if "$sdins" diagnose --log "$out/junk.lcmlog" --json "$out/junk.json" 2> "$out/junk.err"; then

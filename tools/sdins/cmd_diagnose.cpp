@@ -13,6 +13,8 @@
 #include "tools/output_file.hpp"
 #include "tools/diagnosis.hpp"
 #include "tools/flight_config.hpp"
+#include "tools/diagnosis_separation.hpp"
+#include <chrono>
 
 namespace sdins {
 namespace {
@@ -80,6 +82,66 @@ std::string fmt(double v, const char* f = "%.4g") {
   return b;
 }
 
+nlohmann::json segment_json(const sim::Segment& s) {
+  const char* dir = s.direction == sim::TurnDirection::kLeft ? "left" : "right";
+  nlohmann::json j{{"type", sim::to_string(s.type)}};
+  switch (s.type) {
+    case sim::SegmentType::kStraight: j["duration_s"] = s.duration_s; break;
+    case sim::SegmentType::kTurn:
+      j["direction"] = dir;
+      j["bank_deg"] = s.bank_deg;
+      j["heading_change_deg"] = s.heading_change_deg;
+      j["roll_time_s"] = s.roll_time_s;
+      break;
+    case sim::SegmentType::kSpeedChange:
+      j["duration_s"] = s.duration_s;
+      j["delta_speed_mps"] = s.delta_speed_mps;
+      break;
+    case sim::SegmentType::kClimb:
+      j["duration_s"] = s.duration_s;
+      j["flight_path_deg"] = s.flight_path_deg;
+      j["transition_s"] = s.transition_s;
+      break;
+    case sim::SegmentType::kRoll:
+      j["duration_s"] = s.duration_s;
+      j["direction"] = dir;
+      j["bank_deg"] = s.bank_deg;
+      j["roll_time_s"] = s.roll_time_s;
+      break;
+  }
+  return j;
+}
+
+/// A confounded finding's `separation` (docs/diagnosis-separation.md); k: the finding's index.
+nlohmann::json separation_json(const tools::Separation& s, const std::vector<tools::SeparationTrial>& trials,
+                               std::size_t k) {
+  const auto num_or_null = [](bool ok, double v) { return ok && std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  nlohmann::json segs = nlohmann::json::array();
+  for (const sim::Segment& g : s.segments) segs.push_back(segment_json(g));
+  nlohmann::json tried = nlohmann::json::array();
+  for (const tools::SeparationTrial& t : trials)
+    tried.push_back({{"label", t.label},
+                     {"added_s", t.added_s},
+                     {"predicted_correlation", num_or_null(t.evaluated && k < t.correlation.size(),
+                                                           k < t.correlation.size() ? t.correlation[k] : NAN)},
+                     {"error", t.error}});
+  return {{"members", s.members},
+          {"max_correlation", s.max_correlation},
+          {"flown_correlation", s.flown_correlation},
+          {"predicted", s.predicted},
+          {"note", s.note},
+          {"label", s.label},
+          {"segments", s.segments_toml},
+          {"segment_list", segs},
+          {"added_s", s.added_s},
+          {"scenario_toml", s.scenario_toml.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.scenario_toml)},
+          {"predicted_correlation", num_or_null(s.predicted, s.predicted_correlation)},
+          {"member_correlation", s.member_correlation},
+          {"member_sigma", s.member_sigma},
+          {"separates", s.separates},
+          {"tried", tried}};
+}
+
 }  // namespace
 
 void register_diagnose(CLI::App& app) {
@@ -124,6 +186,20 @@ int run_diagnose() {
       });
   tools::throw_if_interrupted("diagnose stopped; no output written");
   if (!r.base.initialised) throw std::runtime_error("the flight software never initialised on this log");
+  // The manoeuvre that separates each confounded group (docs/diagnosis-separation.md).
+  const tools::FlownScenario flown = tools::scenario_from_sidecar(opt.log);
+  std::vector<tools::SeparationTrial> trials;
+  const auto t_sep = std::chrono::steady_clock::now();
+  const std::vector<tools::Separation> seps =
+      tools::suggest_separations(r, cfg, flown, [](const std::string& m) {
+        std::printf("  %s\n", m.c_str());
+        tools::throw_if_interrupted("diagnose stopped (" + m + "); no output written");
+      }, &trials);
+  tools::throw_if_interrupted("diagnose stopped; no output written");
+  const double sep_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_sep).count();
+  bool any_group = false;
+  for (const tools::Finding& f : r.findings) any_group = any_group || !f.separable();
+  if (any_group) std::printf("  separation suggestions: %.1f s\n", sep_s);
 
   const auto& cands = tools::diagnosis_candidates();
   nlohmann::json j;
@@ -154,7 +230,8 @@ int run_diagnose() {
   j["unobservable"] = r.unobservable;
   j["confounded_with_baseline"] = r.confounded_with_baseline;
   nlohmann::json findings = nlohmann::json::array();
-  for (const tools::Finding& f : r.findings) {
+  for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
+    const tools::Finding& f = r.findings[fi];
     nlohmann::json cw = nlohmann::json::array();
     for (const auto& c : f.confounded_with) cw.push_back({{"candidate", c.first}, {"correlation", c.second}});
     nlohmann::json group = nlohmann::json::array();
@@ -181,6 +258,7 @@ int run_diagnose() {
                         {"separable", f.separable()},
                         {"confounded_with", cw},
                         {"group", group}});
+    if (!f.separable()) findings.back()["separation"] = separation_json(seps[fi], trials, fi);
   }
   j["findings"] = findings;
   std::string ext_name = opt.baseline;
@@ -238,7 +316,8 @@ int run_diagnose() {
                 heading_text(r.base.nav).c_str());
   std::printf("\n");
   if (r.findings.empty()) std::printf("no finding (threshold z^2 %.2f over %d components)\n", r.threshold_z2, r.tested);
-  for (const tools::Finding& f : r.findings) {
+  for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
+    const tools::Finding& f = r.findings[fi];
     if (f.separable()) {
       std::printf("finding: %s%s%s = %.4g +- %.3g %s (z^2 %.1f, p %.2g)\n", fsw::effect_info(f.effect).name,
                   f.component.empty() ? "" : ".", f.component.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.z2,
@@ -250,6 +329,14 @@ int run_diagnose() {
     for (const tools::GroupMember& m : f.group)
       std::printf("  %-26s alone %.4g +- %.3g %s = %+.1f prior sigma, plausibility %.2f, rho %+.4f\n", m.name.c_str(),
                   m.alone_estimate, m.alone_sigma, m.unit.c_str(), m.prior_z, m.plausibility, m.correlation);
+    const tools::Separation& sp = seps[fi];
+    if (sp.predicted)
+      std::printf("  separated by: %s (%.0f s more flight): members' correlation %.4f -> %.3f predicted (%s %.2f)%s\n",
+                  sp.label.c_str(), sp.added_s, sp.flown_correlation, sp.predicted_correlation,
+                  sp.separates ? "below" : "NOT below", sp.max_correlation,
+                  opt.report.empty() ? "" : "; scenario file in the report");
+    else
+      std::printf("  to separate them, fly: %s (%s)\n", sp.label.c_str(), sp.note.c_str());
   }
   if (!r.findings.empty()) {
     std::printf("extended %s: NIS %.3f, innovation RMS %.3f m / %.4f m/s, log-likelihood %+.1f", ext_name.c_str(),
@@ -281,6 +368,13 @@ int run_diagnose() {
     const tools::RunDirectory run_dir(opt.report);  // docs/faults.md: summary.json removed now, written last
     write_traces(run_dir.path("baseline.csv"), r.base);
     write_traces(run_dir.path("extended.csv"), r.extended);
+    std::vector<std::string> files = {"diagnosis.json", "report.md", "baseline.csv", "extended.csv"};
+    for (std::size_t fi = 0; fi < seps.size(); ++fi) {
+      if (seps[fi].scenario_toml.empty()) continue;
+      const std::string file = "separation-" + std::to_string(fi + 1) + ".toml";
+      tools::write_text_file(run_dir.path(file), seps[fi].scenario_toml);
+      files.push_back(file);
+    }
     tools::write_json_file(run_dir.path("diagnosis.json"), j);
     const int rc = run_plot_script("plot_diagnosis.py", "'" + opt.report + "'");
     tools::TextOutput md_out(run_dir.path("report.md"));
@@ -317,6 +411,26 @@ int run_diagnose() {
              << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
              << fmt(m.correlation, "%+.4f") << " |\n";
         md << "\n";
+        const std::size_t fi = static_cast<std::size_t>(&f - r.findings.data());
+        const tools::Separation& sp = seps[fi];
+        md << "**The manoeuvre that separates them.** ";
+        if (sp.predicted) {
+          const std::string file = "separation-" + std::to_string(fi + 1) + ".toml";
+          md << "Fly on with *" << sp.label << "* (" << fmt(sp.added_s, "%.0f") << " s more): the members' "
+             << "correlation goes from " << fmt(sp.flown_correlation, "%.4f") << " to " << fmt(sp.predicted_correlation, "%.3f")
+             << " predicted, " << (sp.separates ? "below" : "**not** below") << " the " << fmt(sp.max_correlation, "%.2f")
+             << " at which members are not told apart. " << sp.note << ".";
+          if (!sp.scenario_toml.empty()) md << " The whole scenario: [" << file << "](" << file << ").";
+          md << "\n\n| appended | more flight [s] | predicted correlation |\n|---|---|---|\n";
+          for (const tools::SeparationTrial& t : trials)
+            md << "| " << t.label << " | " << fmt(t.added_s, "%.0f") << " | "
+               << (t.evaluated && fi < t.correlation.size() ? fmt(t.correlation[fi], "%.3f") : "(" + t.error + ")")
+               << " |\n";
+          md << "\n";
+        } else {
+          md << sp.note << ". Fly: " << sp.label << ".\n\n";
+        }
+        md << "```toml\n" << sp.segments_toml << "```\n\n";
       }
     }
     if (!r.unobservable.empty()) {
@@ -370,7 +484,7 @@ int run_diagnose() {
                     {"complete", true},
                     {"findings", r.findings.size()},
                     {"plots", rc == 0},
-                    {"files", {"diagnosis.json", "report.md", "baseline.csv", "extended.csv"}}});
+                    {"files", files}});
     std::printf("report: %s/report.md\n", opt.report.c_str());
   }
   return 0;

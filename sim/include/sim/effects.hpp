@@ -26,6 +26,7 @@ struct EffectSet {
   }
   /// The value of component k in SI units (rad, unitless, rad/s per m/s^2, s, m).
   double si(Effect e, std::size_t component = 0) const { return get(e, component) * fsw::effect_info(e).unit_to_si; }
+  bool operator==(const EffectSet&) const = default;
 };
 
 /// Looks up an effect by catalogue name ("gyro_misalignment"); nullopt when unknown.

@@ -41,6 +41,7 @@ struct Segment {
   double delta_speed_mps = 50.0;      ///< speed_change: [-400, 400], not 0 [m/s]
   double flight_path_deg = 10.0;      ///< climb: [-45, 45], not 0 [deg]
   double transition_s = 10.0;         ///< climb: each of pull-up and push-over (0, 120] [s]
+  bool operator==(const Segment&) const = default;
 };
 
 struct StartState {
@@ -50,6 +51,7 @@ struct StartState {
   double speed_mps = 250.0;   ///< ground speed at t = 0 (speed_change segments change it)
   double heading_deg = 0.0;   ///< true heading
   double pitch_deg = 0.0;     ///< constant body pitch above the (level) flight path
+  bool operator==(const StartState&) const = default;
 };
 
 /// 1-sigma values of the IMU errors drawn per run from the seed (the paper's Table 1 by default).
@@ -65,6 +67,7 @@ struct ImuErrorSigmas {
   double gyro_bias_instability_degph = 0.0; ///< 1-sigma of a first-order Gauss-Markov bias drift
   double accel_bias_instability_ug = 0.0;   ///< 1-sigma of a first-order Gauss-Markov bias drift
   double bias_instability_tau_s = 3600.0;   ///< correlation time of both drifts
+  bool operator==(const ImuErrorSigmas&) const = default;
 };
 
 /// Which error set the IMU model draws: the paper's Table 1, only biases and noise (what the
@@ -75,6 +78,7 @@ struct ImuConfig {
   int rate_hz = 1000;  ///< IMU sample rate; a multiple of the 200 Hz navigation rate
   ImuErrorSet errors = ImuErrorSet::kPaper;
   ImuErrorSigmas sigmas{};
+  bool operator==(const ImuConfig&) const = default;
 };
 
 /// The simulated GPS receiver (sim/gps_model.hpp): constellation, time, measurement errors.
@@ -99,6 +103,7 @@ struct GpsConfig {
   double clock_h0_s = 2e-19;                    ///< white-frequency coefficient h0 [s] (TCXO)
   double clock_h_minus2_per_s = 2e-20;          ///< random-walk-frequency coefficient h_-2 [1/s] (TCXO)
   int max_channels = 12;  ///< [1, fsw::kMaxGnssChannels]; the highest satellites are kept when more are visible
+  bool operator==(const GpsConfig&) const = default;
 };
 
 /// The almanac shipped with the product: "<data directory>/almanac/yuma-week431.alm" (sim/data_dir.hpp).
@@ -123,6 +128,8 @@ struct Scenario {
   /// Default flight: 60 s straight, then alternating 180-degree right and left 60-degree bank
   /// turns with 30 s straights between them, repeated for the whole 1800 s.
   static std::vector<Segment> default_segments();
+  /// Field by field (the scenario writer's round trip: parse(write(s)) == s).
+  bool operator==(const Scenario&) const = default;
 };
 
 /// Result of parsing: either a scenario or a message naming the offending key and its line.
@@ -136,5 +143,22 @@ struct ScenarioParseResult {
 ScenarioParseResult parse_scenario_text(const std::string& toml_text, const std::string& source_name);
 /// As parse_scenario_text; a relative gps.almanac is resolved against the file's directory.
 ScenarioParseResult parse_scenario_file(const std::string& path);
+
+/// Result of writing: the TOML text, or a message saying why the scenario cannot be written.
+struct ScenarioWriteResult {
+  std::string text;
+  std::string error;
+  bool ok() const { return error.empty(); }
+};
+/// The scenario as a complete scenario file (sim/src/scenario_writer.cpp): every key of the schema
+/// in the reader's layout, numbers in their shortest exact form, so parse_scenario_text(text) gives
+/// back a Scenario equal to sc (a segment's fields that its type does not use are not written: they
+/// read back at their defaults). The text is parsed back before it is returned: a scenario the reader
+/// would reject (a value out of range, a seed above 2^63 - 1, a non-finite number) is an error, not
+/// a file. header: comment lines put at the top ("# " added to each line).
+ScenarioWriteResult write_scenario_toml(const Scenario& sc, const std::string& header = "");
+/// Segments as [[trajectory.segment]] entries (the keys their type allows), for quoting a few
+/// segments in a report; the same text write_scenario_toml writes for each.
+std::string segments_toml(const std::vector<Segment>& segments);
 
 }  // namespace sim

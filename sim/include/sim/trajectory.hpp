@@ -151,6 +151,21 @@ class FlightMotion final : public Motion {
   std::vector<FlightPhase> phases_;
 };
 
+/// The segments a scenario flies within its duration, in order, its repeats unrolled: every segment
+/// started before duration_s, the last one completed, so end_s (when it ends) may be after
+/// duration_s; a segment list that ends before duration_s without a repeat is followed by the
+/// straight that fills the flight. The same timeline as FlightMotion::create.
+struct FlownSegments {
+  std::vector<Segment> segments;
+  double end_s = 0.0;
+};
+bool flown_segments(const Scenario& sc, FlownSegments& out, std::string& error);
+
+/// The scenario flown as it was (flown_segments: its last segment completed), then the segments
+/// `extra`, with no repeat; duration_s is when the last extra segment ends. Everything else (start,
+/// seed, IMU, effects, GPS) is sc's, so the flight up to sc.duration_s is the one sc flies.
+bool append_segments(const Scenario& sc, const std::vector<Segment>& extra, Scenario& out, std::string& error);
+
 /// A stationary IMU on a rate table: fixed position, zero velocity, initial attitude C_b_n0,
 /// rotating about a body axis at a constant rate from t = 0 (the paper's section II tests).
 class TableMotion final : public Motion {

@@ -712,9 +712,8 @@ struct Group {
   int dof = 1;
 };
 
-/// Multiple correlation of active position a with the active positions b (posterior correlation
-/// matrix R): how much of a the members b explain together. A group's members are nearly
-/// collinear, so their block is inverted by a rank-revealing decomposition.
+}  // namespace
+
 double multiple_correlation(const Eigen::MatrixXd& R, int a, const std::vector<int>& b) {
   const Eigen::Index k = static_cast<Eigen::Index>(b.size());
   if (k == 0) return 0.0;
@@ -730,8 +729,6 @@ double multiple_correlation(const Eigen::MatrixXd& R, int a, const std::vector<i
   const double r2 = rab.dot(cod.solve(rab));
   return std::sqrt(std::clamp(r2, 0.0, 1.0));
 }
-
-}  // namespace
 
 DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
                          const std::function<void(const std::string&)>& progress) {

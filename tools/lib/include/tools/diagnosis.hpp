@@ -274,6 +274,11 @@ struct DiagnosisResult {
 DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
                          const std::function<void(const std::string&)>& progress = {});
 
+/// Multiple correlation of active position a with the active positions b (posterior correlation
+/// matrix R): how much of a the members b explain together. A group's members are nearly
+/// collinear, so their block is inverted by a rank-revealing decomposition.
+double multiple_correlation(const Eigen::MatrixXd& R, int a, const std::vector<int>& b);
+
 /// Joint Wald statistic of random-constant states (catalogue units) whose estimate x, posterior
 /// covariance P and prior sigmas s0 are given: under the null (all zero) x has covariance
 /// P - P P0^-1 P; only directions whose posterior/prior variance ratio is at most max_ratio count
