@@ -124,6 +124,9 @@ struct DiagnosisConfig {
   double outage_length_s = 15.0;
   double outage_period_s = 60.0;
   double outage_first_s = 120.0;
+  /// Each separable finding's 95% interval from the profile likelihood over the whole recording
+  /// (tools/diagnosis_intervals.hpp, docs/diagnosis-intervals.md); false: the filter's sigma only.
+  bool profile_intervals = true;
   std::string baseline_name = "15";
   std::vector<int> baseline_states;  ///< candidates that are always in the model
 };
@@ -254,6 +257,15 @@ struct Finding {
   /// group, not its lead.
   std::vector<GroupMember> group;
   bool separable() const { return group.empty(); }
+  /// The 95% interval (catalogue units, docs/diagnosis-intervals.md): interval_method
+  /// "profile_likelihood" (separable findings: 2 (l_max - l) <= 3.84 over the whole recording, its
+  /// maximum profile_estimate) or "filter" (estimate +- 1.96 sigma). interval_bounded: false when the
+  /// likelihood did not fall by 3.84 within the range searched (the interval is then that range).
+  double interval_lo = 0.0, interval_hi = 0.0;
+  std::string interval_method = "filter";
+  double profile_estimate = 0.0;
+  bool interval_bounded = true;
+  int profile_runs = 0;
 };
 
 struct DiagnosisResult {
