@@ -33,9 +33,9 @@ PY
 if [ "$sanitized" != "-1" ]; then echo "sanitizer build: the diagnosis of the drive runs in release builds only"; exit 0; fi
 "$sdins" diagnose --log "$out/drive.lcmlog" --filter-config "$config" --json "$out/diag.json" --report "$out/report" \
   | tail -8
-$py - "$out" <<'PY'
-import json, sys
-out = sys.argv[1]
+$py - "$out" "$data" <<'PY'
+import json, struct, sys
+out, data = sys.argv[1], sys.argv[2]
 d = json.load(open(out + "/diag.json"))
 assert d["gnss_source"] == "pvt"
 f = d["findings"]
@@ -49,5 +49,17 @@ assert o["after"]["horizontal_rms_m"] < 0.85 * o["before"]["horizontal_rms_m"], 
 assert o["before"]["reacquisitions"] >= 6 and o["after"]["reacquisition_nis_mean"] < 1.5, o
 g = d["gain"]["innovations"]
 assert g["after"]["log_likelihood"] > g["before"]["log_likelihood"], g
-print("diagnosis ok:", f[0]["effect"], f[0]["estimate"], "+-", f[0]["sigma"])
+# The recording's own tick records (docs/diagnosis-intervals.md): the importer maps the IMU's
+# millisecond tick span onto the tag file's last record (the logging PC's ticks); that stretch is
+# the time scale the diagnosis must find, within its 95% interval (the profile likelihood).
+tag = open(data + "/imu_1934.csv.tag", "rb").read()
+last_tag_ms = struct.unpack("<I", tag[len(tag) - 8:len(tag) - 4])[0]
+ticks = [int(l.split(",")[6]) for l in open(data + "/imu_1934.csv") if len(l.split(",")) == 7 and l.split(",")[6].strip().isdigit()]
+implied_ppm = (last_tag_ms / (ticks[-1] - ticks[0]) - 1.0) * 1e6
+assert 250 < implied_ppm < 265, implied_ppm
+iv = f[0]["interval_95"]
+assert iv["method"] == "profile_likelihood" and iv["bounded"], iv
+assert iv["lo"] <= implied_ppm <= iv["hi"], (implied_ppm, iv)
+print("diagnosis ok:", f[0]["effect"], f[0]["estimate"], "+-", f[0]["sigma"], "interval", iv["lo"], iv["hi"],
+      "tick records", implied_ppm)
 PY

@@ -13,6 +13,7 @@
 #include "tools/output_file.hpp"
 #include "tools/diagnosis.hpp"
 #include "tools/flight_config.hpp"
+#include "tools/diagnosis_intervals.hpp"
 #include "tools/diagnosis_separation.hpp"
 #include <chrono>
 
@@ -25,6 +26,9 @@ struct Options {
   std::string baseline = "15";
   double alpha = 0.05;
   std::string filter_config;
+  std::string intervals = "profile";
+  std::vector<std::string> profile;
+  bool profile_only = false;
 } opt;
 
 nlohmann::json innovations_json(const tools::InnovationStats& s) {
@@ -160,6 +164,18 @@ void register_diagnose(CLI::App& app) {
   sub->add_option("--alpha", opt.alpha, "family-wise false-alarm rate of the diagnosis")
       ->check(CLI::Range(1e-9, 0.5))
       ->capture_default_str();
+  sub->add_option("--intervals", opt.intervals,
+                  "95% interval of each separable finding: profile (the profile likelihood over the whole recording, "
+                  "docs/diagnosis-intervals.md) or filter (the filter's estimate +- 1.96 sigma, faster)")
+      ->check(CLI::IsMember({"profile", "filter"}))
+      ->capture_default_str();
+  sub->add_option("--profile", opt.profile,
+                  "also the profile-likelihood 95% interval of this component (effect.component, catalogue name) on "
+                  "top of the extended model, finding or not (repeatable; JSON `profiles`): an independent check of "
+                  "a value known from elsewhere");
+  sub->add_flag("--profile-only", opt.profile_only,
+               "no search: only the baseline run and the --profile components on top of it, each with the filter's "
+               "and the profile-likelihood interval (the coverage study, docs/diagnosis-intervals.md)");
   sub->add_option("--filter-config", opt.filter_config,
                   "filter configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
                   "(raw or solutions), initialisation, priors and outage pattern of the diagnosis, applied on top of the "
@@ -177,15 +193,49 @@ int run_diagnose() {
   tools::DiagnosisConfig cfg;
   tools::apply_filter_config(cfg, tools::filter_config(opt.filter_config));
   cfg.alpha = opt.alpha;
+  cfg.profile_intervals = opt.intervals == "profile";
   if (!tools::set_diagnosis_baseline(cfg, parse_model(opt.baseline, "--baseline", kFlightModels)))
     throw std::runtime_error("--baseline: " + opt.baseline + " is not a diagnosis baseline");
-  const tools::DiagnosisResult r =
-      tools::diagnose(data, cfg, [](const std::string& m) {
-        std::printf("  %s\n", m.c_str());
-        tools::throw_if_interrupted("diagnose stopped (" + m + "); no output written");
-      });
+  const auto progress = [](const std::string& m) {
+    std::printf("  %s\n", m.c_str());
+    tools::throw_if_interrupted("diagnose stopped (" + m + "); no output written");
+  };
+  if (opt.profile_only && opt.profile.empty()) throw std::runtime_error("--profile-only needs at least one --profile");
+  tools::DiagnosisResult r;
+  if (opt.profile_only) {
+    r.baseline = fsw::to_string(cfg.baseline);
+    r.base = tools::run_diagnosis_model(data, cfg, cfg.baseline_states);
+    r.extended = r.base;
+  } else {
+    r = tools::diagnose(data, cfg, progress);
+  }
   tools::throw_if_interrupted("diagnose stopped; no output written");
   if (!r.base.initialised) throw std::runtime_error("the flight software never initialised on this log");
+  nlohmann::json profiles = nlohmann::json::array();
+  for (const std::string& name : opt.profile) {
+    const int c = tools::candidate_index(name);
+    if (c < 0) throw std::runtime_error("--profile: unknown component '" + name + "' (catalogue names, docs/diagnosis.md)");
+    const fsw::Effect e = tools::diagnosis_candidates()[static_cast<std::size_t>(c)].effect;
+    if (!tools::profile_supported(e)) throw std::runtime_error("--profile: " + name + " cannot be held fixed (delay scales)");
+    double x = 0.0, s = 0.0;
+    const tools::ProfileInterval pi = tools::profile_component(data, cfg, r.extended.active, c, x, s);
+    if (!pi.available) throw std::runtime_error("--profile " + name + ": the model did not initialise");
+    std::printf("profile: %s = %.4g +- %.3g %s (filter); 95%% interval [%.4g, %.4g], maximum %.4g (profile likelihood, %d runs%s)\n",
+                name.c_str(), x, s, fsw::effect_info(e).unit, pi.lo, pi.hi, pi.estimate, pi.runs,
+                pi.lo_bounded && pi.hi_bounded ? "" : ", not bounded within the range searched");
+    profiles.push_back({{"candidate", name},
+                        {"unit", fsw::effect_info(e).unit},
+                        {"filter_estimate", x},
+                        {"filter_sigma", s},
+                        {"interval_95",
+                         {{"lo", pi.lo},
+                          {"hi", pi.hi},
+                          {"method", "profile_likelihood"},
+                          {"estimate", pi.estimate},
+                          {"bounded", pi.lo_bounded && pi.hi_bounded},
+                          {"runs", pi.runs}}},
+                        {"curve", {{"value", pi.theta}, {"deviance", pi.deviance}}}});
+  }
   // The manoeuvre that separates each confounded group (docs/diagnosis-separation.md).
   const tools::FlownScenario flown = tools::scenario_from_sidecar(opt.log);
   std::vector<tools::SeparationTrial> trials;
@@ -219,7 +269,8 @@ int run_diagnose() {
                  {"tested_components", r.tested},
                  {"threshold", r.threshold_z2},
                  {"max_variance_ratio", cfg.max_variance_ratio},
-                 {"max_correlation", cfg.max_correlation}};
+                 {"max_correlation", cfg.max_correlation},
+                 {"intervals", opt.intervals}};
   nlohmann::json screening = nlohmann::json::array();
   for (std::size_t c = 0; c < cands.size() && c < r.screening_z2.size(); ++c)
     if (std::find(cfg.baseline_states.begin(), cfg.baseline_states.end(), static_cast<int>(c)) == cfg.baseline_states.end())
@@ -256,11 +307,20 @@ int run_diagnose() {
                         {"p_value", f.p_value},
                         {"threshold", f.threshold_z2},
                         {"separable", f.separable()},
+                        {"interval_95",
+                         {{"lo", f.interval_lo},
+                          {"hi", f.interval_hi},
+                          {"method", f.interval_method},
+                          {"estimate", f.profile_estimate},
+                          {"bounded", f.interval_bounded},
+                          {"runs", f.profile_runs}}},
+                        {"filter_interval_95", {f.estimate - 1.959963984540054 * f.sigma, f.estimate + 1.959963984540054 * f.sigma}},
                         {"confounded_with", cw},
                         {"group", group}});
     if (!f.separable()) findings.back()["separation"] = separation_json(seps[fi], trials, fi);
   }
   j["findings"] = findings;
+  j["profiles"] = profiles;
   std::string ext_name = opt.baseline;
   for (const std::string& s : r.extended_model) ext_name += "+" + s;
   j["extended_model"] = {{"name", ext_name}, {"added_states", r.extended_model}};
@@ -322,6 +382,8 @@ int run_diagnose() {
       std::printf("finding: %s%s%s = %.4g +- %.3g %s (z^2 %.1f, p %.2g)\n", fsw::effect_info(f.effect).name,
                   f.component.empty() ? "" : ".", f.component.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.z2,
                   f.p_value);
+      std::printf("  95%% interval [%.4g, %.4g] %s (%s%s)\n", f.interval_lo, f.interval_hi, f.unit.c_str(),
+                  f.interval_method.c_str(), f.interval_bounded ? "" : ", not bounded within the range searched");
       continue;
     }
     std::printf("finding: a group this data cannot separate (z^2 %.1f, %d dof, p %.2g); the cause is one of (or a mix "

@@ -15,6 +15,7 @@
 #include "hal/lcm_convert.hpp"
 #include "hal/lcm_log.hpp"
 #include "hal/lcm_log_sink.hpp"
+#include "tools/diagnosis_intervals.hpp"
 #include "tools/flight_config.hpp"
 #include "tools/sensor_stream.hpp"
 
@@ -417,7 +418,12 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     run.outages.horizontal_max_m = std::max(run.outages.horizontal_max_m, window_err_h);
     window_open = -1;
   };
+  // The likelihood's keys are the GNSS measurement times (the last epoch fed), not the IMU clock:
+  // runs on re-timed IMU data (diagnosis_intervals.cpp) compare the same measurements.
+  double last_gnss_t_s = 0.0;
   for (const RecordedData::Event& ev : data.order) {
+    if (ev.kind == RecordedData::Kind::kGnss && cfg.gnss_source == sim::GnssSource::kRaw) last_gnss_t_s = data.gnss[ev.index].t_s;
+    if (ev.kind == RecordedData::Kind::kPvt && cfg.gnss_source == sim::GnssSource::kPvt) last_gnss_t_s = data.pvt[ev.index].t_s;
     switch (ev.kind) {
       case RecordedData::Kind::kAlmanac: app->on_almanac(data.almanac[ev.index]); continue;
       case RecordedData::Kind::kGnss:
@@ -525,7 +531,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
         await_reacquisition = false;
       }
     }
-    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(out.nav.t_s * app_cfg.exec.nav_rate_hz));
+    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(last_gnss_t_s * app_cfg.exec.nav_rate_hz));
     double epr = 0.0, eprr = 0.0, epos = 0.0, evel = 0.0;
     int npr = 0, nprr = 0, npos = 0, nvel = 0;
     if (rep.pvt) {
@@ -946,6 +952,7 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     for (int mbr : g.members) res.extended_model.push_back(candidate_name(cands[at(mbr)]));
   }
   std::sort(res.findings.begin(), res.findings.end(), [](const Finding& x, const Finding& y) { return x.z2 > y.z2; });
+  add_finding_intervals(res, data, cfg, progress);
   return res;
 }
 

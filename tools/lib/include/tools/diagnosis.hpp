@@ -126,6 +126,9 @@ struct DiagnosisConfig {
   /// The baseline (fsw/filter_model.hpp): 15 (no extension) or 24 (the paper's 24-state model: the
   /// 9 misalignments are part of the baseline, never candidates). Set with set_diagnosis_baseline().
   fsw::FilterModel baseline = fsw::FilterModel::k15;
+  /// Each separable finding's 95% interval from the profile likelihood over the whole recording
+  /// (tools/diagnosis_intervals.hpp, docs/diagnosis-intervals.md); false: the filter's sigma only.
+  bool profile_intervals = true;
   std::vector<int> baseline_states;  ///< candidates that are always in the model
 };
 /// Sets the baseline model (15 or 24); false for a model that is not a diagnosis baseline.
@@ -255,6 +258,15 @@ struct Finding {
   /// group, not its lead.
   std::vector<GroupMember> group;
   bool separable() const { return group.empty(); }
+  /// The 95% interval (catalogue units, docs/diagnosis-intervals.md): interval_method
+  /// "profile_likelihood" (separable findings: 2 (l_max - l) <= 3.84 over the whole recording, its
+  /// maximum profile_estimate) or "filter" (estimate +- 1.96 sigma). interval_bounded: false when the
+  /// likelihood did not fall by 3.84 within the range searched (the interval is then that range).
+  double interval_lo = 0.0, interval_hi = 0.0;
+  std::string interval_method = "filter";
+  double profile_estimate = 0.0;
+  bool interval_bounded = true;
+  int profile_runs = 0;
 };
 
 struct DiagnosisResult {

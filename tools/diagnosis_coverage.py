@@ -1,0 +1,158 @@
+#!/usr/bin/env python3
+"""Coverage study of the diagnosis' 95% intervals (docs/diagnosis-intervals.md, issue 18 part 1).
+
+For each effect class and seed: `sdins sim` flies the scenario with one hidden effect (magnitude
+drawn per seed: the nominal value times a factor in [0.5, 1.5] with a random sign) and `sdins
+diagnose --profile COMPONENT --profile-only` estimates that component on top of the baseline (the
+model the search ends with when it names it; whether it is named is the job of the Diagnosis
+tests): the study counts whether the profile-likelihood 95% interval and the filter's own
+(estimate +- 1.96 sigma) cover the value simulated. The null class (no hidden effect) runs the
+whole search and counts the diagnoses with any finding: the false-finding rate, against alpha.
+
+  tools/diagnosis_coverage.py --sdins build/release/tools/sdins --seeds 20 --jobs 2 \\
+      --json coverage.json --markdown coverage.md
+  exit status 1 when a class's profile-interval coverage is below --min-coverage or the null class's false-finding rate is
+  above --max-false-rate; 0 otherwise.
+
+Python 3 standard library only.
+"""
+import argparse
+import concurrent.futures
+import json
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+
+# Effect classes: catalogue name, component, nominal magnitude (catalogue units). Chosen among the
+# components the default bank-to-turn flight separates (docs/diagnosis.md): a confounded group has
+# no single component to cover (docs/diagnosis-groups.md).
+CLASSES = {
+    "imu_clock_drift": ("imu_clock_drift", "", 100.0),
+    "antenna_lever_arm.y": ("antenna_lever_arm", "y", 1.0),
+    "antenna_lever_arm.z": ("antenna_lever_arm", "z", 1.0),
+    "accel_scale_factor.z": ("accel_scale_factor", "z", 4000.0),
+    "null": (None, None, 0.0),
+}
+
+
+def run_one(args, cls, seed, workdir):
+    effect, comp, nominal = CLASSES[cls]
+    rng = random.Random(1000003 * seed + sum(map(ord, cls)))
+    value = 0.0
+    if effect is not None:
+        value = nominal * rng.uniform(0.5, 1.5) * rng.choice((-1.0, 1.0))
+    log = os.path.join(workdir, f"{cls}-{seed}.lcmlog")
+    out = os.path.join(workdir, f"{cls}-{seed}.json")
+    sim = [args.sdins, "sim", "--scenario", args.scenario, "--seed", str(seed), "--log", log]
+    if args.duration:
+        sim += ["--duration", str(args.duration)]
+    name = effect + ("." + comp if comp else "") if effect else None
+    if name:
+        sim += ["--effect", f"{name}={value:.9g}"]
+    subprocess.run(sim, check=True, stdout=subprocess.DEVNULL)
+    t0 = time.monotonic()
+    diag = [args.sdins, "diagnose", "--log", log, "--filter-config", args.filter_config, "--json", out]
+    if name:  # the interval of the hidden component on top of the baseline, without the search
+        diag += ["--profile", name, "--profile-only"]
+    subprocess.run(diag, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    seconds = time.monotonic() - t0
+    j = json.load(open(out))
+    os.remove(log)
+    os.remove(out)
+    r = {"class": cls, "seed": seed, "value": value, "findings": len(j["findings"]), "diagnose_s": seconds,
+         "found": False, "covered_profile": False, "covered_filter": False}
+    for p in j.get("profiles", []):
+        if p["candidate"] != name:
+            continue
+        iv = p["interval_95"]
+        fi = [p["filter_estimate"] - 1.959963984540054 * p["filter_sigma"], p["filter_estimate"] + 1.959963984540054 * p["filter_sigma"]]
+        r.update(found=True, estimate=p["filter_estimate"], sigma=p["filter_sigma"], interval=[iv["lo"], iv["hi"]],
+                 bounded=iv["bounded"], profile_estimate=iv["estimate"], filter_interval=fi, runs_profile=iv["runs"],
+                 covered_profile=iv["lo"] <= value <= iv["hi"], covered_filter=fi[0] <= value <= fi[1])
+    r["others"] = [f["effect"] + ("." + f["component"] if f["component"] else "") for f in j["findings"]]
+    return r
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sdins", required=True)
+    ap.add_argument("--scenario", default=os.path.join(ROOT, "config/coverage/mems_aircraft.toml"))
+    ap.add_argument("--filter-config", default=os.path.join(ROOT, "config/coverage/mems_aircraft_filter.toml"))
+    ap.add_argument("--duration", type=float, default=0.0, help="override the scenario's duration [s]")
+    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--first-seed", type=int, default=1)
+    ap.add_argument("--classes", default=",".join(CLASSES), help="comma-separated: " + ", ".join(CLASSES))
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--json")
+    ap.add_argument("--markdown")
+    ap.add_argument("--min-coverage", type=float, default=0.9)
+    ap.add_argument("--max-false-rate", type=float, default=0.05)
+    args = ap.parse_args()
+    classes = [c for c in args.classes.split(",") if c]
+    for c in classes:
+        if c not in CLASSES:
+            sys.exit(f"unknown class {c} (valid: {', '.join(CLASSES)})")
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    t0 = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix="sdins-coverage-") as wd:
+        with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as ex:
+            futs = [ex.submit(run_one, args, c, s, wd) for c in classes for s in seeds]
+            rows = [f.result() for f in futs]
+    wall = time.monotonic() - t0
+    table, ok = [], True
+    for c in classes:
+        rs = [r for r in rows if r["class"] == c]
+        n = len(rs)
+        if c == "null":
+            false = sum(1 for r in rs if r["findings"] > 0)
+            row = {"class": c, "seeds": n, "false_findings": false, "false_rate": false / n,
+                   "which": sorted({o for r in rs for o in r["others"]})}
+            ok = ok and row["false_rate"] <= args.max_false_rate
+        else:
+            found = [r for r in rs if r["found"]]
+            cp = sum(r["covered_profile"] for r in rs)
+            cf = sum(r["covered_filter"] for r in rs)
+            row = {"class": c, "seeds": n, "found": len(found),
+                   "unbounded": sum(1 for r in found if not r["bounded"]),
+                   "median_width_ratio": sorted((r["interval"][1] - r["interval"][0]) / (r["filter_interval"][1] - r["filter_interval"][0]) for r in found)[len(found) // 2] if found else None,
+                   "covered_profile": cp, "covered_filter": cf,
+                   "coverage_profile": cp / n, "coverage_filter": cf / n,
+                   "median_abs_error_over_sigma_filter": sorted(abs(r["estimate"] - r["value"]) / r["sigma"] for r in found)[len(found) // 2] if found else None}
+            ok = ok and row["coverage_profile"] >= args.min_coverage
+        table.append(row)
+    result = {"scenario": os.path.relpath(args.scenario, ROOT), "filter_config": os.path.relpath(args.filter_config, ROOT),
+              "duration_s": args.duration or None, "seeds": list(seeds), "wall_s": wall,
+              "mean_diagnose_s": sum(r["diagnose_s"] for r in rows) / len(rows), "table": table, "runs": rows, "pass": ok}
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(result, f, indent=1)
+    lines = ["| hidden effect (nominal, x U(0.5, 1.5), random sign) | seeds | profile interval covers | filter interval covers | width profile / filter (median) | profile not bounded |",
+             "|---|---|---|---|---|---|"]
+    for row in table:
+        if row["class"] == "null":
+            continue
+        nom = CLASSES[row["class"]][2]
+        wr = row["median_width_ratio"]
+        lines.append(f"| `{row['class']}` ({nom:g}) | {row['seeds']} | {row['covered_profile']} ({100 * row['coverage_profile']:.0f}%) "
+                     f"| {row['covered_filter']} ({100 * row['coverage_filter']:.0f}%) | {'' if wr is None else f'{wr:.2f}'} | {row['unbounded']} |")
+    for row in table:
+        if row["class"] == "null":
+            lines.append(f"| none (null, whole search) | {row['seeds']} | false findings: {row['false_findings']} ({100 * row['false_rate']:.0f}%)"
+                         f"{': ' + ', '.join(row['which']) if row['which'] else ''} | | | |")
+    md = "\n".join(lines) + "\n"
+    if args.markdown:
+        with open(args.markdown, "w") as f:
+            f.write(md)
+    sys.stdout.write(md)
+    print(f"{len(rows)} diagnoses in {wall:.0f} s (mean diagnose {result['mean_diagnose_s']:.1f} s); {'PASS' if ok else 'FAIL'}")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

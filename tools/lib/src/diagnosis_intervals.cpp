@@ -1,0 +1,319 @@
+#include "tools/diagnosis_intervals.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <cmath>
+#include <thread>
+#include <utility>
+
+namespace tools {
+namespace {
+
+using fsw::Effect;
+
+/// A run's log-likelihood contributions, sorted by measurement key.
+using Contributions = std::vector<std::pair<std::uint64_t, double>>;
+
+Contributions contributions(const ModelRun& run) {
+  Contributions c;
+  c.reserve(run.scalars.size());
+  for (const ModelRun::Scalar& s : run.scalars)
+    c.emplace_back(s.key, -0.5 * (std::log(2.0 * fsw::kPi * s.S) + s.nu * s.nu / s.S));
+  std::sort(c.begin(), c.end());
+  return c;
+}
+
+/// The model with `cand` held at each value: runs in parallel, results in input order.
+std::vector<Contributions> profile_runs(const RecordedData& data, const DiagnosisConfig& cfg,
+                                        const std::vector<int>& model, int cand, const std::vector<double>& thetas,
+                                        double t_ref_s) {
+  const Candidate& c = diagnosis_candidates()[static_cast<std::size_t>(cand)];
+  std::vector<int> fixed_model;
+  for (int m : model)
+    if (m != cand) fixed_model.push_back(m);
+  std::vector<Contributions> out(thetas.size());
+  std::atomic<std::size_t> next{0};
+  auto worker = [&]() {
+    for (std::size_t i = next++; i < thetas.size(); i = next++) {
+      DiagnosisConfig k = cfg;
+      if (c.effect == Effect::kAntennaLeverArm) {
+        k.app.exec.ekf.lever_arm_b_m(c.component) += thetas[i] * fsw::effect_info(c.effect).unit_to_si;
+        out[i] = contributions(run_diagnosis_model(data, k, fixed_model));
+      } else {
+        out[i] = contributions(run_diagnosis_model(with_fixed_effect(data, c, thetas[i], t_ref_s), k, fixed_model));
+      }
+    }
+  };
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned n = std::min<unsigned>(hw, static_cast<unsigned>(std::max<std::size_t>(1, thetas.size())));
+  std::vector<std::thread> threads;
+  for (unsigned t = 1; t < n; ++t) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+  return out;
+}
+
+/// Log-likelihood of each run over the keys every run has; sets n to their number.
+std::vector<double> common_log_likelihood(const std::vector<const Contributions*>& runs, int& n) {
+  std::vector<double> ll(runs.size(), 0.0);
+  n = 0;
+  if (runs.empty()) return ll;
+  std::vector<std::size_t> pos(runs.size(), 0);
+  for (;;) {
+    std::uint64_t kmax = 0;
+    bool end = false;
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      if (pos[r] >= runs[r]->size()) {
+        end = true;
+        break;
+      }
+      kmax = std::max(kmax, (*runs[r])[pos[r]].first);
+    }
+    if (end) break;
+    bool all = true;
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      while (pos[r] < runs[r]->size() && (*runs[r])[pos[r]].first < kmax) ++pos[r];
+      if (pos[r] >= runs[r]->size() || (*runs[r])[pos[r]].first != kmax) all = false;
+    }
+    if (!all) continue;
+    for (std::size_t r = 0; r < runs.size(); ++r) ll[r] += (*runs[r])[pos[r]++].second;
+    ++n;
+  }
+  return ll;
+}
+
+}  // namespace
+
+bool profile_supported(Effect e) {
+  return e != Effect::kTroposphericDelay && e != Effect::kIonosphericDelay && e != Effect::kCount;
+}
+
+RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, double value, double t_ref_s) {
+  RecordedData d = data;
+  const double v = value * fsw::effect_info(c.effect).unit_to_si;
+  // The compensation of fsw::ImuCompensation with this one component set (its sign convention:
+  // the estimate is the error that is removed).
+  fsw::Mat3 Eg = fsw::Mat3::Zero(), Ea = fsw::Mat3::Zero();
+  fsw::Vec3 gs = fsw::Vec3::Zero();
+  double offset_s = 0.0, drift = 0.0;
+  switch (c.effect) {
+    case Effect::kGyroMisalignment: {
+      const auto ax = fsw::kGyroMisalignmentAxes[static_cast<std::size_t>(c.component)];
+      Eg(ax.i, ax.j) = v;
+      break;
+    }
+    case Effect::kAccelMisalignment: {
+      const auto ax = fsw::kAccelMisalignmentAxes[static_cast<std::size_t>(c.component)];
+      Ea(ax.i, ax.j) = v;
+      break;
+    }
+    case Effect::kGyroScaleFactor: Eg(c.component, c.component) = v; break;
+    case Effect::kAccelScaleFactor: Ea(c.component, c.component) = v; break;
+    case Effect::kGyroGSensitivity: gs(c.component) = v; break;
+    case Effect::kImuGnssTimeOffset: offset_s = v; break;
+    case Effect::kImuClockDrift: drift = v; break;
+    default: return d;
+  }
+  const bool retimed = offset_s != 0.0 || drift != 0.0;
+  std::vector<double> old_t;
+  if (retimed) {
+    old_t.reserve(d.imu.size());
+    for (const fsw::ImuSample& s : d.imu) old_t.push_back(s.t_s);
+  }
+  for (fsw::ImuSample& s : d.imu) {
+    const fsw::Vec3 dth = s.dtheta_rad, dv = s.dv_mps;
+    s.dtheta_rad = dth - Eg * dth - gs.cwiseProduct(dv);
+    s.dv_mps = dv - Ea * dv;
+    // IMU tags at t (1 + drift) + offset (sim::ImuModel): the tag and the frame length restored.
+    s.t_s = s.t_s - offset_s - drift * (s.t_s - t_ref_s);
+    s.dt_s = s.dt_s / (1.0 + drift);
+  }
+  if (retimed) {
+    // Arrival order on the corrected clock: a GNSS input keeps its lag behind its own time (the
+    // original tag of the IMU sample it arrived after, minus its time) on the corrected IMU tags.
+    std::vector<double> key(d.order.size(), -1e300);
+    double prev_old = -1e300, prev_key = -1e300;
+    for (std::size_t i = 0; i < d.order.size(); ++i) {
+      const RecordedData::Event& ev = d.order[i];
+      switch (ev.kind) {
+        case RecordedData::Kind::kImu:
+          prev_old = old_t[ev.index];
+          key[i] = d.imu[ev.index].t_s;
+          break;
+        case RecordedData::Kind::kGnss: key[i] = d.gnss[ev.index].t_s + std::max(0.0, prev_old - d.gnss[ev.index].t_s); break;
+        case RecordedData::Kind::kPvt: key[i] = d.pvt[ev.index].t_s + std::max(0.0, prev_old - d.pvt[ev.index].t_s); break;
+        case RecordedData::Kind::kAlmanac: key[i] = prev_key; break;
+      }
+      prev_key = key[i];
+    }
+    std::vector<std::size_t> idx(d.order.size());
+    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+    // Ties: inputs that are not IMU samples after the sample (they arrived after it).
+    std::stable_sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
+      if (key[a] != key[b]) return key[a] < key[b];
+      return (d.order[a].kind == RecordedData::Kind::kImu) && (d.order[b].kind != RecordedData::Kind::kImu);
+    });
+    std::vector<RecordedData::Event> order;
+    order.reserve(idx.size());
+    for (std::size_t i : idx) order.push_back(d.order[i]);
+    d.order = std::move(order);
+  }
+  return d;
+}
+
+ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& model,
+                                 int cand, double x, double s, double level_z2) {
+  ProfileInterval pi;
+  const Candidate& c = diagnosis_candidates()[static_cast<std::size_t>(cand)];
+  if (!profile_supported(c.effect) || !(s > 0.0) || !std::isfinite(x)) return pi;
+  // The drift's reference: the first GNSS measurement (the filter's is its first update; the
+  // offset, when in the model, absorbs the difference).
+  double t_ref_s = data.imu.empty() ? 0.0 : data.imu.front().t_s;
+  for (const RecordedData::Event& ev : data.order) {
+    if (ev.kind == RecordedData::Kind::kGnss && cfg.gnss_source == sim::GnssSource::kRaw) {
+      t_ref_s = data.gnss[ev.index].t_s;
+      break;
+    }
+    if (ev.kind == RecordedData::Kind::kPvt && cfg.gnss_source == sim::GnssSource::kPvt) {
+      t_ref_s = data.pvt[ev.index].t_s;
+      break;
+    }
+  }
+  const double prior = cfg.prior[static_cast<std::size_t>(c.effect)];
+  const double max_reach = std::max(30.0 * s, 6.0 * prior);  // no interval beyond this from x
+  std::vector<double> theta;
+  std::vector<Contributions> runs;
+  const auto add = [&](const std::vector<double>& t) {
+    std::vector<Contributions> r = profile_runs(data, cfg, model, cand, t, t_ref_s);
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      theta.push_back(t[i]);
+      runs.push_back(std::move(r[i]));
+    }
+    pi.runs += static_cast<int>(t.size());
+  };
+  // A Gaussian likelihood crosses 3.84 at x +- 1.96 s: three runs bound it; a flatter or shifted
+  // one is followed outward with doubling steps.
+  add({x - 2.0 * s, x, x + 2.0 * s});
+  double step_lo = 2.0 * s, step_hi = 2.0 * s;
+  std::vector<double> dev;
+  std::vector<std::size_t> order;
+  for (int iter = 0;; ++iter) {
+    order.resize(theta.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return theta[a] < theta[b]; });
+    std::vector<const Contributions*> ptr;
+    for (std::size_t i : order) ptr.push_back(&runs[i]);
+    const std::vector<double> ll = common_log_likelihood(ptr, pi.measurements);
+    const double ll_max = *std::max_element(ll.begin(), ll.end());
+    dev.assign(ll.size(), 0.0);
+    for (std::size_t i = 0; i < ll.size(); ++i) dev[i] = 2.0 * (ll_max - ll[i]);
+    const double t_lo = theta[order.front()], t_hi = theta[order.back()];
+    std::vector<double> more;
+    if (dev.front() < level_z2 && x - t_lo < max_reach) more.push_back(t_lo - step_lo);
+    if (dev.back() < level_z2 && t_hi - x < max_reach) more.push_back(t_hi + step_hi);
+    if (more.empty() || iter >= 8) break;
+    if (dev.front() < level_z2) step_lo *= 2.0;
+    if (dev.back() < level_z2) step_hi *= 2.0;
+    add(more);
+  }
+  const std::size_t n = order.size();
+  pi.theta.resize(n);
+  pi.deviance = dev;
+  for (std::size_t i = 0; i < n; ++i) pi.theta[i] = theta[order[i]];
+  const std::size_t best = static_cast<std::size_t>(std::min_element(dev.begin(), dev.end()) - dev.begin());
+  // The maximum: the parabola through the best point and its neighbours.
+  pi.estimate = pi.theta[best];
+  if (best > 0 && best + 1 < n) {
+    const double x0 = pi.theta[best - 1], x1 = pi.theta[best], x2 = pi.theta[best + 1];
+    const double y0 = dev[best - 1], y1 = dev[best], y2 = dev[best + 1];
+    const double den = (x0 - x1) * (x0 - x2) * (x1 - x2);
+    const double A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den;
+    const double B = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / den;
+    if (A > 0.0) pi.estimate = std::clamp(-B / (2.0 * A), x0, x2);
+  }
+  // The crossings: outward from the best point, interpolated linearly in sqrt(deviance) (the
+  // signed root of the deviance is linear in theta for a Gaussian likelihood).
+  const auto cross = [&](std::size_t i, std::size_t j) {  // i inside (below level), j outside
+    const double a = std::sqrt(std::max(0.0, dev[i])), b = std::sqrt(dev[j]), r = std::sqrt(level_z2);
+    return pi.theta[i] + (pi.theta[j] - pi.theta[i]) * (r - a) / (b - a);
+  };
+  pi.lo = pi.theta.front();
+  for (std::size_t i = best; i > 0; --i)
+    if (dev[i - 1] >= level_z2) {
+      pi.lo = cross(i, i - 1);
+      pi.lo_bounded = true;
+      break;
+    }
+  pi.hi = pi.theta.back();
+  for (std::size_t i = best; i + 1 < n; ++i)
+    if (dev[i + 1] >= level_z2) {
+      pi.hi = cross(i, i + 1);
+      pi.hi_bounded = true;
+      break;
+    }
+  pi.available = true;
+  return pi;
+}
+
+int candidate_index(const std::string& name) {
+  const std::vector<Candidate>& cands = diagnosis_candidates();
+  for (std::size_t i = 0; i < cands.size(); ++i)
+    if (candidate_name(cands[i]) == name) return static_cast<int>(i);
+  return -1;
+}
+
+ProfileInterval profile_component(const RecordedData& data, const DiagnosisConfig& cfg, std::vector<int> model,
+                                  int cand, double& filter_x, double& filter_s) {
+  if (std::find(model.begin(), model.end(), cand) == model.end()) model.push_back(cand);
+  const ModelRun run = run_diagnosis_model(data, cfg, model);
+  filter_x = 0.0;
+  filter_s = 0.0;
+  for (std::size_t a = 0; a < run.active.size() && a < run.estimate.size(); ++a)
+    if (run.active[a] == cand) {
+      filter_x = run.estimate[a];
+      filter_s = run.sigma[a];
+    }
+  if (!run.initialised) return {};
+  return profile_interval(data, cfg, model, cand, filter_x, filter_s);
+}
+
+void add_finding_intervals(DiagnosisResult& res, const RecordedData& data, const DiagnosisConfig& cfg,
+                           const std::function<void(const std::string&)>& progress) {
+  const std::vector<Candidate>& cands = diagnosis_candidates();
+  for (Finding& f : res.findings) {
+    f.interval_method = "filter";
+    f.interval_lo = f.estimate - 1.959963984540054 * f.sigma;
+    f.interval_hi = f.estimate + 1.959963984540054 * f.sigma;
+    f.profile_estimate = f.estimate;
+    f.interval_bounded = true;
+    if (!cfg.profile_intervals || !f.separable() || !res.extended.initialised) continue;
+    int cand = -1;
+    for (std::size_t i = 0; i < cands.size(); ++i) {
+      const fsw::EffectInfo& info = fsw::effect_info(cands[i].effect);
+      const std::string comp = info.n_components > 1 ? info.components[cands[i].component] : "";
+      if (cands[i].effect == f.effect && comp == f.component) cand = static_cast<int>(i);
+    }
+    if (cand < 0 || !profile_supported(f.effect)) continue;
+    if (progress) progress("interval: profile likelihood of " + candidate_name(cands[static_cast<std::size_t>(cand)]));
+    const ProfileInterval pi = profile_interval(data, cfg, res.extended.active, cand, f.estimate, f.sigma);
+    if (!pi.available) continue;
+    if (progress) {
+      std::string curve = "  profile (value: deviance):";
+      char b[64];
+      for (std::size_t i = 0; i < pi.theta.size(); ++i) {
+        std::snprintf(b, sizeof b, " %.4g: %.2f", pi.theta[i], pi.deviance[i]);
+        curve += b;
+      }
+      progress(curve + " over " + std::to_string(pi.measurements) + " common measurements");
+    }
+    f.interval_method = "profile_likelihood";
+    f.interval_lo = pi.lo;
+    f.interval_hi = pi.hi;
+    f.profile_estimate = pi.estimate;
+    f.interval_bounded = pi.lo_bounded && pi.hi_bounded;
+    f.profile_runs = pi.runs;
+  }
+}
+
+}  // namespace tools
