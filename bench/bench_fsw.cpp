@@ -620,7 +620,9 @@ bool run_executive(const FlightData& d, fsw::Executive<L>& ex, int f_end, std::s
       return false;
     }
   }
-  if (ex.health().fsw_errors != 0 || ex.health().ekf_updates != static_cast<std::uint32_t>(f_end / kFramesPerEkf)) {
+  // Every release's correction lands cfg.ekf_latency_frames later (fsw/executive.hpp).
+  if (ex.health().fsw_errors != 0 ||
+      ex.health().ekf_updates != static_cast<std::uint32_t>((f_end - cfg.ekf_latency_frames) / kFramesPerEkf)) {
     err = "executive warm-up: fsw errors or missed EKF updates";
     return false;
   }
@@ -636,9 +638,11 @@ void BM_ExecTickNav(benchmark::State& state) {
   auto snap = std::make_unique<fsw::Executive<L>>();
   auto ex = std::make_unique<fsw::Executive<L>>();
   std::string err;
-  const int f0 = kFramesPerEkf * kWarmCycles;
+  // From just after the last correction landed to just before the next release.
+  const int latency = fsw::ExecutiveConfig{}.ekf_latency_frames;
+  const int f0 = kFramesPerEkf * kWarmCycles + latency;
   if (!d.error.empty() || !run_executive(d, *snap, f0, err)) return fail(state, d.error.empty() ? err : d.error);
-  constexpr int kBlock = kFramesPerEkf - 1;
+  const int kBlock = kFramesPerEkf - 1 - latency;
   int k = 0;
   double total_s = 0.0;
   Clock::time_point t0;
@@ -681,9 +685,15 @@ void BM_ExecTickEkf(benchmark::State& state) {
   const fsw::FrameInput in = frame_input(d, f, g);
   fsw::FrameOutput out;
   {
+    // This tick releases the 1 Hz group and runs it inline; its correction (with the update's
+    // report) lands ekf_latency_frames later.
     *ex = *snap;
-    if (ex->tick(in, out) != Status::kOk || !out.ekf_ran || !out.ekf_updated || out.report.pr_used != kSatellites ||
-        out.report.prr_used != kSatellites)
+    if (ex->tick(in, out) != Status::kOk || !out.ekf_released || ex->ekf_group_busy())
+      return fail(state, "the EKF tick did not release and run the 1 Hz group");
+    const int latency = fsw::ExecutiveConfig{}.ekf_latency_frames;
+    for (int k = 1; k <= latency; ++k)
+      if (ex->tick(frame_input(d, f + k, nullptr), out) != Status::kOk) return fail(state, "tick failed");
+    if (!out.ekf_ran || !out.ekf_updated || out.report.pr_used != kSatellites || out.report.prr_used != kSatellites)
       return fail(state, "the EKF tick did not use the whole epoch");
   }
   double total_s = 0.0;

@@ -167,7 +167,7 @@ void Executive<Layout>::maybe_release(FrameOutput& out) {
   }
   rq.omega_ib_b_radps = ins_.omega_ib_b_radps();
   rq.t_s = nav.t_s;
-  rq.transition = &transition_[acc_];
+  rq.transition = acc_;
   acc_ ^= 1;
   transition_[acc_].reset(cfg_.ekf.propagation_substep_frames);
   apply_frame_ = health_.nav_frames + static_cast<std::uint32_t>(cfg_.ekf_latency_frames);
@@ -185,7 +185,7 @@ Status Executive<Layout>::run_ekf_group() {
   r.correction_valid = false;
   r.report = EkfUpdateReport{};
   r.fsw_errors = 0;
-  if (ekf_.propagate(*rq.transition) != Status::kOk) ++r.fsw_errors;
+  if (ekf_.propagate(transition_[rq.transition]) != Status::kOk) ++r.fsw_errors;
   Status st = Status::kOk;
   if (rq.aid == EkfRequest<Layout>::Aid::kRaw)
     st = ekf_.update(rq.epoch, rq.nav_at_aid, rq.omega_ib_b_radps, r.report);

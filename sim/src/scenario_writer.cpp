@@ -221,8 +221,8 @@ ScenarioWriteResult write_scenario_toml(const Scenario& sc, const std::string& h
     << "pseudorange_rate_white_sigma_mps = " << num(g.pseudorange_rate_white_sigma_mps) << "\n"
     << "clock_bias_sigma_m = " << num(g.clock_bias_sigma_m) << "\n"
     << "clock_drift_sigma_mps = " << num(g.clock_drift_sigma_mps) << "\n"
-    << "clock_h0 = " << num(g.clock_h0) << "\n"
-    << "clock_h_minus2 = " << num(g.clock_h_minus2) << "\n";
+    << "clock_h0_s = " << num(g.clock_h0_s) << "\n"
+    << "clock_h_minus2_per_s = " << num(g.clock_h_minus2_per_s) << "\n";
   // What is written must read back: the reader is the judge of every range.
   const ScenarioParseResult back = parse_scenario_text(o.str(), "written scenario");
   if (!back.ok()) {

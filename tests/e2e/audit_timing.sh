@@ -12,7 +12,10 @@ j = json.load(open(sys.argv[1]))
 layouts = ["Layout15", "Layout24", "Layout15Full", "Layout24Full"]
 names = [t["name"] for t in j["tasks"]]
 assert names == [f"{k}/{l}" for l in layouts for k in ("mech_200hz", "ekf_1hz")], names
-assert abs(j["flight_s"] - 30.0) < 1e-6 and j["frames"] == 6000, (j["flight_s"], j["frames"])
+# Initialised in flight (--init track): the frame in progress when the initialisation restarts the
+# batching may be lost, so 5999 or 6000 frames.
+assert abs(j["flight_s"] - 30.0) < 1e-6 and j["frames"] in (5999, 6000), (j["flight_s"], j["frames"])
+assert [g["name"] for g in j["groups"]] == names and all(g["slips"] == 0 for g in j["groups"]), j["groups"]
 assert 0 < j["timer_overhead_ns"] < 1000
 by = {t["name"]: t for t in j["tasks"]}
 for t in j["tasks"]:
@@ -24,15 +27,16 @@ for t in j["tasks"]:
     assert t["release_jitter_max_us"] >= 0 and t["deadline_misses"] >= 0
 for l in layouts:
     m, e = by[f"mech_200hz/{l}"], by[f"ekf_1hz/{l}"]
-    assert m["n"] + m["preempted"] + e["n"] + e["preempted"] == 6000, l  # every tick in exactly one task
-    assert e["n"] + e["preempted"] == 30, l                             # one 1 Hz run per second
+    assert m["n"] + m["preempted"] == j["frames"], l  # every minor frame is a 200 Hz frame
+    assert e["n"] + e["preempted"] == 29, l           # one 1 Hz run per second after the first epoch
     assert e["interval_frames"]["min"] == e["interval_frames"]["max"] == 200, e["interval_frames"]
-    assert e["median_us"] > m["median_us"], l  # the 1 Hz frame does the 200 Hz work and the EKF
+    assert e["median_us"] > m["median_us"], l  # a filter epoch costs more than a mechanization frame
     assert abs(m["nominal_rate_hz"] - 200) < 1e-9 and abs(e["nominal_rate_hz"] - 1) < 1e-9
 lay = {x["layout"]: x for x in j["layouts"]}
 for l in layouts:
     x = lay[l]
-    assert x["fsw_errors"] == 0 and x["ekf_updates"] == 30, x
+    assert x["fsw_errors"] == 0 and x["ekf_updates"] == 28, x  # the last correction lands after the end
+    assert x["initialisation_frame"]["index"] >= 0, x
     assert 4 <= x["satellites"]["min"] <= x["satellites"]["median"] <= x["satellites"]["max"] <= 12, x
     total = by[f"mech_200hz/{l}"]["cpu_share"] + by[f"ekf_1hz/{l}"]["cpu_share"]
     assert abs(x["fsw_cpu_share"] - total) <= 1e-12 + 1e-9 * total, (x, total)

@@ -11,8 +11,14 @@ rm -rf "$out" && mkdir -p "$out"
 "$sdins" replay "$out/sil.lcmlog" --json "$out/replay1.json" --log "$out/replay1.lcmlog"
 "$sdins" replay "$out/sil.lcmlog" --json "$out/replay2.json"
 "$sdins" replay "$out/replay1.lcmlog" --json "$out/replay3.json"   # the replay's own log is replayable
-size=$(stat -c %s "$out/sil.lcmlog")
-head -c $((size * 2 / 3 + 17)) "$out/sil.lcmlog" > "$out/truncated.lcmlog"
+# Cut two thirds in, in the middle of an event (a cut on an event boundary is a shorter, valid log).
+/usr/bin/python3 - "$out/sil.lcmlog" "$out/truncated.lcmlog" <<'PY'
+import struct, sys
+b = open(sys.argv[1], "rb").read()
+i = b.rfind(b"\xed\xa1\xda\x01", 0, len(b) * 2 // 3)  # the LCM sync word of the event there
+channel_len, data_len = struct.unpack(">ii", b[i + 20:i + 28])
+open(sys.argv[2], "wb").write(b[:i + 28 + channel_len + data_len // 2])
+PY
 cp "$out/sil.lcmlog" "$out/corrupt.lcmlog"
 # 4 KiB of garbage in the middle (random bytes from a fixed seed).
 /usr/bin/python3 - "$out/corrupt.lcmlog" <<'PY'

@@ -117,8 +117,8 @@ pseudorange_white_sigma_m = 1.5
 pseudorange_rate_white_sigma_mps = 0.05
 clock_bias_sigma_m = 0.0
 clock_drift_sigma_mps = 2.0
-clock_h0 = 2e-19
-clock_h_minus2 = 2e-20
+clock_h0_s = 2e-19
+clock_h_minus2_per_s = 2e-20
 )", "custom.toml");
   ASSERT_TRUE(p.ok()) << p.error;
   const Scenario& sc = *p.scenario;
@@ -314,7 +314,7 @@ TEST(DiagnosisSeparation, TheSuggestionLowersATimeOffsetsCorrelationWithTheLever
   EXPECT_EQ(p.scenario->seed, sc.seed);
   EXPECT_EQ(p.scenario->imu.rate_hz, sc.imu.rate_hz);
   EXPECT_DOUBLE_EQ(p.scenario->duration_s, sc.duration_s + s.added_s);
-  const tools::ModelRun run = tools::run_diagnosis_model(tools::record_scenario(*p.scenario, p.scenario->seed), cfg,
+  const tools::DiagnosisRun run = tools::run_diagnosis_model(tools::record_scenario(*p.scenario, p.scenario->seed), cfg,
                                                          r.extended.active);
   ASSERT_TRUE(run.initialised);
   std::vector<int> pos;

@@ -38,7 +38,7 @@ Flight fly(bool inline_group, const Policy& policy, int latency_frames = 10) {
   EXPECT_TRUE(alm.ok()) << alm.error;
   tools::MonteCarloConfig mc;
   mc.model_gps_errors = true;
-  mc.models = {tools::Model::k24};
+  mc.models = {fsw::FilterModel::k24};
   tools::RunSensors sensors(sc, truth, *alm.almanac, sc.seed);
   fsw::FlightAppConfig cfg = tools::flight_app_config(sc, mc);
   cfg.exec.ekf_group_inline = inline_group;

@@ -165,7 +165,7 @@ template <class Layout>
 struct EkfRequest {
   enum class Aid : std::uint8_t { kNone, kRaw, kPvt };
   Aid aid = Aid::kNone;
-  EkfTransition<Layout>* transition = nullptr;  ///< the closed interval (the executive's accumulator)
+  int transition = 0;      ///< the closed interval: the executive's accumulator of this index
   GnssEpoch epoch{};
   GnssPvtMeasurement pvt{};
   NavState nav_at_aid{};   ///< the INS solution aligned to the aid's time tag
@@ -183,6 +183,20 @@ struct EkfResult {
   EkfOutput<Layout> output{};
   EkfHealth ekf_health{};
   std::uint32_t fsw_errors = 0;
+};
+
+/// The hand-off's state word: atomic, and copyable (a copy takes the current value), so an
+/// executive can be saved and restored (benchmarks, tests) like any other plain state.
+struct HandOffState {
+  std::atomic<std::uint8_t> v{0};
+  HandOffState() = default;
+  HandOffState(const HandOffState& o) : v(o.v.load(std::memory_order_acquire)) {}
+  HandOffState& operator=(const HandOffState& o) {
+    v.store(o.v.load(std::memory_order_acquire), std::memory_order_release);
+    return *this;
+  }
+  std::uint8_t load(std::memory_order m) const { return v.load(m); }
+  void store(std::uint8_t x, std::memory_order m) { v.store(x, m); }
 };
 
 template <class Layout>
@@ -246,7 +260,7 @@ class Executive {
   EkfOutput<Layout> ekf_output_{};
   // The hand-off (one atomic state word; the request is the 200 Hz group's to write while idle,
   // the result the 1 Hz group's while released).
-  std::atomic<std::uint8_t> group_state_{kIdle};
+  HandOffState group_state_{};  ///< kIdle, kReleased, kDone
   EkfRequest<Layout> request_{};
   EkfResult<Layout> result_{};
   // 1 Hz group.

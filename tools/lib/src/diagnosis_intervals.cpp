@@ -15,10 +15,10 @@ using fsw::Effect;
 /// A run's log-likelihood contributions, sorted by measurement key.
 using Contributions = std::vector<std::pair<std::uint64_t, double>>;
 
-Contributions contributions(const ModelRun& run) {
+Contributions contributions(const DiagnosisRun& run) {
   Contributions c;
   c.reserve(run.scalars.size());
-  for (const ModelRun::Scalar& s : run.scalars)
+  for (const DiagnosisRun::Scalar& s : run.scalars)
     c.emplace_back(s.key, -0.5 * (std::log(2.0 * fsw::kPi * s.S) + s.nu * s.nu / s.S));
   std::sort(c.begin(), c.end());
   return c;
@@ -266,7 +266,7 @@ int candidate_index(const std::string& name) {
 ProfileInterval profile_component(const RecordedData& data, const DiagnosisConfig& cfg, std::vector<int> model,
                                   int cand, double& filter_x, double& filter_s) {
   if (std::find(model.begin(), model.end(), cand) == model.end()) model.push_back(cand);
-  const ModelRun run = run_diagnosis_model(data, cfg, model);
+  const DiagnosisRun run = run_diagnosis_model(data, cfg, model);
   filter_x = 0.0;
   filter_s = 0.0;
   for (std::size_t a = 0; a < run.active.size() && a < run.estimate.size(); ++a)

@@ -114,7 +114,7 @@ std::vector<int> member_candidates(const Finding& f) {
 }
 
 /// Positions of the candidates in a run's active list (-1 where absent).
-std::vector<int> positions(const ModelRun& run, const std::vector<int>& members) {
+std::vector<int> positions(const DiagnosisRun& run, const std::vector<int>& members) {
   std::vector<int> pos;
   for (int c : members) {
     const auto it = std::find(run.active.begin(), run.active.end(), c);
@@ -294,7 +294,7 @@ std::vector<Separation> suggest_separations(const DiagnosisResult& r, const Diag
       if (ext.imu.rate_hz > kPredictionImuRate_hz && ext.imu.rate_hz % kPredictionImuRate_hz == 0)
         ext.imu.rate_hz = kPredictionImuRate_hz;
       const RecordedData d = record_scenario(ext, ext.seed);
-      const ModelRun run = run_diagnosis_model(d, cfg, active);
+      const DiagnosisRun run = run_diagnosis_model(d, cfg, active);
       if (!run.initialised) {
         t.error = "the diagnosis model did not initialise on the simulated flight";
         return;
