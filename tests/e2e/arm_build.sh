@@ -21,7 +21,7 @@ syms=$(arm-none-eabi-nm -C "$elf")
 need=("T main" "T Reset_Handler"
       "fsw::Executive<fsw::ErrorStateLayout<(fsw::Block)0, (fsw::Block)1, (fsw::Block)2, (fsw::Block)3, (fsw::Block)4, (fsw::Block)9> >::tick("
       "fsw::Executive<fsw::ErrorStateLayout<(fsw::Block)0, (fsw::Block)1, (fsw::Block)2, (fsw::Block)3, (fsw::Block)4, (fsw::Block)5, (fsw::Block)6, (fsw::Block)9> >::tick("
-      "::propagate()" "::update(fsw::GnssEpoch const&" "::feedback(fsw::Strapdown&" "fsw::Strapdown::step("
+      "::propagate(fsw::EkfTransition<" "::run_ekf_group()" "::update(fsw::GnssEpoch const&" "::take_correction(" "fsw::Strapdown::step("
       "::on_imu(fsw::ImuSample const&" "::on_gnss(fsw::GnssRawEpoch const&" "::on_almanac(fsw::GpsAlmanac const&"
       "fsw::gnss_epoch_from_raw(" "fsw::gnss_pvt(")
 for s in "${need[@]}"; do
