@@ -166,6 +166,11 @@ void EkfTransition<Layout>::reset(int substep_frames) {
   frames_ = 0;
   phi_nav_.setIdentity();
   interval_s_ = 0.0;
+  clear_substep();
+}
+
+template <class Layout>
+void EkfTransition<Layout>::clear_substep() {
   sub_frames_ = 0;
   sub_T_ = 0.0;
   sum_C_dt_.setZero();
@@ -256,12 +261,7 @@ void EkfTransition<Layout>::flush() {
   phi_nav_ = top_;
 
   interval_s_ += T;
-  sub_frames_ = 0;
-  sub_T_ = 0.0;
-  sum_C_dt_.setZero();
-  sum_dv_n_.setZero();
-  sum_C_dv_.setZero();
-  sum_C_dth_.setZero();
+  clear_substep();
 }
 
 template <class Layout>

@@ -253,6 +253,7 @@ class EkfTransition {
   int frames() const { return frames_; }  ///< frames accumulated since reset()
 
  private:
+  void clear_substep();  ///< empties the sub-step sums
   int substep_frames_ = 10;
   int frames_ = 0;
   NavRows phi_nav_ = NavRows::Identity();

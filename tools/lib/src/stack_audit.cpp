@@ -585,10 +585,6 @@ void fsw_task_specs(const CallGraph& g, long budget_bytes, long red_zone_bytes, 
                       ">::run_ekf_group (Ekf::propagate over the released interval, update or update_pvt, the "
                       "correction), on its own stack when it runs as its own task";
     tasks.push_back(ekf);
-    (void)propagate;
-    (void)update;
-    (void)update_pvt;
-    (void)feedback;
     for (const auto& [what, id] : {std::pair<std::string, std::string>{"accumulate", accumulate},
                                    {"propagate", propagate}, {"update", update}, {"update_pvt", update_pvt},
                                    {"feedback", feedback}}) {
