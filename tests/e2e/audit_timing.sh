@@ -21,7 +21,10 @@ by = {t["name"]: t for t in j["tasks"]}
 for t in j["tasks"]:
     for k in ("min_us", "median_us", "p99_us", "p999_us", "max_us", "cpu_share"):
         assert isinstance(t[k], (int, float)) and math.isfinite(t[k]), (t["name"], k)
-    assert 0 < t["min_us"] <= t["median_us"] <= t["p99_us"] <= t["p999_us"] <= t["max_us"], t
+    # A 200 Hz frame before initialisation only stores the sample for levelling: tens of ns, which
+    # the timer-overhead subtraction can bring to 0 (seen in CI: Layout15Full min 0.000 us).
+    assert 0 <= t["min_us"] <= t["median_us"] <= t["p99_us"] <= t["p999_us"] <= t["max_us"], t
+    assert t["median_us"] > 0, t
     assert t["max_us"] <= t["max_including_preempted_us"] + 1e-9, t
     assert 0 < t["cpu_share"] < 0.5, t  # far below one core: these are microseconds per 5 ms frame
     assert t["release_jitter_max_us"] >= 0 and t["deadline_misses"] >= 0
