@@ -26,6 +26,7 @@ struct Slot {
 };
 std::array<Slot, kSlots> g_slots;
 std::atomic<unsigned> g_counter{0};
+std::atomic<bool> g_unnamed{true};
 
 int register_tmp(const std::string& p) {
   if (p.size() + 1 > kSlotPath) return -1;
@@ -163,11 +164,17 @@ bool OutputFile::open(const std::string& path) {
     in_place_ = true;
   } else {
     const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-    const std::string name = target.filename().string();
+    // First choice: an unnamed file in the target's directory (O_TMPFILE), linked in by commit():
+    // until then it has no name, so nothing is left behind whatever ends the process, SIGKILL and
+    // power cuts included. Needs /proc (commit links it through /proc/self/fd) and a file system
+    // that supports it (ext4, xfs, btrfs, tmpfs); otherwise a named temporary file.
+    anonymous_ = false;
+    if (g_unnamed.load(std::memory_order_relaxed) && ::access("/proc/self/fd", X_OK) == 0) {
+      fd_ = ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+      anonymous_ = fd_ >= 0;
+    }
     for (int attempt = 0; attempt < 100 && fd_ < 0; ++attempt) {
-      tmp_ = (dir / ("." + name + ".sdins-tmp." + std::to_string(::getpid()) + "." +
-                     std::to_string(g_counter.fetch_add(1))))
-                 .string();
+      tmp_ = temporary_name();
       fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
       if (fd_ < 0 && errno != EEXIST) break;
     }
@@ -178,10 +185,44 @@ bool OutputFile::open(const std::string& path) {
       return false;
     }
     if (exists) (void)::fchmod(fd_, st.st_mode & 07777);  // keep the replaced file's permissions
-    slot_ = register_tmp(tmp_);
+    if (!anonymous_) slot_ = register_tmp(tmp_);
   }
   if (buf_.empty()) buf_.resize(64u << 10);
   return true;
+}
+
+std::string OutputFile::temporary_name() const {
+  const fs::path target = target_;
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  return (dir / ("." + target.filename().string() + ".sdins-tmp." + std::to_string(::getpid()) + "." +
+                 std::to_string(g_counter.fetch_add(1))))
+      .string();
+}
+
+bool OutputFile::link_anonymous() {
+  // The unnamed file gets its name: the target itself when there is none yet (atomic: linkat never
+  // replaces), else a temporary name renamed over the target (microseconds during which a SIGKILL
+  // would leave that name behind; a SIGINT/SIGTERM handler removes it).
+  const std::string self = "/proc/self/fd/" + std::to_string(fd_);
+  if (::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, target_.c_str(), AT_SYMLINK_FOLLOW) == 0) return true;
+  if (errno != EEXIST) {
+    fail("cannot link the written file to its name", errno);
+    return false;
+  }
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    tmp_ = temporary_name();
+    slot_ = register_tmp(tmp_);
+    if (::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, tmp_.c_str(), AT_SYMLINK_FOLLOW) == 0) return true;
+    const int e = errno;
+    release_slot();
+    tmp_.clear();
+    if (e != EEXIST) {
+      fail("cannot link the written file beside it", e);
+      return false;
+    }
+  }
+  fail("cannot find a free temporary name beside it", EEXIST);
+  return false;
 }
 
 bool OutputFile::drain() {
@@ -236,17 +277,25 @@ bool OutputFile::commit() {
     fail("fsync failed", errno);
     ok = false;
   }
-  if (::close(fd_) != 0 && ok) {
+  if (in_place_) {
+    if (::close(fd_) != 0 && ok) {
+      fail("close failed", errno);
+      ok = false;
+    }
+    fd_ = -1;
+    return ok;
+  }
+  if (ok && anonymous_) ok = link_anonymous();
+  if (fd_ >= 0 && ::close(fd_) != 0 && ok) {
     fail("close failed", errno);
     ok = false;
   }
   fd_ = -1;
-  if (in_place_) return ok;
-  if (ok && ::rename(tmp_.c_str(), target_.c_str()) != 0) {
+  if (ok && !tmp_.empty() && ::rename(tmp_.c_str(), target_.c_str()) != 0) {
     fail(("cannot rename " + tmp_ + " over it").c_str(), errno);
     ok = false;
   }
-  if (!ok) ::unlink(tmp_.c_str());
+  if (!ok && !tmp_.empty()) ::unlink(tmp_.c_str());
   release_slot();
   tmp_.clear();
   if (ok) {
@@ -291,6 +340,8 @@ bool write_file_atomic(const std::string& path, std::string_view content, std::s
   }
   return true;
 }
+
+void set_unnamed_temporaries(bool on) noexcept { g_unnamed.store(on, std::memory_order_relaxed); }
 
 void remove_pending_outputs() noexcept {
   for (Slot& s : g_slots)

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """HIL end to end: `sdins bus-sim` and `sdins fsw` as two processes on the udp:PORT transport.
 
-usage: hil.py SDINS DBC WORKDIR MODE     MODE: lockstep | bad-input | silent | realtime
+usage: hil.py SDINS DBC WORKDIR MODE [SECONDS]     MODE: lockstep | bad-input | silent | realtime
 
 lockstep   a 90 s flight in lockstep; the fsw summary must show every frame consumed and the end
            of run; `sdins can record` captures the bus and python3-canmatrix decodes SIM_CONTROL and
@@ -11,7 +11,9 @@ bad-input  frames with corrupted CRCs, unknown IDs, a wrong length and a foreign
            with `sdins can play` into a running fsw: each counted in its summary, no crash, exit 2
            (silent bus after the frames).
 silent     fsw on a bus nobody talks on: stops after --idle-timeout with a report, exit 2.
-realtime   a 3 s real-time run: both processes complete and report lateness (no thresholds).
+realtime   a real-time run of SECONDS (default 3; CTest's e2e_hil_realtime): both processes complete and
+           report lateness and execution time apart (no thresholds: this VM's sleeps are late by
+           up to milliseconds; docs/rate-groups.md has a 20 s run measured this way).
 
 Exit 77 (CTest: skipped) with the reason when UDP multicast does not work on this host.
 """
@@ -242,23 +244,23 @@ def silent(sdins, work):
     return 0
 
 
-def realtime(sdins, work, bus):
+def realtime(sdins, work, bus, duration_s=3):
     fsw, fsw_json = start_fsw(sdins, bus, work, ["--realtime", "--idle-timeout", "20"])
     sim_json = os.path.join(work, "bus_sim.json")
-    sim = subprocess.run([sdins, "bus-sim", "--can", bus, "--realtime", "--duration", "3", "--json", sim_json],
-                         capture_output=True, text=True, timeout=120)
+    sim = subprocess.run([sdins, "bus-sim", "--can", bus, "--realtime", "--duration", str(duration_s), "--json",
+                          sim_json], capture_output=True, text=True, timeout=120 + 2 * duration_s)
     print(sim.stdout, sim.stderr)
     rc, o, e = finish(fsw, "sdins fsw", 60)
     print(o, e)
     assert sim.returncode == 0 and rc == 0, (sim.returncode, rc)
     s, f = json.load(open(sim_json)), json.load(open(fsw_json))
     r = f["realtime_stats"]
-    assert s["paced"] == 3000 and s["imu_sent"] == 3000, s
+    assert s["paced"] == 1000 * duration_s and s["imu_sent"] == 1000 * duration_s, s
     assert r["imu_frames_timed"] > 0 and r["minor_frames_timed"] > 0, r
     for k in ("exec_mean_s", "exec_max_s", "imu_lateness_mean_s", "imu_lateness_max_s"):
         assert isinstance(r[k], float), (k, r[k])
     assert "SCHED_FIFO" in r["sched_note"]
-    print(f"realtime 3 s over {bus}: bus-sim sleep lateness mean {s['late_mean_s'] * 1e3:.3f} ms max "
+    print(f"realtime {duration_s} s over {bus}: bus-sim sleep lateness mean {s['late_mean_s'] * 1e3:.3f} ms max "
           f"{s['late_max_s'] * 1e3:.3f} ms; fsw {r['sched_note']}; IMU frame lateness mean "
           f"{r['imu_lateness_mean_s'] * 1e3:.3f} ms max {r['imu_lateness_max_s'] * 1e3:.3f} ms, late {r['imu_late']}, "
           f"missing {r['imu_missing']}; minor frame exec mean {r['exec_mean_s'] * 1e6:.1f} us max "
@@ -268,6 +270,7 @@ def realtime(sdins, work, bus):
 
 def main():
     sdins, dbc, work, mode = sys.argv[1:5]
+    seconds = int(sys.argv[5]) if len(sys.argv) > 5 else 3
     os.makedirs(work, exist_ok=True)
     if mode == "silent":
         return silent(sdins, work)
@@ -282,7 +285,7 @@ def main():
     if mode == "bad-input":
         return bad_input(sdins, work, bus)
     if mode == "realtime":
-        return realtime(sdins, work, bus)
+        return realtime(sdins, work, bus, seconds)
     raise SystemExit(f"unknown mode {mode}")
 
 

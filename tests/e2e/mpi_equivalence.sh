@@ -58,4 +58,35 @@ for rank in 1 0; do
     { echo "failure on rank $rank: message missing"; cat "$out/fail$rank.log"; exit 1; }
   echo "failure on rank $rank: job failed with exit code $rc and the rank's message"
 done
+# SIGINT to mpirun while the ranks fly (docs/faults.md): mpirun forwards SIGTERM to every rank and
+# kills them 1 s later; each rank stops within a frame, says how far it got and writes nothing: the
+# previous run's CSVs stay as they were, and its completion marker summary.json is gone (the
+# directory no longer holds one complete run).
+prev="$out/np2"
+sum_before=$(md5sum "$prev"/stats_*.csv)
+"${launch[@]}" -np 2 "$sdins" montecarlo --runs 4000 --duration 120 --out "$prev" > "$out/int.log" 2>&1 &
+mpid=$!
+# Signal once both ranks have spent 2 s of CPU (past MPI start-up and the truth generation).
+for _ in $(seq 600); do
+  busy=0
+  for p in $(pgrep -P "$mpid" -f "sdins montecarlo" || true); do
+    read -r -a st < "/proc/$p/stat" 2> /dev/null || continue
+    [ $((st[13] + st[14])) -ge 200 ] && busy=$((busy + 1))
+  done
+  [ "$busy" -ge 2 ] && break
+  sleep 0.1
+done
+[ "$busy" -ge 2 ] || { echo "SIGINT case: the ranks did not start flying"; kill -KILL "$mpid"; cat "$out/int.log"; exit 1; }
+kill -INT "$mpid"
+rc=0; timeout 30 tail --pid="$mpid" -f /dev/null || { echo "SIGINT case: mpirun did not stop within 30 s"; exit 1; }
+wait "$mpid" || rc=$?
+[ "$rc" != 0 ] || { echo "SIGINT case: exit code 0"; cat "$out/int.log"; exit 1; }
+for rank in 0 1; do
+  grep -q "sdins: MPI rank $rank of 2: SIGTERM: Monte Carlo stopped after [0-9]* of 2000 runs; no results written" "$out/int.log" ||
+    { echo "SIGINT case: rank $rank did not say how far it got"; cat "$out/int.log"; exit 1; }
+done
+[ "$(md5sum "$prev"/stats_*.csv)" = "$sum_before" ] || { echo "SIGINT case: the previous run's CSVs changed"; exit 1; }
+[ ! -e "$prev/summary.json" ] || { echo "SIGINT case: summary.json marks an interrupted run complete"; exit 1; }
+if find "$prev" -name '*.sdins-tmp.*' | grep -q .; then echo "SIGINT case: temporary files left"; exit 1; fi
+echo "SIGINT to mpirun: both ranks stopped and said so, mpirun exit $rc, previous results intact"
 echo "mpi equivalence ok ($("$mpiexec" --version 2>&1 | head -1))"

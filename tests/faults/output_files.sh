@@ -82,6 +82,51 @@ INNER
   fi
 fi
 
+# 3b. figures (tools/plot/plot_io.py, used by every plot script): written whole or not at all, a
+#     failure names the file and the OS error; on the small disk the previous figure survives.
+plot_dir=$(cd "$(dirname "$sdins")/../share/sdins/plot" && pwd) || fail "no staged plot scripts beside $sdins"
+cat > "$out/figures.py" << 'PY'
+import os, sys
+sys.path.insert(0, sys.argv[1])
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+from plot_io import OutputError, save_figure
+d, big = sys.argv[2], len(sys.argv) > 3
+fig = plt.figure(figsize=(20, 20) if big else (2, 2))
+plt.plot(range(1000))
+target = os.path.join(d, "fig.png")
+try:
+    save_figure(fig, target, dpi=150 if big else 50)
+    print("saved", os.path.getsize(target))
+except OutputError as e:
+    print("error:", e)
+    sys.exit(1)
+PY
+mkdir -p "$out/fig"
+/usr/bin/python3 "$out/figures.py" "$plot_dir" "$out/fig" > "$out/fig_new.log" 2>&1 || { cat "$out/fig_new.log"; fail "figure: not written"; }
+fs1=$(sum "$out/fig/fig.png")
+/usr/bin/python3 "$out/figures.py" "$plot_dir" "$out/fig" big > "$out/fig_big.log" 2>&1 || fail "figure: not replaced"
+[ "$(sum "$out/fig/fig.png")" != "$fs1" ] || fail "figure: the replacement did not land"
+[ "$(ls -A "$out/fig")" = fig.png ] || fail "figure: files left beside it: $(ls -A "$out/fig")"
+mkdir -p "$out/figdir/fig.png"
+run nonzero figure_is_dir -- /usr/bin/python3 "$out/figures.py" "$plot_dir" "$out/figdir"
+says figure_is_dir "$out/figdir/fig.png"; says figure_is_dir "Is a directory"
+if unshare -m true 2> /dev/null; then
+  mkdir -p "$out/figsmall"
+  unshare -m bash -c 'mount -t tmpfs -o size=64k tmpfs "$3" || exit 77
+    echo previous > "$3/fig.png"
+    /usr/bin/python3 "$1" "$2" "$3" big; echo "rc=$?"; cat "$3/fig.png"; ls -A "$3"' _ \
+    "$out/figures.py" "$plot_dir" "$out/figsmall" > "$out/fig_small.out" 2>&1
+  if ! grep -q "^rc=77" "$out/fig_small.out" && [ -s "$out/fig_small.out" ]; then
+    grep -q "^rc=1$" "$out/fig_small.out" || { cat "$out/fig_small.out"; fail "figure on a full disk: not an error"; }
+    grep -q "fig.png: No space left on device" "$out/fig_small.out" || { cat "$out/fig_small.out"; fail "figure: message"; }
+    [ "$(grep -c . "$out/fig_small.out")" = 4 ] && grep -q "^previous$" "$out/fig_small.out" ||
+      { cat "$out/fig_small.out"; fail "figure on a full disk: the previous file was lost or a temporary left"; }
+    cases=$((cases + 1))
+  fi
+fi
+
 # 4. a failing command leaves the previous output as it was (exception path)
 echo "previous" > "$out/prev.csv"
 run nonzero export_unknown -- "$sdins" log export "$log" --channel NOPE --csv "$out/prev.csv"

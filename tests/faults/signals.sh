@@ -24,16 +24,26 @@ signal_after() {
   cases=$((cases + 1))
 }
 
-# signal_when GLOB SIGNAL NAME -- CMD...: as signal_after, but signals 50 ms after a file matching
-# GLOB appears (the run's temporary output: the run is past its setup and polling), so a fast
-# machine cannot finish first.
+# writing_in DIR PID: PID holds an output file open in DIR that has no name yet (hal::OutputFile's
+# O_TMPFILE file, which /proc shows as "DIR/#INODE (deleted)") or a named temporary.
+writing_in() {
+  local l
+  for f in /proc/"$2"/fd/*; do
+    l=$(readlink "$f" 2> /dev/null) || continue
+    case "$l" in "$1/#"*" (deleted)" | "$1/."*".sdins-tmp."*) return 0 ;; esac
+  done
+  return 1
+}
+
+# signal_when DIR SIGNAL NAME -- CMD...: as signal_after, but signals 50 ms after CMD opens its
+# output in DIR (the run is past its setup and polling), so a fast machine cannot finish first.
 signal_when() {
-  local glob=$1 sig=$2 name=$3
+  local dir=$1 sig=$2 name=$3
   shift 4
   "$@" > "$out/$name.log" 2>&1 &
   local pid=$!
   local n=0
-  until compgen -G "$glob" > /dev/null; do
+  until writing_in "$dir" "$pid"; do
     kill -0 "$pid" 2> /dev/null || fail "$name: finished before its temporary output appeared"
     n=$((n + 1))
     [ $n -lt 20000 ] || { kill -KILL "$pid"; fail "$name: no temporary output appeared"; }
@@ -78,7 +88,7 @@ python3 -c 'import json,sys; json.load(open(sys.argv[1]))' "$out/bus.json" || fa
 # replay: SIGINT in the middle of a 600 s log: the summary so far, no log, no JSON.
 "$sdins" sim --seed 1 --duration 600 --log "$out/long.lcmlog" > /dev/null 2>&1 || fail "sim setup"
 echo "previous" > "$out/replay_out.lcmlog"
-signal_when "$out/.replay_out.lcmlog.sdins-tmp.*" INT replay_int -- "$sdins" replay "$out/long.lcmlog" --log "$out/replay_out.lcmlog" --json "$out/replay.json"
+signal_when "$out" INT replay_int -- "$sdins" replay "$out/long.lcmlog" --log "$out/replay_out.lcmlog" --json "$out/replay.json"
 [ "$rc" = 130 ] || { cat "$out/replay_int.log"; fail "replay SIGINT: exit $rc, expected 130"; }
 says replay_int "replay stopped after"; says replay_int "navigation frames"
 [ "$(cat "$out/replay_out.lcmlog")" = previous ] || fail "replay: the previous --log was replaced by a partial one"
@@ -89,6 +99,23 @@ no_temporaries "$out"
 signal_after 0.3 TERM diagnose_term -- "$sdins" diagnose --log "$out/long.lcmlog" --json "$out/diag.json" --report "$out/diag"
 [ "$rc" = 143 ] || { cat "$out/diagnose_term.log"; fail "diagnose SIGTERM: exit $rc, expected 143"; }
 absent "$out/diag.json"; absent "$out/diag/summary.json"
+
+# SIGKILL in the middle of writing: nothing can clean up, and nothing needs to: the output has no
+# name until it is complete, so the previous log stays and no file is left beside it.
+echo "previous" > "$out/kill_out.lcmlog"
+"$sdins" replay "$out/long.lcmlog" --log "$out/kill_out.lcmlog" > "$out/replay_kill.log" 2>&1 &
+pid=$!
+n=0
+until writing_in "$out" "$pid"; do
+  kill -0 "$pid" 2> /dev/null || fail "replay_kill: finished before its output was open"
+  n=$((n + 1)); [ $n -lt 20000 ] || { kill -KILL "$pid"; fail "replay_kill: no output opened"; }
+done
+sleep 0.2
+kill -KILL "$pid"; wait "$pid" 2> /dev/null
+cases=$((cases + 1))
+[ "$(cat "$out/kill_out.lcmlog")" = previous ] || fail "replay SIGKILL: the previous --log was replaced"
+no_temporaries "$out"
+[ "$(ls -A "$out" | grep -c kill_out)" = 1 ] || fail "replay SIGKILL: files left beside the log"
 
 # sim (not polled): SIGINT ends it at once; the previous log stays, no temporary is left.
 echo "previous" > "$out/sim.lcmlog"

@@ -3,11 +3,14 @@
 // sanity (hal::TimeTagGate, in the replay reader and the importers), the one almanac validation.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -71,10 +74,61 @@ TEST(OutputFile, TargetKeepsItsOldContentsUntilCommit) {
   ASSERT_TRUE(f.write("new contents\n"));
   ASSERT_TRUE(f.flush());
   EXPECT_EQ(slurp(p), "old\n");  // still the old file while writing
+  EXPECT_EQ(temporaries_in(d.path), 0);  // the bytes are in an unnamed (O_TMPFILE) file
+  EXPECT_EQ(std::distance(fs::directory_iterator(d.path), fs::directory_iterator{}), 1);
+  ASSERT_TRUE(f.commit()) << f.error();
+  EXPECT_EQ(slurp(p), "new contents\n");
+  EXPECT_EQ(temporaries_in(d.path), 0);
+  // A new file appears whole, under its own name, at commit.
+  const std::string q = d / "new.txt";
+  hal::OutputFile g;
+  ASSERT_TRUE(g.open(q));
+  ASSERT_TRUE(g.write("fresh\n"));
+  EXPECT_FALSE(fs::exists(q));
+  ASSERT_TRUE(g.commit()) << g.error();
+  EXPECT_EQ(slurp(q), "fresh\n");
+  EXPECT_EQ(temporaries_in(d.path), 0);
+}
+
+TEST(OutputFile, NamedTemporaryFallbackKeepsTheOldContentsUntilCommit) {
+  // File systems without O_TMPFILE get a named ".NAME.sdins-tmp.PID.N" beside the target.
+  ScratchDir d;
+  const std::string p = d / "out.txt";
+  put(p, "old\n");
+  hal::set_unnamed_temporaries(false);
+  hal::OutputFile f;
+  const bool opened = f.open(p);
+  hal::set_unnamed_temporaries(true);
+  ASSERT_TRUE(opened);
+  ASSERT_TRUE(f.write("new contents\n"));
+  ASSERT_TRUE(f.flush());
+  EXPECT_EQ(slurp(p), "old\n");
   EXPECT_EQ(temporaries_in(d.path), 1);
   ASSERT_TRUE(f.commit()) << f.error();
   EXPECT_EQ(slurp(p), "new contents\n");
   EXPECT_EQ(temporaries_in(d.path), 0);
+}
+
+TEST(OutputFile, SigkillWhileWritingLeavesTheOldFileAndNothingElse) {
+  ScratchDir d;
+  const std::string p = d / "out.txt";
+  put(p, "old\n");
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {  // child: half a file written, then killed without any chance to clean up
+    hal::OutputFile f;
+    if (!f.open(p)) ::_exit(2);
+    std::string big(300000, 'x');
+    (void)f.write(big);
+    (void)f.flush();
+    ::raise(SIGKILL);
+    ::_exit(3);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << status;
+  EXPECT_EQ(slurp(p), "old\n");
+  EXPECT_EQ(std::distance(fs::directory_iterator(d.path), fs::directory_iterator{}), 1);  // no temporary
 }
 
 TEST(OutputFile, AbortAndDestructorLeaveTheOldFileAndNoTemporary) {

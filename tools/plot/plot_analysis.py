@@ -15,6 +15,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from plot_io import OutputError, save_figure  # noqa: E402  (beside this script)
 
 
 def read_csv(path):
@@ -55,7 +56,7 @@ def plot_bank_turn(d, summary):
     axes[0][0].legend(loc="upper left", fontsize=8)
     fig.suptitle(f"Bank-to-turn, free inertial, each gyro misalignment alone ({summary['scenario']['name']})")
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "bank_turn.png"), dpi=110)
+    save_figure(fig, os.path.join(d, "bank_turn.png"), dpi=110)
     plt.close(fig)
 
 
@@ -87,7 +88,7 @@ def plot_rotation(d, summary):
         ax.set_xlabel("time [s]")
     fig.suptitle("Single-axis rotation at 10 deg/s with one gyro misalignment (5 and 10 arcsec)")
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "rotation.png"), dpi=110)
+    save_figure(fig, os.path.join(d, "rotation.png"), dpi=110)
     plt.close(fig)
 
 
@@ -104,4 +105,8 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except OutputError as e:
+        print(f"plot_analysis.py: error: {e}", file=sys.stderr)
+        sys.exit(1)

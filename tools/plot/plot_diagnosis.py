@@ -16,6 +16,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from plot_io import OutputError, save_figure  # noqa: E402  (beside this script)
 
 
 def read_csv(path):
@@ -47,7 +48,7 @@ def main(d):
         ax.legend(loc="upper right")
     axes[1].set_xlabel("time [s]")
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "innovations.png"), dpi=110)
+    save_figure(fig, os.path.join(d, "innovations.png"), dpi=110)
     plt.close(fig)
 
     if any(not math.isnan(v) for v in base.get("heading_err_deg", [])):
@@ -59,7 +60,7 @@ def main(d):
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper right")
         fig.tight_layout()
-        fig.savefig(os.path.join(d, "heading.png"), dpi=110)
+        save_figure(fig, os.path.join(d, "heading.png"), dpi=110)
         plt.close(fig)
 
     states = j["extended_model"]["added_states"]
@@ -79,9 +80,13 @@ def main(d):
             ax.legend(loc="upper right")
         axes[-1, 0].set_xlabel("time [s]")
         fig.tight_layout()
-        fig.savefig(os.path.join(d, "estimates.png"), dpi=110)
+        save_figure(fig, os.path.join(d, "estimates.png"), dpi=110)
         plt.close(fig)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    try:
+        main(sys.argv[1])
+    except OutputError as e:
+        print(f"plot_diagnosis.py: error: {e}", file=sys.stderr)
+        sys.exit(1)

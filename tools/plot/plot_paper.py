@@ -33,6 +33,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from plot_io import OutputError, save_figure  # noqa: E402  (beside this script)
 
 PROG = "plot_paper.py"
 DPI = 150
@@ -270,7 +271,7 @@ def plot_case(out_dir, case, d):
                  f"{case['model']}-state filter, {case['runs']} Monte Carlo runs", fontsize=11)
     fig.tight_layout()
     name = case_figure_name(case)
-    fig.savefig(os.path.join(out_dir, name), dpi=DPI)
+    save_figure(fig, os.path.join(out_dir, name), dpi=DPI)
     plt.close(fig)
     return name
 
@@ -306,7 +307,7 @@ def plot_compare_u(out_dir, cases, data):
     fig.suptitle("Up (heading) residual error, Monte Carlo 1σ: 15-state filters (15, 15c, 15t) vs 24-state filter",
                  fontsize=11)
     fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, "compare_U.png"), dpi=DPI)
+    save_figure(fig, os.path.join(out_dir, "compare_U.png"), dpi=DPI)
     plt.close(fig)
     return "compare_U.png"
 
@@ -351,7 +352,7 @@ def plot_nees(out_dir, cases, data):
     fig.suptitle(f"Navigation NEES ({NEES_DOF} dof: position, velocity, attitude), averaged over the runs",
                  fontsize=11)
     fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, "nees.png"), dpi=DPI)
+    save_figure(fig, os.path.join(out_dir, "nees.png"), dpi=DPI)
     plt.close(fig)
     return "nees.png"
 
@@ -378,7 +379,7 @@ if __name__ == "__main__":
     warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN slices etc.: plotted as gaps
     try:
         sys.exit(main(sys.argv))
-    except InputError as e:
+    except (InputError, OutputError) as e:
         print(f"{PROG}: error: {e}", file=sys.stderr)
         sys.exit(1)
     except Exception as e:  # keep failures to one line for `sdins paper`

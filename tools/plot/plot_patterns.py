@@ -19,6 +19,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from plot_io import OutputError, save_figure  # noqa: E402  (beside this script)
 
 PROG = "plot_patterns.py"
 
@@ -89,7 +90,7 @@ def main(argv):
     b.grid(alpha=0.3, axis="y")
     fig.suptitle("Which turn patterns make the 24-state filter worth it", fontsize=11)
     fig.tight_layout()
-    fig.savefig(os.path.join(argv[1], "patterns.png"), dpi=150)
+    save_figure(fig, os.path.join(argv[1], "patterns.png"), dpi=150)
     plt.close(fig)
     print(f"{PROG}: wrote patterns.png in {argv[1]}")
     return 0
@@ -98,7 +99,7 @@ def main(argv):
 if __name__ == "__main__":
     try:
         sys.exit(main(sys.argv))
-    except InputError as e:
+    except (InputError, OutputError) as e:
         print(f"{PROG}: error: {e}", file=sys.stderr)
         sys.exit(1)
     except Exception as e:  # keep failures to one line for `sdins paper`

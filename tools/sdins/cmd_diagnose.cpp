@@ -426,6 +426,7 @@ int run_diagnose() {
                 r.base.outages.reacquisitions, cfg.outage_length_s, pvt ? "position scalar" : "pseudorange",
                 r.base.outages.reacquisition_nis_mean, r.extended.outages.reacquisition_nis_mean);
 
+  bool plots_failed = false;
   if (!opt.report.empty()) {
     const tools::RunDirectory run_dir(opt.report);  // docs/faults.md: summary.json removed now, written last
     write_traces(run_dir.path("baseline.csv"), r.base);
@@ -439,6 +440,7 @@ int run_diagnose() {
     }
     tools::write_json_file(run_dir.path("diagnosis.json"), j);
     const int rc = run_plot_script("plot_diagnosis.py", "'" + opt.report + "'");
+    plots_failed = rc != 0;
     tools::TextOutput md_out(run_dir.path("report.md"));
     std::ostream& md = md_out.os();
     md << "# Diagnosis of `" << opt.log << "`\n\n";
@@ -538,7 +540,7 @@ int run_diagnose() {
       if (r.base.nav.available) md << "![heading error](heading.png)\n\n";
       if (!r.findings.empty()) md << "![estimates](estimates.png)\n\n";
     } else {
-      md << "(plots not made: matplotlib unavailable)\n\n";
+      md << "(plots not made: plot_diagnosis.py failed)\n\n";
     }
     md_out.commit();
     run_dir.finish({{"command", "diagnose"},
@@ -548,6 +550,11 @@ int run_diagnose() {
                     {"plots", rc == 0},
                     {"files", files}});
     std::printf("report: %s/report.md\n", opt.report.c_str());
+  }
+  if (plots_failed) {  // docs/faults.md: an output not written fails the command; the rest is complete
+    std::fprintf(stderr, "sdins diagnose: error: the report's figures could not be made (plot_diagnosis.py's message "
+                         "above); the JSON and report.md are complete\n");
+    return 1;
   }
   return 0;
 }

@@ -338,8 +338,9 @@ int run_paper_body() {
   write_report(out, summary);
   tools::throw_if_interrupted("paper stopped before its summary; no summary.json written");
   run_dir->finish(summary);  // the completion marker; the figures below are drawn from it
-  if (opt.plots && run_plot_script("plot_paper.py", "\"" + out.string() + "\"") != 0)
-    std::fprintf(stderr, "sdins paper: warning: the figures could not be made (plot_paper.py failed)\n");
+  // A figure that cannot be written fails the command (docs/faults.md), after the results, which
+  // are complete: summary.json and the CSVs do not depend on the figures.
+  const bool plots_failed = opt.plots && run_plot_script("plot_paper.py", "\"" + out.string() + "\"") != 0;
   std::printf("\nclaims:\n");
   for (const auto& c : summary["claims"])
     std::printf("  %-24s %s\n", c["id"].get<std::string>().c_str(), c["verdict"].get<std::string>().c_str());
@@ -348,6 +349,13 @@ int run_paper_body() {
     std::printf("  %-4s %-90s %8.3f (limit %.3f%s)\n", c.pass ? "ok" : "FAIL", c.name.c_str(), c.value, c.limit,
                 c.limit2 != c.limit ? (" .. " + std::to_string(c.limit2)).c_str() : "");
   std::printf("wrote %s/{summary.json,report.md,mis*/stats_*.csv,*.png,analysis/}\n", out.string().c_str());
+  if (plots_failed) {
+    std::fprintf(stderr,
+                 "sdins paper: error: the figures could not be made (plot_paper.py's message above); the results in %s "
+                 "are complete (--no-plots skips the figures)\n",
+                 out.string().c_str());
+    return 1;
+  }
   return 0;
 }
 
@@ -430,10 +438,16 @@ int run_patterns_body() {
     f << "\n" << paragraph << "\n\n![U and E ratio per pattern](patterns.png)\n";
     md.commit();
   }
-  if (opt.plots && run_plot_script("plot_patterns.py", "\"" + out.string() + "\"") != 0)
-    std::fprintf(stderr, "sdins paper: warning: the pattern figure could not be made (plot_patterns.py failed)\n");
+  const bool plots_failed = opt.plots && run_plot_script("plot_patterns.py", "\"" + out.string() + "\"") != 0;
   std::printf("\n%s\nwrote %s/{patterns.json,patterns.md,patterns.png,<pattern>/stats_*.csv}\n", paragraph.c_str(),
               out.string().c_str());
+  if (plots_failed) {
+    std::fprintf(stderr,
+                 "sdins paper: error: the pattern figure could not be made (plot_patterns.py's message above); the "
+                 "results in %s are complete (--no-plots skips the figures)\n",
+                 out.string().c_str());
+    return 1;
+  }
   return 0;
 }
 

@@ -12,6 +12,7 @@
 #include <type_traits>
 
 #include "sim/almanac.hpp"
+#include "tools/interrupt.hpp"
 
 #if SDINS_WITH_MPI
 #include <mpi.h>
@@ -185,6 +186,8 @@ void wait_gently(MPI_Request& req, const char* what) {
     int done = 0;
     mpi_check(MPI_Test(&req, &done, MPI_STATUS_IGNORE), what);
     if (done) return;
+    // A rank that was interrupted sends nothing: the others must not wait for it.
+    tools::throw_if_interrupted(std::string("stopped while exchanging results (") + what + ")");
     std::this_thread::sleep_for(pause);
     pause = std::min(pause * 2, std::chrono::microseconds(5000));
   }
@@ -442,6 +445,14 @@ int run_guarded(const std::function<int()>& body) {
   if (w.size <= 1) return body();
   try {
     return body();
+  } catch (const tools::Interrupted& e) {
+    // mpirun forwards SIGINT/SIGTERM to every rank as SIGTERM and kills them 1 s later: each rank
+    // says how far it got, and the job ends with the signal's exit code (128 + signal) through
+    // MPI_Abort, which the launcher returns; no rank writes results (docs/faults.md).
+    std::fprintf(stderr, "sdins: MPI rank %d of %d: %s\n", w.rank, w.size, e.what());
+    std::fflush(stderr);
+    std::fflush(stdout);
+    std::_Exit(tools::interrupt_exit_code());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sdins: error on MPI rank %d of %d: %s\n", w.rank, w.size, e.what());
   } catch (...) {

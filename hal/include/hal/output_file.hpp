@@ -6,17 +6,21 @@
 //    an input (same st_dev/st_ino after following links), that lies inside an input directory, or
 //    that is the same file as another output of the same command, is refused with a message naming
 //    both paths;
-//  - OutputFile: the bytes go to a temporary file beside the target (".NAME.sdins-tmp.PID.N", in
-//    the target's directory so the rename is atomic); commit() flushes, fsyncs, closes and renames
-//    it over the target. Until then the target keeps its old contents (or does not exist): a
-//    failure, an exception or an interrupt leaves the old file or nothing, never half a file.
+//  - OutputFile: the bytes go to an unnamed file in the target's directory (O_TMPFILE); commit()
+//    flushes and fsyncs it and links it in: as the target when there is none, else under a
+//    temporary name renamed over the target (atomic: same directory). Where O_TMPFILE or /proc is
+//    missing, a named temporary file ".NAME.sdins-tmp.PID.N" beside the target is written and
+//    renamed instead. Until commit() the target keeps its old contents (or does not exist): a
+//    failure, an exception, an interrupt or a SIGKILL leaves the old file or nothing, never half a
+//    file, and (with O_TMPFILE) no temporary file either.
 //    An existing target that is not a regular file (a device such as /dev/null or /dev/full, a
 //    FIFO) is written in place, since it cannot be renamed over;
 //  - every write, flush, fsync, close and rename is checked; the first failure is kept with the
 //    file's name and the errno text (error()), and commit() returns false.
 // A temporary file is registered until commit()/abort() so that remove_pending_outputs() (async-
-// signal-safe: unlink() only) can delete it from a signal handler before the process exits. A
-// process killed with SIGKILL leaves its temporary file beside the target (the target untouched).
+// signal-safe: unlink() only) can delete it from a signal handler before the process exits. Only
+// a named temporary file can outlive a SIGKILL: the fallback's whole life, or the microseconds
+// between link and rename when an existing target is replaced (the target is untouched either way).
 //
 // Host-side only (hal's POSIX part): no exceptions; status by bool + error().
 #pragma once
@@ -76,11 +80,14 @@ class OutputFile {
     OutputFile& f_;
   };
   bool drain();
+  std::string temporary_name() const;
+  bool link_anonymous();
   void fail(const char* what, int err);
   void release_slot();
 
   int fd_ = -1;
   bool in_place_ = false;  ///< writing a non-regular target directly
+  bool anonymous_ = false; ///< fd_ is an unnamed O_TMPFILE file, linked in by commit()
   int slot_ = -1;          ///< registry slot of the temporary file
   std::string path_;       ///< as given
   std::string target_;     ///< the file replaced (links resolved)
@@ -95,6 +102,10 @@ class OutputFile {
 
 /// Writes a whole file through OutputFile. false with `error` set on any failure.
 bool write_file_atomic(const std::string& path, std::string_view content, std::string& error);
+
+/// Whether OutputFile tries an unnamed O_TMPFILE file first (default true). Tests switch it off to
+/// exercise the named-temporary fallback that file systems without O_TMPFILE get.
+void set_unnamed_temporaries(bool on) noexcept;
 
 /// Removes every registered temporary file (async-signal-safe: unlink only). For signal handlers.
 void remove_pending_outputs() noexcept;

@@ -306,6 +306,10 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   std::array<const sim::TruthSample*, kMaxSpf> truth_at{};  ///< the epoch's truth, or nullptr
   Clock::duration d_sim{}, d_mech{}, d_ekf{};
   for (std::size_t j0 = 0; j0 < truth.imu.size(); j0 += static_cast<std::size_t>(spf)) {
+    // SIGINT/SIGTERM: a run stops within a frame (run_many then discards it and throws). Under
+    // mpirun the launcher kills the ranks 1 s after forwarding the signal, so a rank must not wait
+    // for the end of a long run to notice it (docs/faults.md).
+    if (interrupted()) break;
     const auto c0 = Clock::now();
     const int nf = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(spf), truth.imu.size() - j0));
     for (int k = 0; k < nf; ++k) {
