@@ -16,6 +16,7 @@ double now_s(clockid_t c) {
 
 double mono_now_s() { return now_s(CLOCK_MONOTONIC); }
 double wall_now_s() { return now_s(CLOCK_REALTIME); }
+double thread_cpu_now_s() { return now_s(CLOCK_THREAD_CPUTIME_ID); }
 
 double sleep_until_mono_s(double t_s) {
   if (t_s > mono_now_s()) {

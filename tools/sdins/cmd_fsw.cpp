@@ -100,11 +100,16 @@ int run_fsw() {
               static_cast<unsigned long long>(r.lcm_send_failures), r.log_path.empty() ? "(none)" : r.log_path.c_str(),
               static_cast<unsigned long long>(r.lcm_logged), static_cast<unsigned long long>(r.lcm_log_failures));
   if (r.realtime)
-    std::printf("realtime: %s; minor frames timed=%llu exec mean=%.6f s max=%.6f s overruns=%u; IMU lateness mean=%.6f "
-                "s max=%.6f s late(>%.3f s)=%llu missing=%u\n",
+    std::printf("realtime: %s; minor frames timed=%llu exec mean=%.6f s max=%.6f s (CPU max %.6f s) overruns=%u "
+                "(execution %llu, stalled %llu); IMU lateness mean=%.6f s max=%.6f s late(>%.3f s)=%llu missing=%u\n",
                 r.sched_note.c_str(), static_cast<unsigned long long>(r.minor_frames_timed), r.exec_mean_s,
-                r.exec_max_s, e.overruns, r.imu_lateness_mean_s, r.imu_lateness_max_s, r.late_threshold_s,
+                r.exec_max_s, r.exec_cpu_max_s, e.overruns, static_cast<unsigned long long>(r.overruns_execution),
+                static_cast<unsigned long long>(r.overruns_stalled), r.imu_lateness_mean_s, r.imu_lateness_max_s,
+                r.late_threshold_s,
                 static_cast<unsigned long long>(r.imu_late), r.rx.imu_missing);
+  if (r.realtime && r.minor_frames_timed > 0)
+    std::printf("realtime: longest minor frame %.6f s at INS time %.3f s (%s)\n", r.exec_max_s, r.exec_max_t_s,
+                r.exec_max_work.c_str());
   std::printf("wall time: %.3f s\n", r.wall_s);
   if (!opt.run.json.empty()) tools::write_json_file(opt.run.json, tools::to_json(r));
   if (r.exit == tools::FswExit::kStopped) return tools::interrupt_exit_code();

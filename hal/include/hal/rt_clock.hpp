@@ -9,6 +9,9 @@ namespace hal {
 
 /// CLOCK_MONOTONIC now [s] (pacing, execution times, lateness).
 double mono_now_s();
+/// CLOCK_THREAD_CPUTIME_ID now [s]: CPU time the calling thread has run. Set against the monotonic
+/// clock it tells execution from time the thread spent switched out or stalled.
+double thread_cpu_now_s();
 /// CLOCK_REALTIME now [s] (the time scale of CAN frame receive timestamps).
 double wall_now_s();
 /// Sleeps until CLOCK_MONOTONIC reaches t_s (clock_nanosleep with TIMER_ABSTIME, restarted after

@@ -394,7 +394,11 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
     last_ack_imu = a.imu_frames;
   };
 
-  double exec_acc = 0.0, exec_sum = 0.0, late_sum = 0.0;
+  double exec_acc = 0.0, exec_cpu_acc = 0.0, exec_sum = 0.0, late_sum = 0.0;
+  const double budget_s = ncfg.app.exec.frame_budget_s;  // the executive's overrun threshold
+  const int spf = std::max(1, ncfg.app.exec.imu_samples_per_frame);
+  int imu_in_frame = 0;
+  double imu_t_s = 0.0;  // the last IMU sample's time
   bool have_base = false;
   double base_mono = 0.0, base_t = 0.0;
   for (;;) {
@@ -421,6 +425,7 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
       break;
     }
     const double arrival = hal::mono_now_s();
+    const double arrival_cpu = cfg.realtime ? hal::thread_cpu_now_s() : 0.0;
     last_frame = arrival;
     ++r.frames_received;
     if (cfg.realtime && !f.extended && f.id == can::kIdImuSample) {
@@ -431,6 +436,7 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
           base_mono = arrival;
           base_t = d.sample.t_s;
         }
+        imu_t_s = d.sample.t_s;
         const double late = arrival - (base_mono + (d.sample.t_s - base_t));
         r.imu_lateness_max_s = r.imu_lateness_n == 0 ? late : std::max(r.imu_lateness_max_s, late);
         ++r.imu_lateness_n;
@@ -442,14 +448,32 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
     in.push(f, f.timestamp_s);
     if (cfg.realtime) {
       // A minor frame's execution: the handling of every frame since the previous one completed.
+      // Before initialisation there are no navigation frames: every imu_samples_per_frame IMU
+      // samples (levelling, the initialisation attempts on the GNSS epochs) count as one frame.
       exec_acc += hal::mono_now_s() - arrival;
-      if (node.summary().nav_frames != nav_before) {
+      exec_cpu_acc += hal::thread_cpu_now_s() - arrival_cpu;
+      if (!f.extended && f.id == can::kIdImuSample) ++imu_in_frame;
+      const bool nav_frame = node.summary().nav_frames != nav_before;
+      const bool pre_init_frame = !node.summary().initialised && imu_in_frame >= spf;
+      if (nav_frame || pre_init_frame) {
         node.set_prev_tick_exec_s(exec_acc);
         ++r.minor_frames_timed;
         r.frame_exec_s.push_back(exec_acc);
         exec_sum += exec_acc;
-        r.exec_max_s = std::max(r.exec_max_s, exec_acc);
+        if (exec_acc > r.exec_max_s) {
+          const fsw::FrameOutput& fo = node.last_frame();
+          r.exec_max_s = exec_acc;
+          r.exec_max_t_s = nav_frame ? fo.nav.t_s : imu_t_s;
+          r.exec_max_work = !nav_frame                    ? "before initialisation (levelling, initialisation attempts)"
+                            : fo.ekf_released             ? "released the 1 Hz group"
+                            : fo.ekf_ran                  ? "landed a 1 Hz correction"
+                                                          : "200 Hz group only";
+        }
+        r.exec_cpu_max_s = std::max(r.exec_cpu_max_s, exec_cpu_acc);
+        if (exec_acc > budget_s) ++(exec_cpu_acc > budget_s ? r.overruns_execution : r.overruns_stalled);
         exec_acc = 0.0;
+        exec_cpu_acc = 0.0;
+        imu_in_frame = 0;
       }
     }
     if (in.control_changed()) {
@@ -586,7 +610,12 @@ nlohmann::json to_json(const FswRunResult& r) {
                            {"minor_frames_timed", r.minor_frames_timed},
                            {"exec_mean_s", r.exec_mean_s},
                            {"exec_max_s", r.exec_max_s},
+                           {"exec_cpu_max_s", r.exec_cpu_max_s},
+                           {"exec_max_t_s", r.exec_max_t_s},
+                           {"exec_max_work", r.exec_max_work},
                            {"overruns", r.exec.overruns},
+                           {"overruns_execution", r.overruns_execution},
+                           {"overruns_stalled", r.overruns_stalled},
                            {"imu_frames_timed", r.imu_lateness_n},
                            {"imu_lateness_mean_s", r.imu_lateness_mean_s},
                            {"imu_lateness_max_s", r.imu_lateness_max_s},

@@ -106,6 +106,13 @@ struct FswRunResult {
   std::uint64_t minor_frames_timed = 0;
   double exec_mean_s = 0.0, exec_max_s = 0.0;
   std::vector<double> frame_exec_s;  ///< real time: each minor frame's execution [s] (the 200 Hz group)
+  /// The same frames' CPU time on the receiving thread [s]: an overrun whose CPU time is within the
+  /// budget was a stall (preemption, the hypervisor), not execution.
+  double exec_cpu_max_s = 0.0;
+  double exec_max_t_s = 0.0;        ///< INS time at the end of the longest frame (wall time)
+  std::string exec_max_work;        ///< what that frame did ("released the 1 Hz group", ...)
+  std::uint64_t overruns_execution = 0;  ///< frames over the budget in CPU time
+  std::uint64_t overruns_stalled = 0;    ///< frames over the budget in wall time only
   hal::EkfGroupTimes ekf_group{};    ///< the 1 Hz thread's runs
   std::uint64_t imu_lateness_n = 0, imu_late = 0;
   double imu_lateness_mean_s = 0.0, imu_lateness_max_s = 0.0, late_threshold_s = 0.0;
