@@ -42,6 +42,7 @@ const char* to_string(SegmentType t) {
     case SegmentType::kSpeedChange: return "speed_change";
     case SegmentType::kClimb: return "climb";
     case SegmentType::kRoll: return "roll";
+    case SegmentType::kCrab: return "crab";
   }
   return "?";
 }
@@ -136,13 +137,14 @@ class Parser : public toml_schema::Reader {
   bool segment(const toml::table& t, const std::string& path, Segment& seg) {
     const toml::node* type = t.get("type");
     if (!type) {
-      return fail(t, "'" + path + ".type' is required (\"straight\", \"turn\", \"speed_change\", \"climb\" or \"roll\")");
+      return fail(t, "'" + path + ".type' is required (\"straight\", \"turn\", \"speed_change\", \"climb\", \"roll\" or \"crab\")");
     }
     if (!choice(seg.type, {{"straight", SegmentType::kStraight},
                            {"turn", SegmentType::kTurn},
                            {"speed_change", SegmentType::kSpeedChange},
                            {"climb", SegmentType::kClimb},
-                           {"roll", SegmentType::kRoll}})(*type, path + ".type")) {
+                           {"roll", SegmentType::kRoll},
+                           {"crab", SegmentType::kCrab}})(*type, path + ".type")) {
       return false;
     }
     const SegmentType type_of_segment = seg.type;
@@ -158,8 +160,9 @@ class Parser : public toml_schema::Reader {
     };
     const SegmentType straight = SegmentType::kStraight, turn = SegmentType::kTurn;
     const SegmentType speed = SegmentType::kSpeedChange, climb = SegmentType::kClimb, roll = SegmentType::kRoll;
-    // The hold of a climb may be 0 (pull-up then push-over); every other duration is positive.
-    const bool zero_ok = seg.type == climb || seg.type == roll;
+    const SegmentType crab = SegmentType::kCrab;
+    // The hold of a climb, roll or crab may be 0 (pull-up then push-over); every other duration is positive.
+    const bool zero_ok = seg.type == climb || seg.type == roll || seg.type == crab;
     // A signed amount in [-limit, limit] that must not be 0 (a speed change or climb of nothing).
     const auto nonzero = [this](double& v, double limit) -> Handler {
       return [this, &v, limit](const toml::node& n, const std::string& p) {
@@ -177,15 +180,16 @@ class Parser : public toml_schema::Reader {
     };
     return fields(t, path + ".", {
         {"type", [](const toml::node&, const std::string&) { return true; }},
-        {"duration_s", only({straight, speed, climb, roll},
+        {"duration_s", only({straight, speed, climb, roll, crab},
                             number(seg.duration_s, zero_ok ? closed(0.0, 86400.0) : left_open(0.0, 86400.0)))},
-        {"direction", only({turn, roll}, choice(seg.direction, {{"left", TurnDirection::kLeft}, {"right", TurnDirection::kRight}}))},
+        {"direction", only({turn, roll, crab}, choice(seg.direction, {{"left", TurnDirection::kLeft}, {"right", TurnDirection::kRight}}))},
         {"bank_deg", only({turn, roll}, number(seg.bank_deg, left_open(0.0, 80.0)))},
         {"heading_change_deg", only({turn}, number(seg.heading_change_deg, left_open(0.0, 3600.0)))},
         {"roll_time_s", only({turn, roll}, number(seg.roll_time_s, left_open(0.0, 60.0)))},
         {"delta_speed_mps", only({speed}, nonzero(seg.delta_speed_mps, 400.0))},
         {"flight_path_deg", only({climb}, nonzero(seg.flight_path_deg, 45.0))},
-        {"transition_s", only({climb}, number(seg.transition_s, left_open(0.0, 120.0)))},
+        {"transition_s", only({climb, crab}, number(seg.transition_s, left_open(0.0, 120.0)))},
+        {"crab_deg", only({crab}, number(seg.crab_deg, left_open(0.0, 45.0)))},
     });
   }
 

@@ -65,7 +65,7 @@ bool all_finite(const Scenario& sc) {
   for (double v : {st.lat_deg, st.lon_deg, st.alt_m, st.speed_mps, st.heading_deg, st.pitch_deg}) ok = ok && std::isfinite(v);
   for (const Segment& s : sc.segments)
     for (double v : {s.duration_s, s.bank_deg, s.heading_change_deg, s.roll_time_s, s.delta_speed_mps, s.flight_path_deg,
-                     s.transition_s})
+                     s.transition_s, s.crab_deg})
       ok = ok && std::isfinite(v);
   for (const auto& e : sc.effects.value)
     for (double v : e) ok = ok && std::isfinite(v);
@@ -99,6 +99,12 @@ Segment used_fields(const Segment& s) {
       d.direction = s.direction;
       d.bank_deg = s.bank_deg;
       d.roll_time_s = s.roll_time_s;
+      break;
+    case SegmentType::kCrab:
+      d.duration_s = s.duration_s;
+      d.direction = s.direction;
+      d.crab_deg = s.crab_deg;
+      d.transition_s = s.transition_s;
       break;
   }
   return d;
@@ -135,6 +141,12 @@ std::string segments_toml(const std::vector<Segment>& segments) {
           << "direction = \"" << direction(s.direction) << "\"\n"
           << "bank_deg = " << num(s.bank_deg) << "\n"
           << "roll_time_s = " << num(s.roll_time_s) << "\n";
+        break;
+      case SegmentType::kCrab:
+        o << "duration_s = " << num(s.duration_s) << "\n"
+          << "direction = \"" << direction(s.direction) << "\"\n"
+          << "crab_deg = " << num(s.crab_deg) << "\n"
+          << "transition_s = " << num(s.transition_s) << "\n";
         break;
     }
   }

@@ -201,6 +201,26 @@ std::unique_ptr<FlightMotion> FlightMotion::create(const Scenario& sc, std::stri
         t += 2.0 * T + s.duration_s;
         break;
       }
+      case SegmentType::kCrab: {
+        // Wings level and straight: only the nose moves off the track (kinematics: the velocity
+        // is unchanged, the attitude's yaw is track + crab, the body yaw rate the crab's rate).
+        const double c1 = sign * s.crab_deg * kDegToRad;
+        const double T = s.transition_s;
+        FlightPhase in = level(FlightPhase::Kind::kStraight, t, t + T, 0.0, seg, -1, true);
+        in.crab1_rad = c1;
+        m->phases_.push_back(in);
+        if (s.duration_s > 0.0) {
+          FlightPhase hold = level(FlightPhase::Kind::kStraight, t + T, t + T + s.duration_s, 0.0, seg, -1, true);
+          hold.crab0_rad = hold.crab1_rad = c1;
+          m->phases_.push_back(hold);
+        }
+        FlightPhase out = level(FlightPhase::Kind::kStraight, t + T + s.duration_s, t + 2.0 * T + s.duration_s, 0.0,
+                                seg, -1, true);
+        out.crab0_rad = c1;
+        m->phases_.push_back(out);
+        t += 2.0 * T + s.duration_s;
+        break;
+      }
     }
     ++idx;
   }
@@ -278,6 +298,11 @@ void FlightMotion::flight_path(double t_s, double& gamma_rad, double& gamma_rate
   blend(p, t_s, p.gamma0_rad, p.gamma1_rad, gamma_rad, gamma_rate_radps);
 }
 
+void FlightMotion::crab(double t_s, double& crab_rad, double& crab_rate_radps) const {
+  const FlightPhase& p = phase_at(t_s);
+  blend(p, t_s, p.crab0_rad, p.crab1_rad, crab_rad, crab_rate_radps);
+}
+
 double FlightMotion::heading_rate(double t_s, double phi, double V) const {
   return phase_at(t_s).coordinated ? g_coord_mps2_ * std::tan(phi) / V : 0.0;
 }
@@ -303,7 +328,9 @@ Kinematics FlightMotion::eval(double t_s, const State& y) const {
   roll(t_s, phi, phi_dot);
   speed(t_s, V, V_dot);
   flight_path(t_s, gam, gam_dot);
-  const double psi = y(0);
+  double beta = 0.0, beta_dot = 0.0;
+  crab(t_s, beta, beta_dot);
+  const double psi = y(0);  // the track
   const double psi_dot = heading_rate(t_s, phi, V);
   const double theta = start_.pitch_deg * kDegToRad + gam;
   const double sp = std::sin(psi), cp = std::cos(psi), sg = std::sin(gam), cg = std::cos(gam);
@@ -313,8 +340,9 @@ Kinematics FlightMotion::eval(double t_s, const State& y) const {
   // d/dt of V (cos g sin psi, cos g cos psi, sin g).
   k.acc_enu_mps2 = V_dot * Vec3(cg * sp, cg * cp, sg) + V * gam_dot * Vec3(-sg * sp, -sg * cp, cg) +
                    V * psi_dot * Vec3(cg * cp, -cg * sp, 0.0);
-  k.C_b_n = fsw::C_b_n_from_euler(phi, theta, psi);
-  k.omega_nb_b_radps = fsw::omega_nb_b_from_euler_rates(phi, theta, phi_dot, gam_dot, psi_dot);
+  // The body heading is the track plus the crab angle; the velocity above follows the track only.
+  k.C_b_n = fsw::C_b_n_from_euler(phi, theta, psi + beta);
+  k.omega_nb_b_radps = fsw::omega_nb_b_from_euler_rates(phi, theta, phi_dot, gam_dot, psi_dot + beta_dot);
   return k;
 }
 
@@ -339,7 +367,8 @@ std::size_t phase_count(const Segment& s) {
     case SegmentType::kSpeedChange: return 1;
     case SegmentType::kTurn: return 3;
     case SegmentType::kClimb:
-    case SegmentType::kRoll: return s.duration_s > 0.0 ? 3 : 2;
+    case SegmentType::kRoll:
+    case SegmentType::kCrab: return s.duration_s > 0.0 ? 3 : 2;
   }
   return 1;
 }

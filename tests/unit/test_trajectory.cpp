@@ -591,6 +591,78 @@ TEST(FlightMotion, SpeedChangeClimbAndRollWithoutTurning) {
   EXPECT_LT(max_att, 1e-8);
 }
 
+// A crab (the nose off the track, wings level, the velocity unchanged: the heading a crosswind
+// needs) moves only the attitude: the velocity keeps its direction and size, the body heading
+// reaches track + crab and comes back, the body x axis leaves the velocity by the crab angle, and
+// the ideal IMU made from it flies free-inertial on the truth like the other segments.
+TEST(FlightMotion, CrabTurnsTheNoseOffTheTrackWithTheVelocityUnchanged) {
+  sim::Scenario sc;
+  sc.duration_s = 200.0;
+  sc.repeat_from.reset();
+  sc.start.heading_deg = 30.0;
+  sim::Segment straight{.type = sim::SegmentType::kStraight, .duration_s = 20.0};
+  sim::Segment right{.type = sim::SegmentType::kCrab, .duration_s = 30.0, .direction = sim::TurnDirection::kRight,
+                     .transition_s = 10.0, .crab_deg = 15.0};
+  sim::Segment left = right;
+  left.direction = sim::TurnDirection::kLeft;
+  left.duration_s = 0.0;  // in and out at once
+  sc.segments = {straight, right, straight, left, straight};
+  auto m = make(sc);
+  ASSERT_TRUE(m);
+  sim::TruthGenerator gen(*m, 1000.0);
+  const double V0 = sc.start.speed_mps;
+  const Vec3 v0 = gen.current().vel_enu_mps;
+  const Vec3 f_n0 = gen.current().C_b_n * gen.current().f_b_mps2;
+  const auto heading = [](const sim::TruthSample& s) { return std::atan2(s.C_b_n(0, 0), s.C_b_n(1, 0)); };
+  double max_crab = 0.0, min_crab = 0.0, max_yaw_rate = 0.0, max_lat_f = 0.0;
+  while (gen.current().t_s < 140.0 - 1e-9) {
+    const sim::TruthSample& s = gen.next();
+    const double t = s.t_s;
+    // The velocity: the start's, to the solver's precision (no turn, no speed change, no climb).
+    EXPECT_NEAR((s.vel_enu_mps - v0).norm(), 0.0, 1e-6) << t;
+    // Angle of body x from the velocity, + nose right of the track.
+    const Vec3 x_n = s.C_b_n.col(0);
+    const double crab = std::atan2(x_n.x() * v0.y() - x_n.y() * v0.x(), x_n.head<2>().dot(v0.head<2>()));
+    max_crab = std::max(max_crab, crab);
+    min_crab = std::min(min_crab, crab);
+    // right: 20 s in 10 s, hold 30 s (30..60), out 10 s: ends 70 s; left: 90 s in 10, out 10: 110 s.
+    if (t > 30.0 && t < 60.0) EXPECT_NEAR(crab, 15.0 * kDeg, 1e-9) << t;
+    if (t < 20.0 || (t > 70.0 && t < 90.0) || t > 110.0) EXPECT_NEAR(crab, 0.0, 1e-9) << t;
+    EXPECT_NEAR(heading(s), 30.0 * kDeg + crab, 1e-9);
+    EXPECT_NEAR(s.vel_enu_mps.norm(), V0, 1e-6);
+    max_yaw_rate = std::max(max_yaw_rate, std::abs(s.omega_nb_b_radps.z()));
+    max_lat_f = std::max(max_lat_f, (s.C_b_n * s.f_b_mps2 - f_n0).norm());
+    EXPECT_FALSE(s.phase.turning);
+  }
+  EXPECT_NEAR(max_crab, 15.0 * kDeg, 1e-9);
+  EXPECT_NEAR(min_crab, -15.0 * kDeg, 1e-9);
+  // smooth_step: peak rate twice the mean, 2 x 15 deg / 10 s.
+  EXPECT_NEAR(max_yaw_rate, 2.0 * 15.0 * kDeg / 10.0, 1e-4);
+  // The specific force in the navigation frame stays that of the straight flight (no side force: the
+  // velocity does not turn; what changes is gravity and the transport rate along 35 km).
+  EXPECT_LT(max_lat_f, 1e-3);
+
+  tools::FreeInertialConfig cfg;
+  cfg.duration_s = 200.0;
+  double max_pos = 0.0, max_vel = 0.0, max_att = 0.0;
+  fsw::Status st = fsw::Status::kOk;
+  tools::run_free_inertial(
+      *m, nullptr, cfg,
+      [&](const sim::TruthSample& truth, const fsw::NavState& nav) {
+        const tools::NavErrors e = tools::nav_errors(nav, truth);
+        max_pos = std::max(max_pos, e.pos_enu_m.norm());
+        max_vel = std::max(max_vel, e.vel_enu_mps.norm());
+        max_att = std::max(max_att, e.att_phi_enu_rad.norm());
+      },
+      &st);
+  ASSERT_EQ(st, fsw::Status::kOk);
+  std::printf("crab, perfect IMU free-inertial over 200 s: position %.2e m, velocity %.2e m/s, attitude %.2e rad\n",
+              max_pos, max_vel, max_att);
+  EXPECT_LT(max_pos, 0.05);
+  EXPECT_LT(max_vel, 1e-3);
+  EXPECT_LT(max_att, 1e-8);
+}
+
 TEST(FlightMotion, SpeedChangeBelowTheMinimumIsRejected) {
   sim::Scenario sc;
   sc.segments = {sim::Segment{.type = sim::SegmentType::kSpeedChange, .duration_s = 10.0, .delta_speed_mps = -240.0}};

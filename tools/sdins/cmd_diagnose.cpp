@@ -112,6 +112,12 @@ nlohmann::json segment_json(const sim::Segment& s) {
       j["bank_deg"] = s.bank_deg;
       j["roll_time_s"] = s.roll_time_s;
       break;
+    case sim::SegmentType::kCrab:
+      j["duration_s"] = s.duration_s;
+      j["direction"] = dir;
+      j["crab_deg"] = s.crab_deg;
+      j["transition_s"] = s.transition_s;
+      break;
   }
   return j;
 }

@@ -13,7 +13,7 @@
 
 namespace sim {
 
-enum class SegmentType { kStraight, kTurn, kSpeedChange, kClimb, kRoll };
+enum class SegmentType { kStraight, kTurn, kSpeedChange, kClimb, kRoll, kCrab };
 const char* to_string(SegmentType t);
 enum class TurnDirection { kLeft, kRight };
 
@@ -31,16 +31,21 @@ enum class TurnDirection { kLeft, kRight };
 ///  - roll: roll to bank_deg (direction) over roll_time_s, held for duration_s, back over
 ///    roll_time_s, with the heading held (not coordinated: the sideslip a pilot flies with rudder):
 ///    a roll without turning, which separates roll-rate effects from turn-rate ones.
+///  - crab: wings level and straight, the nose yawed crab_deg to direction off the track over
+///    transition_s, held for duration_s, back over transition_s; the velocity (track, speed, climb)
+///    does not change: the heading offset an aircraft flies in a crosswind. The only segment with the
+///    body x axis off the velocity (what separates a lever arm along x from a time offset).
 struct Segment {
   SegmentType type = SegmentType::kStraight;
-  double duration_s = 60.0;           ///< straight, speed_change, climb (hold), roll (hold) [s]
-  TurnDirection direction = TurnDirection::kRight;  ///< turn, roll
+  double duration_s = 60.0;           ///< straight, speed_change, climb (hold), roll (hold), crab (hold) [s]
+  TurnDirection direction = TurnDirection::kRight;  ///< turn, roll, crab (right: nose right of the track)
   double bank_deg = 60.0;             ///< turn, roll: magnitude (0, 80] [deg]
   double heading_change_deg = 180.0;  ///< turn only, magnitude (0, 3600] [deg]
   double roll_time_s = 5.0;           ///< turn, roll: each of roll-in and roll-out (0, 60] [s]
   double delta_speed_mps = 50.0;      ///< speed_change: [-400, 400], not 0 [m/s]
   double flight_path_deg = 10.0;      ///< climb: [-45, 45], not 0 [deg]
-  double transition_s = 10.0;         ///< climb: each of pull-up and push-over (0, 120] [s]
+  double transition_s = 10.0;         ///< climb, crab: each of the two transitions (0, 120] [s]
+  double crab_deg = 10.0;             ///< crab: heading minus track, magnitude (0, 45] [deg]
   bool operator==(const Segment&) const = default;
 };
 

@@ -102,9 +102,9 @@ void imu_from_kinematics(const Kinematics& k, Vec3& omega_ib_b, Vec3& f_b);
 // Motions
 // ------------------------------------------------------------------------------------------------
 
-/// One phase of a flight timeline. Over the phase the speed goes from v0_mps to v1_mps and the
-/// flight-path angle from gamma0_rad to gamma1_rad (smooth_step shape; equal ends: constant); the
-/// bank follows kind. A coordinated phase turns at g tan(phi) / V; an uncoordinated one (a roll
+/// One phase of a flight timeline. Over the phase the speed goes from v0_mps to v1_mps, the
+/// flight-path angle from gamma0_rad to gamma1_rad and the crab angle (heading minus track) from
+/// crab0_rad to crab1_rad (smooth_step shape; equal ends: constant); the bank follows kind. A coordinated phase turns at g tan(phi) / V; an uncoordinated one (a roll
 /// without turning) holds the heading.
 struct FlightPhase {
   enum class Kind { kStraight, kRollIn, kBank, kRollOut };
@@ -117,10 +117,12 @@ struct FlightPhase {
   double v0_mps = 0.0, v1_mps = 0.0;
   double gamma0_rad = 0.0, gamma1_rad = 0.0;
   bool coordinated = true;
+  double crab0_rad = 0.0, crab1_rad = 0.0;
 };
 
 /// The scenario flight: coordinated bank-to-turn segments, speed changes, climbs (pull-up and
-/// push-over) and rolls without turning (scenario.hpp, Segment). ODE state y = (heading, lat, lon, h).
+/// push-over), rolls without turning and crabs (scenario.hpp, Segment). ODE state y = (track, lat,
+/// lon, h); the body heading is the track plus the crab angle.
 class FlightMotion final : public Motion {
  public:
   /// Builds the timeline up to the scenario duration; returns nullptr and an error message when
@@ -139,6 +141,8 @@ class FlightMotion final : public Motion {
   void speed(double t_s, double& v_mps, double& v_rate_mps2) const;
   /// Flight-path angle [rad] and its rate [rad/s] at t.
   void flight_path(double t_s, double& gamma_rad, double& gamma_rate_radps) const;
+  /// Crab angle (body heading minus track, + nose right) [rad] and its rate [rad/s] at t.
+  void crab(double t_s, double& crab_rad, double& crab_rate_radps) const;
 
  private:
   FlightMotion() = default;

@@ -537,7 +537,10 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     if (rep.pvt) {
       for (int i = 0; i < 6; ++i) {
         const fsw::PvtInnovation& o = rep.pvt_obs[static_cast<std::size_t>(i)];
-        if (o.outcome == fsw::InnovationOutcome::kGated) ++run.innovations.rejected;
+        if (o.outcome == fsw::InnovationOutcome::kGated) {
+          ++run.innovations.rejected;
+          run.gated.emplace_back(frame, std::uint8_t{0});
+        }
         if (o.outcome != fsw::InnovationOutcome::kUsed) continue;
         // Keys above the raw observations' (k < kMaxGnssChannels = 16).
         run.scalars.push_back({(frame << 6) | (static_cast<std::uint64_t>(16 + i) << 1), o.innovation, o.variance});
@@ -556,6 +559,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
         ++npr;
       } else if (o.pr_outcome == fsw::InnovationOutcome::kGated) {
         ++run.innovations.rejected;
+        run.gated.emplace_back(frame, o.prn);
       }
       if (o.prr_outcome == fsw::InnovationOutcome::kUsed) {
         run.scalars.push_back({key | 1u, o.prr_innovation_mps, o.prr_variance_m2ps2});
@@ -564,6 +568,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
         ++nprr;
       } else if (o.prr_outcome == fsw::InnovationOutcome::kGated) {
         ++run.innovations.rejected;
+        if (o.pr_outcome != fsw::InnovationOutcome::kGated) run.gated.emplace_back(frame, o.prn);
       }
     }
     pr_ss += epr;

@@ -59,7 +59,19 @@ Segment turn(TurnDirection d, double bank_deg, double heading_change_deg, double
   s.roll_time_s = roll_time_s;
   return s;
 }
+Segment crab(TurnDirection d, double crab_deg, double hold_s, double transition_s) {
+  Segment s;
+  s.type = SegmentType::kCrab;
+  s.direction = d;
+  s.crab_deg = crab_deg;
+  s.duration_s = hold_s;
+  s.transition_s = transition_s;
+  return s;
+}
 TurnDirection other(TurnDirection d) { return d == TurnDirection::kRight ? TurnDirection::kLeft : TurnDirection::kRight; }
+
+/// Crab angle of the candidate: 15 deg, the heading offset of a 65 m/s crosswind at 250 m/s.
+constexpr double kCrabDeg = 15.0;
 
 /// The candidates for a flight that ends at speed V after a turn of bank `bank_deg` to `last`.
 std::vector<SeparationTrial> candidates_for(double V, TurnDirection last, double bank_deg) {
@@ -69,7 +81,7 @@ std::vector<SeparationTrial> candidates_for(double V, TurnDirection last, double
   const double dv = std::max(10.0, 10.0 * std::round(0.04 * V));
   const double half_v = std::max(10.0, 10.0 * std::round(0.05 * V));
   const double half_bank = std::max(5.0, 0.5 * bank_deg);
-  std::vector<SeparationTrial> c(6);
+  std::vector<SeparationTrial> c(7);
   // Speed against time: the along-track error of a time offset grows with the speed, a lever
   // arm's does not; an accelerometer x scale factor sees the acceleration.
   c[0].label = "wings-level speed change";
@@ -94,6 +106,12 @@ std::vector<SeparationTrial> candidates_for(double V, TurnDirection last, double
   // Heading coverage: a whole turn, to the side the flight turned last from.
   c[5].label = "a full turn the other way";
   c[5].segments = {turn(other(last), bank_deg, 360.0, 5.0), straight(30.0)};
+  // The nose off the track, both ways, wings level with the velocity unchanged (a crosswind crab):
+  // the body x axis leaves the velocity, so a lever arm along x moves the antenna across the track
+  // while a time offset's error stays along it; every other segment keeps body x on the velocity.
+  c[6].label = "crab both ways";
+  c[6].segments = {crab(TurnDirection::kRight, kCrabDeg, 60.0, 10.0), crab(TurnDirection::kLeft, kCrabDeg, 60.0, 10.0),
+                   straight(30.0)};
   return c;
 }
 

@@ -26,6 +26,7 @@ struct ProfileInterval {
   bool lo_bounded = false, hi_bounded = false;  ///< the deviance crossed 3.84 inside the grid searched
   int runs = 0;             ///< model runs spent
   int measurements = 0;     ///< scalar measurements common to every run (the likelihood's support)
+  int gated = 0;            ///< observations the gate rejected at the estimate, left out of every run
   std::vector<double> theta, deviance;  ///< the curve: 2 (l_max - l(theta)), sorted by theta
 };
 

@@ -4,7 +4,8 @@
 //   For a finding that is a group (Finding::group: components the flight cannot tell apart), the
 //   candidates are short sequences of scenario segments appended to the flown flight: a wings-level
 //   speed change, a pull-up and push-over, a roll without turning, turns at half the bank, turns at
-//   half the speed, a full turn the other way (separation_candidates()). Each is judged by the diagnosis model itself: the
+//   half the speed, a full turn the other way, a crab both ways (the nose off the track)
+//   (separation_candidates()). Each is judged by the diagnosis model itself: the
 //   flown scenario with the candidate appended (sim::append_segments) is simulated and the extended
 //   model (the baseline and every finding's members: DiagnosisResult::extended.active) is run over
 //   it (run_diagnosis_model). Its posterior covariance at the end is the prediction: the covariance
