@@ -373,7 +373,7 @@ RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double
   long long n_imu = 0;
   while (stream.next(ev, &t)) {
     out.push(ev);
-    if (ev.kind == fsw::InputEvent::Kind::kImu && n_imu++ % decim == 0) out.truth.push_back(TruthPoint{t.t_s, t.llh, t.vel_enu_mps, fsw::Quat(t.C_b_n)});
+    if (ev.kind == fsw::InputEvent::Kind::kImu && n_imu++ % decim == 0) out.truth.push_back(sim::truth_point(t));
   }
   return out;
 }
@@ -520,12 +520,13 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
       TruthPoint t;
       if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_at(out.nav.t_s), t)) {
         const fsw::Vec3 dp = scored_error_enu_m(t);
-        const fsw::Vec3 dv = out.nav.vel_enu_mps - t.vel_enu_mps;
+        const sim::NavErrors err = sim::nav_errors(out.nav, t);
+        const fsw::Vec3& dv = err.vel_enu_mps;
         nav_pos_ss += dp.squaredNorm();
         nav_vel_ss += dv.squaredNorm();
         ++run.nav.samples;
         if (t.has_attitude) {
-          const fsw::Vec3 phi = fsw::attitude_error_enu(out.nav.C_b_n(), t.q_b_n.toRotationMatrix());
+          const fsw::Vec3& phi = err.att_phi_enu_rad;
           nav_tilt_ss += phi.head<2>().squaredNorm();
           nav_head_ss += phi.z() * phi.z();
           ++run.nav.attitude_samples;
@@ -610,7 +611,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     if (!data.truth.empty()) {
       TruthPoint t;
       if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t) && t.has_attitude)
-        head = fsw::attitude_error_enu(out.nav.C_b_n(), t.q_b_n.toRotationMatrix()).z() * fsw::kRadToDeg;
+        head = sim::nav_errors(out.nav, t).att_phi_enu_rad.z() * fsw::kRadToDeg;
     }
     run.heading_err_deg.push_back(head);
     std::vector<double> est(static_cast<std::size_t>(na)), sig(static_cast<std::size_t>(na));

@@ -50,17 +50,12 @@
 #include "fsw/strapdown.hpp"
 #include "sim/filter_config.hpp"
 #include "sim/scenario.hpp"
+#include "sim/truth.hpp"
 
 namespace tools {
 
-/// A truth or reference sample (TRUTH channel).
-struct TruthPoint {
-  double t_s = 0.0;
-  fsw::Vec3 llh = fsw::Vec3::Zero();
-  fsw::Vec3 vel_enu_mps = fsw::Vec3::Zero();
-  fsw::Quat q_b_n = fsw::Quat::Identity();
-  bool has_attitude = true;  ///< false for a position/velocity reference (an imported GNSS solution)
-};
+/// A truth or reference sample (TRUTH channel): sim/truth.hpp, with the navigation-error metric.
+using sim::TruthPoint;
 
 /// A recording in memory, in arrival order: the inputs of the flight software and, separately,
 /// truth (used only to score navigation). Stored by type (an fsw::InputEvent is about 1 KiB, an
