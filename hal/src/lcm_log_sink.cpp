@@ -113,15 +113,26 @@ void LcmReplayReader::enqueue(fsw::InputEvent&& in) {
   });
 }
 
+namespace {
+
+/// Decodes ev as a Msg into m, validates it into out (from_msg with args) and counts the status in
+/// stats; true when the input is accepted.
+template <class Msg, class Out, class... Args>
+bool decode_input(const LcmLogEvent& ev, LcmInputStats& stats, Msg& m, Out& out, const Args&... args) {
+  LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
+  if (st == LcmInputStatus::kOk) st = from_msg(m, out, args...);
+  stats.record(st);
+  return st == LcmInputStatus::kOk;
+}
+
+}  // namespace
+
 void LcmReplayReader::take(const LcmLogEvent& ev) {
   fsw::InputEvent in;
   if (ev.channel == cfg_.imu_channel) {
     sdins::imu_sample_t m{};
-    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
     ImuRecord rec;
-    if (st == LcmInputStatus::kOk) st = from_msg(m, rec, cfg_.imu_limits);
-    stats_.imu.record(st);
-    if (st != LcmInputStatus::kOk) return;
+    if (!decode_input(ev, stats_.imu, m, rec, cfg_.imu_limits)) return;
     in.imu = rec.sample;
     in.imu_counter = rec.counter;
     in.imu_status = rec.status;
@@ -148,19 +159,13 @@ void LcmReplayReader::take(const LcmLogEvent& ev) {
     in.t_s = in.gnss.t_s;
   } else if (ev.channel == cfg_.almanac_channel) {
     sdins::gps_almanac_t m{};
-    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
-    if (st == LcmInputStatus::kOk) st = from_msg(m, in.almanac);
-    stats_.almanac.record(st);
-    if (st != LcmInputStatus::kOk) return;
+    if (!decode_input(ev, stats_.almanac, m, in.almanac)) return;
     in.kind = fsw::InputEvent::Kind::kAlmanac;
     in.t_s = m.t_s;
   } else if (!cfg_.gnss_pvt_channel.empty() && ev.channel == cfg_.gnss_pvt_channel) {
     sdins::gnss_pvt_t m{};
-    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
     GnssPvtSample pvt;
-    if (st == LcmInputStatus::kOk) st = from_msg(m, pvt, cfg_.pvt_limits);
-    stats_.gnss_pvt.record(st);
-    if (st != LcmInputStatus::kOk) return;
+    if (!decode_input(ev, stats_.gnss_pvt, m, pvt, cfg_.pvt_limits)) return;
     in.pvt = to_fsw(pvt);
     in.kind = fsw::InputEvent::Kind::kGnssPvt;
     in.t_s = in.pvt.t_s;

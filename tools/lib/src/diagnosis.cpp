@@ -340,24 +340,15 @@ void RecordedData::input_event(const Event& e, fsw::InputEvent& ev) const {
 }
 
 void RecordedData::push(const fsw::InputEvent& ev) {
-  const auto at = [](std::size_t n) { return static_cast<std::uint32_t>(n); };
+  const auto add = [this](Kind k, auto& array, const auto& value) {
+    order.push_back({k, static_cast<std::uint32_t>(array.size())});
+    array.push_back(value);
+  };
   switch (ev.kind) {
-    case fsw::InputEvent::Kind::kImu:
-      order.push_back({Kind::kImu, at(imu.size())});
-      imu.push_back(ev.imu);
-      return;
-    case fsw::InputEvent::Kind::kGnssRaw:
-      order.push_back({Kind::kGnss, at(gnss.size())});
-      gnss.push_back(ev.gnss);
-      return;
-    case fsw::InputEvent::Kind::kGnssPvt:
-      order.push_back({Kind::kPvt, at(pvt.size())});
-      pvt.push_back(ev.pvt);
-      return;
-    case fsw::InputEvent::Kind::kAlmanac:
-      order.push_back({Kind::kAlmanac, at(almanac.size())});
-      almanac.push_back(ev.almanac);
-      return;
+    case fsw::InputEvent::Kind::kImu: return add(Kind::kImu, imu, ev.imu);
+    case fsw::InputEvent::Kind::kGnssRaw: return add(Kind::kGnss, gnss, ev.gnss);
+    case fsw::InputEvent::Kind::kGnssPvt: return add(Kind::kPvt, pvt, ev.pvt);
+    case fsw::InputEvent::Kind::kAlmanac: return add(Kind::kAlmanac, almanac, ev.almanac);
   }
 }
 
@@ -450,29 +441,21 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
         app->on_event(input, out);
         continue;
       case RecordedData::Kind::kGnss:
-        if (cfg.gnss_source != sim::GnssSource::kRaw) continue;
-        if (outage_window(data.gnss[ev.index].t_s) >= 0) {
+      case RecordedData::Kind::kPvt: {
+        // The GNSS input the configuration takes (raw epochs or solutions); the other is not fed.
+        const sim::GnssSource source = ev.kind == RecordedData::Kind::kGnss ? sim::GnssSource::kRaw : sim::GnssSource::kPvt;
+        if (cfg.gnss_source != source) continue;
+        data.input_event(ev, input);
+        if (outage_window(input.t_s) >= 0) {
           ++run.outages.epochs_withheld;
           in_outage = true;
           continue;
         }
         if (in_outage) await_reacquisition = true;
         in_outage = false;
-        data.input_event(ev, input);
         app->on_event(input, out);
         continue;
-      case RecordedData::Kind::kPvt:
-        if (cfg.gnss_source != sim::GnssSource::kPvt) continue;
-        if (outage_window(data.pvt[ev.index].t_s) >= 0) {
-          ++run.outages.epochs_withheld;
-          in_outage = true;
-          continue;
-        }
-        if (in_outage) await_reacquisition = true;
-        in_outage = false;
-        data.input_event(ev, input);
-        app->on_event(input, out);
-        continue;
+      }
       case RecordedData::Kind::kImu: break;
     }
     out.nav_valid = false;
