@@ -32,7 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   hal::LcmReplayConfig cfg;
   cfg.max_event_bytes = 1u << 20;
   if (reader.open(path, cfg) != hal::LcmLogStatus::kOk) return 0;
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   std::uint64_t n = 0;
   double last_t_s = 0.0;
   while (reader.next(in) == hal::LcmLogStatus::kOk) {
@@ -41,10 +41,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (!(n == 1 || in.t_s >= last_t_s)) std::fprintf(stderr, "order: %.17g after %.17g (n=%llu)\n", in.t_s, last_t_s, (unsigned long long)n);
     check(n == 1 || in.t_s >= last_t_s, "inputs delivered in time order");
     last_t_s = in.t_s;
-    if (in.kind == hal::LcmReplayInput::Kind::kImu)
-      check(in.imu.sample.dtheta_rad.allFinite() && in.imu.sample.dv_mps.allFinite() && in.imu.sample.dt_s > 0.0,
+    if (in.kind == fsw::InputEvent::Kind::kImu)
+      check(in.imu.dtheta_rad.allFinite() && in.imu.dv_mps.allFinite() && in.imu.dt_s > 0.0,
             "IMU input finite");
-    if (in.kind == hal::LcmReplayInput::Kind::kGnss)
+    if (in.kind == fsw::InputEvent::Kind::kGnssRaw)
       check(in.gnss.n_meas >= 0 && in.gnss.n_meas <= fsw::kMaxGnssChannels, "GNSS measurement count in range");
   }
   check(reader.stats().delivered == n, "delivered count matches");

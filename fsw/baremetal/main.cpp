@@ -1,6 +1,7 @@
 // Bare-metal entry of the fsw image (docs/baremetal.md): the flight application with the
-// paper's 24-state and 15-state filters, statically allocated, fed through the same entries HIL
-// uses (FlightApp::on_almanac, on_gnss with raw receiver epochs, on_imu with 1 kHz samples) from
+// paper's 24-state and 15-state filters, statically allocated, fed the way every harness feeds it
+// (fsw::InputEvent through FlightApp::on_event: almanac elements, raw receiver epochs, 1 kHz IMU
+// samples) from
 // the synthetic receiver at rest of synthetic_sensors.hpp: the almanac at power-up, then the IMU
 // and a raw epoch every second. The flight application initialises itself by stationary alignment
 // (levelling + gyrocompassing over 60 s, position from the single-point fix) and then runs the
@@ -18,7 +19,7 @@ namespace {
 fsw::FlightApp<fsw::Layout24> g_app24;
 fsw::FlightApp<fsw::Layout15> g_app15;
 fsw::FrameOutput g_out24, g_out15;
-fsw::GnssRawEpoch g_epoch;
+fsw::InputEvent g_event;  ///< the input being delivered (static, not on the stack: 864 B on x86-64)
 
 }  // namespace
 
@@ -38,18 +39,24 @@ int main() {
     }
   }
   for (int k = 0; k < sdins_baremetal::kSatellites; ++k) {
-    const fsw::GpsAlmanac a = sdins_baremetal::almanac(k);
-    if (g_app24.on_almanac(a) != fsw::Status::kOk || g_app15.on_almanac(a) != fsw::Status::kOk)
+    g_event.kind = fsw::InputEvent::Kind::kAlmanac;
+    g_event.almanac = sdins_baremetal::almanac(k);
+    if (g_app24.on_event(g_event, g_out24) != fsw::Status::kOk || g_app15.on_event(g_event, g_out15) != fsw::Status::kOk)
       g_sdins_fsw_errors = g_sdins_fsw_errors + 1u;
   }
   constexpr std::uint32_t kSamplesPerEpoch = 1000;  // 1 kHz IMU, 1 Hz receiver
   for (std::uint32_t n = 0;; ++n) {
     const fsw::ImuSample s = sdins_baremetal::imu_sample(n);
-    if (g_app24.on_imu(s, g_out24) != fsw::Status::kOk || g_app15.on_imu(s, g_out15) != fsw::Status::kOk)
+    g_event.kind = fsw::InputEvent::Kind::kImu;
+    g_event.t_s = s.t_s;
+    g_event.imu = s;
+    if (g_app24.on_event(g_event, g_out24) != fsw::Status::kOk || g_app15.on_event(g_event, g_out15) != fsw::Status::kOk)
       g_sdins_fsw_errors = g_sdins_fsw_errors + 1u;
     if ((n + 1) % kSamplesPerEpoch == 0u) {  // the epoch of this sample's time, after it (receiver latency)
-      sdins_baremetal::raw_epoch(s.t_s, g_epoch);
-      if (g_app24.on_gnss(g_epoch) != fsw::Status::kOk || g_app15.on_gnss(g_epoch) != fsw::Status::kOk)
+      g_event.kind = fsw::InputEvent::Kind::kGnssRaw;
+      g_event.t_s = s.t_s;
+      sdins_baremetal::raw_epoch(s.t_s, g_event.gnss);
+      if (g_app24.on_event(g_event, g_out24) != fsw::Status::kOk || g_app15.on_event(g_event, g_out15) != fsw::Status::kOk)
         g_sdins_fsw_errors = g_sdins_fsw_errors + 1u;
     }
     g_sdins_initialised = (g_app24.initialised() ? 1u : 0u) + (g_app15.initialised() ? 1u : 0u);

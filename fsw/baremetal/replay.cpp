@@ -61,6 +61,7 @@ struct Model {
   const char* name;
   fsw::FlightApp<Layout> app{};
   fsw::FrameOutput out{};
+  fsw::InputEvent ev{};  ///< what the flight application is fed (FlightApp::on_event), one at a time
   std::uint64_t digest = fsw::kNavDigestSeed;
   std::uint32_t frames = 0, epochs = 0;
   std::uint32_t imu_ticks = 0, gnss_ticks = 0;  // 200 Hz group work since the last completed frame
@@ -74,11 +75,18 @@ struct Model {
 
   std::uint32_t elapsed(const Board& b, std::uint32_t t0) const { return (t0 - b.ticks()) & b.tick_mask; }
 
-  void almanac(const Board&, const fsw::GpsAlmanac& a) { app.on_almanac(a); }
+  void almanac(const Board&, const fsw::GpsAlmanac& a) {
+    ev.kind = fsw::InputEvent::Kind::kAlmanac;
+    ev.almanac = a;
+    app.on_event(ev, out);
+  }
   void gnss(const Board& b, const fsw::GnssRawEpoch& e) {
+    ev.kind = fsw::InputEvent::Kind::kGnssRaw;  // filled before the clock starts: the copy is the harness's
+    ev.t_s = e.t_s;
+    ev.gnss = e;
     const bool was_initialised = app.initialised();
     const std::uint32_t t0 = b.ticks != nullptr ? b.ticks() : 0u;
-    app.on_gnss(e);
+    app.on_event(ev, out);
     if (b.ticks == nullptr) return;
     const std::uint32_t dt = elapsed(b, t0);
     if (was_initialised)
@@ -87,10 +95,13 @@ struct Model {
       pre_init_gnss_worst = dt;
   }
   void imu(const Board& b, const fsw::ImuSample& s) {
+    ev.kind = fsw::InputEvent::Kind::kImu;
+    ev.t_s = s.t_s;
+    ev.imu = s;
     const bool was_initialised = app.initialised();
     const std::uint32_t t0 = b.ticks != nullptr ? b.ticks() : 0u;
     out.nav_valid = false;
-    const fsw::Status st = app.on_imu(s, out);
+    const fsw::Status st = app.on_event(ev, out);
     if (b.ticks != nullptr) {
       const std::uint32_t dt = elapsed(b, t0);
       if (was_initialised)

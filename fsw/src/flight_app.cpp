@@ -499,6 +499,17 @@ Status FlightApp<Layout>::on_imu(const ImuSample& s, FrameOutput& out) {
   return exec_.tick(in, out);
 }
 
+template <class Layout>
+Status FlightApp<Layout>::on_event(const InputEvent& ev, FrameOutput& out) {
+  switch (ev.kind) {
+    case InputEvent::Kind::kImu: return on_imu(ev.imu, out);
+    case InputEvent::Kind::kGnssRaw: return on_gnss(ev.gnss);
+    case InputEvent::Kind::kGnssPvt: return on_gnss_pvt(ev.pvt);
+    case InputEvent::Kind::kAlmanac: return on_almanac(ev.almanac);
+  }
+  return Status::kBadInput;
+}
+
 template class FlightApp<Layout15>;
 template class FlightApp<Layout24>;
 template class FlightApp<Layout15Conv>;

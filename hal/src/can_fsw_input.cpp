@@ -76,12 +76,12 @@ void CanFswInput::finish() {
 
 void CanFswInput::drain() {
   fsw::GpsAlmanac a;
-  while (rx_.pop_almanac(a)) node_.on_almanac(a, last_imu_t_s_);
+  while (rx_.pop_almanac(a)) node_.on_event(fsw::InputEvent::of_almanac(a, last_imu_t_s_));
   fsw::GnssRawEpoch e;
-  while (rx_.pop_gps(e)) node_.on_gnss(e);
+  while (rx_.pop_gps(e)) node_.on_event(fsw::InputEvent::of_gnss(e));
   fsw::ImuSample s;
   while (rx_.pop_imu(s)) {
-    node_.on_imu(s);
+    node_.on_event(fsw::InputEvent::of_imu(s));
     last_imu_t_s_ = s.t_s;
     ++imu_delivered_;
   }

@@ -19,10 +19,7 @@ namespace hal {
 struct FswNode::App {
   virtual ~App() = default;
   virtual fsw::Status init(const fsw::FlightAppConfig& cfg) = 0;
-  virtual void on_almanac(const fsw::GpsAlmanac& s) = 0;
-  virtual void on_gnss(const fsw::GnssRawEpoch& e) = 0;
-  virtual void on_gnss_pvt(const fsw::GnssPvtMeasurement& m) = 0;
-  virtual fsw::Status on_imu(const fsw::ImuSample& s, fsw::FrameOutput& out) = 0;
+  virtual fsw::Status on_event(const fsw::InputEvent& ev, fsw::FrameOutput& out) = 0;
   virtual void set_prev_tick_exec_s(double s) = 0;
   virtual fsw::Status run_ekf_group() = 0;
   virtual bool ekf_result_due_next_frame() const = 0;
@@ -39,10 +36,7 @@ template <class Layout>
 struct AppOf final : FswNode::App {
   fsw::FlightApp<Layout> app;
   fsw::Status init(const fsw::FlightAppConfig& cfg) override { return app.init(cfg); }
-  void on_almanac(const fsw::GpsAlmanac& s) override { app.on_almanac(s); }
-  void on_gnss(const fsw::GnssRawEpoch& e) override { app.on_gnss(e); }
-  void on_gnss_pvt(const fsw::GnssPvtMeasurement& m) override { app.on_gnss_pvt(m); }
-  fsw::Status on_imu(const fsw::ImuSample& s, fsw::FrameOutput& out) override { return app.on_imu(s, out); }
+  fsw::Status on_event(const fsw::InputEvent& ev, fsw::FrameOutput& out) override { return app.on_event(ev, out); }
   void set_prev_tick_exec_s(double s) override { app.set_prev_tick_exec_s(s); }
   fsw::Status run_ekf_group() override { return app.run_ekf_group(); }
   bool ekf_result_due_next_frame() const override { return app.ekf_result_due_next_frame(); }
@@ -182,32 +176,26 @@ bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
   return true;
 }
 
-void FswNode::on_almanac(const fsw::GpsAlmanac& sat, double t_s) {
-  if (!app_) return;
-  if (cfg_.log_inputs) sink_.write_almanac(sat, t_s);
-  app_->on_almanac(sat);
-}
-
-void FswNode::on_gnss(const fsw::GnssRawEpoch& epoch) {
-  if (!app_) return;
-  if (cfg_.log_inputs) sink_.write_gnss(epoch);
-  app_->on_gnss(epoch);
-}
-
-void FswNode::on_gnss_pvt(const GnssPvtSample& pvt) {
-  if (!app_) return;
-  if (cfg_.log_inputs) sink_.write_pvt(pvt);
-  app_->on_gnss_pvt(to_fsw(pvt));
-}
-
-void FswNode::on_imu(const fsw::ImuSample& s, std::int32_t counter, std::int16_t status) {
-  frame_done_ = false;
+void FswNode::on_event(const fsw::InputEvent& ev) {
+  const bool imu = ev.kind == fsw::InputEvent::Kind::kImu;
+  if (imu) frame_done_ = false;
   if (!app_) return;
   if (cfg_.log_inputs) {
-    if (counter >= 0)
-      sink_.write_imu(ImuRecord{s, counter, status});
-    else
-      sink_.write_imu(s, status);
+    switch (ev.kind) {
+      case fsw::InputEvent::Kind::kAlmanac: sink_.write_almanac(ev.almanac, ev.t_s); break;
+      case fsw::InputEvent::Kind::kGnssRaw: sink_.write_gnss(ev.gnss); break;
+      case fsw::InputEvent::Kind::kGnssPvt: sink_.write_pvt(from_fsw(ev.pvt)); break;
+      case fsw::InputEvent::Kind::kImu:
+        if (ev.imu_counter >= 0)
+          sink_.write_imu(ImuRecord{ev.imu, ev.imu_counter, ev.imu_status});
+        else
+          sink_.write_imu(ev.imu, ev.imu_status);
+        break;
+    }
+  }
+  if (!imu) {
+    app_->on_event(ev, frame_);  // leaves frame_ as it is
+    return;
   }
   if (group_) {
     // Lockstep: the correction lands at a fixed frame; wait for the 1 Hz thread before it.
@@ -220,7 +208,7 @@ void FswNode::on_imu(const fsw::ImuSample& s, std::int32_t counter, std::int16_t
     group_->take_times(group_times_.exec_s);
     for (std::size_t k = before; k < group_times_.exec_s.size(); ++k) app_->note_ekf_group_exec_s(group_times_.exec_s[k]);
   }
-  app_->on_imu(s, frame_);
+  app_->on_event(ev, frame_);
   if (group_ && frame_.ekf_released) group_->release();
   if (frame_.nav_valid) after_frame();
 }

@@ -85,21 +85,21 @@ LcmLogStatus LcmReplayReader::open(const std::string& path, const LcmReplayConfi
   g.max_forward_s = cfg_.max_time_jump_s;
   g.max_backward_s = cfg_.reorder_window_s;
   g.confirm_samples = cfg_.time_base_confirm_inputs;
-  gate_ = TimeTagFilter<LcmReplayInput>(g);
+  gate_ = TimeTagFilter<fsw::InputEvent>(g);
   return log_.open(path, cfg.max_event_bytes);
 }
 
-void LcmReplayReader::push(LcmReplayInput&& in) {
+void LcmReplayReader::push(fsw::InputEvent&& in) {
   gate_.push(
-      in.t_s, std::move(in), [this](LcmReplayInput&& a) { enqueue(std::move(a)); },
-      [this](LcmReplayInput&&, TimeTagRejection) { ++stats_.time_tag_rejected; });
+      in.t_s, std::move(in), [this](fsw::InputEvent&& a) { enqueue(std::move(a)); },
+      [this](fsw::InputEvent&&, TimeTagRejection) { ++stats_.time_tag_rejected; });
   const TimeTagGateStats& g = gate_.stats();
   stats_.time_base_changes = g.new_bases;
   stats_.last_time_base_jump_s = g.last_new_base_jump_s;
   stats_.last_time_base_at_s = g.last_new_base_at_s;
 }
 
-void LcmReplayReader::enqueue(LcmReplayInput&& in) {
+void LcmReplayReader::enqueue(fsw::InputEvent&& in) {
   // Inputs are delivered in time order: one older than an input already returned is too late.
   if (have_delivered_ && in.t_s < last_delivered_t_s_) {
     ++stats_.out_of_order;
@@ -113,25 +113,40 @@ void LcmReplayReader::enqueue(LcmReplayInput&& in) {
   });
 }
 
+namespace {
+
+/// Decodes ev as a Msg into m, validates it into out (from_msg with args) and counts the status in
+/// stats; true when the input is accepted.
+template <class Msg, class Out, class... Args>
+bool decode_input(const LcmLogEvent& ev, LcmInputStats& stats, Msg& m, Out& out, const Args&... args) {
+  LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
+  if (st == LcmInputStatus::kOk) st = from_msg(m, out, args...);
+  stats.record(st);
+  return st == LcmInputStatus::kOk;
+}
+
+}  // namespace
+
 void LcmReplayReader::take(const LcmLogEvent& ev) {
-  LcmReplayInput in;
+  fsw::InputEvent in;
   if (ev.channel == cfg_.imu_channel) {
     sdins::imu_sample_t m{};
-    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
-    if (st == LcmInputStatus::kOk) st = from_msg(m, in.imu, cfg_.imu_limits);
-    stats_.imu.record(st);
-    if (st != LcmInputStatus::kOk) return;
+    ImuRecord rec;
+    if (!decode_input(ev, stats_.imu, m, rec, cfg_.imu_limits)) return;
+    in.imu = rec.sample;
+    in.imu_counter = rec.counter;
+    in.imu_status = rec.status;
     if (have_counter_) {
-      const std::uint32_t step = static_cast<std::uint32_t>(in.imu.counter) - static_cast<std::uint32_t>(last_counter_);
+      const std::uint32_t step = static_cast<std::uint32_t>(in.imu_counter) - static_cast<std::uint32_t>(last_counter_);
       if (step != 1u) {
         ++stats_.imu_counter_gaps;
         if (step > 1u && step < (1u << 30)) stats_.imu_counter_missing += step - 1u;
       }
     }
     have_counter_ = true;
-    last_counter_ = in.imu.counter;
-    in.kind = LcmReplayInput::Kind::kImu;
-    in.t_s = in.imu.sample.t_s;
+    last_counter_ = in.imu_counter;
+    in.kind = fsw::InputEvent::Kind::kImu;
+    in.t_s = in.imu.t_s;
   } else if (ev.channel == cfg_.gnss_channel) {
     sdins::gnss_raw_epoch_t m{};
     LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
@@ -140,23 +155,19 @@ void LcmReplayReader::take(const LcmLogEvent& ev) {
     stats_.gnss.record(st);
     stats_.gnss.measurements_dropped += static_cast<std::uint64_t>(dropped);
     if (st != LcmInputStatus::kOk && st != LcmInputStatus::kMeasurementsDropped) return;
-    in.kind = LcmReplayInput::Kind::kGnss;
+    in.kind = fsw::InputEvent::Kind::kGnssRaw;
     in.t_s = in.gnss.t_s;
   } else if (ev.channel == cfg_.almanac_channel) {
     sdins::gps_almanac_t m{};
-    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
-    if (st == LcmInputStatus::kOk) st = from_msg(m, in.almanac);
-    stats_.almanac.record(st);
-    if (st != LcmInputStatus::kOk) return;
-    in.kind = LcmReplayInput::Kind::kAlmanac;
+    if (!decode_input(ev, stats_.almanac, m, in.almanac)) return;
+    in.kind = fsw::InputEvent::Kind::kAlmanac;
     in.t_s = m.t_s;
   } else if (!cfg_.gnss_pvt_channel.empty() && ev.channel == cfg_.gnss_pvt_channel) {
     sdins::gnss_pvt_t m{};
-    LcmInputStatus st = decode_exact(ev.data, ev.data_len, m);
-    if (st == LcmInputStatus::kOk) st = from_msg(m, in.pvt, cfg_.pvt_limits);
-    stats_.gnss_pvt.record(st);
-    if (st != LcmInputStatus::kOk) return;
-    in.kind = LcmReplayInput::Kind::kGnssPvt;
+    GnssPvtSample pvt;
+    if (!decode_input(ev, stats_.gnss_pvt, m, pvt, cfg_.pvt_limits)) return;
+    in.pvt = to_fsw(pvt);
+    in.kind = fsw::InputEvent::Kind::kGnssPvt;
     in.t_s = in.pvt.t_s;
   } else {
     ++stats_.other_events;
@@ -165,7 +176,7 @@ void LcmReplayReader::take(const LcmLogEvent& ev) {
   push(std::move(in));
 }
 
-LcmLogStatus LcmReplayReader::next(LcmReplayInput& in) {
+LcmLogStatus LcmReplayReader::next(fsw::InputEvent& in) {
   const auto cmp = [](const Pending& a, const Pending& b) { return later({a.input.t_s, a.seq}, {b.input.t_s, b.seq}); };
   for (;;) {
     if (!pending_.empty() && (eof_ || pending_.front().input.t_s <= newest_t_s_ - cfg_.reorder_window_s)) {
@@ -183,8 +194,8 @@ LcmLogStatus LcmReplayReader::next(LcmReplayInput& in) {
     if (st == LcmLogStatus::kOk) {
       take(ev);
     } else if (st == LcmLogStatus::kEndOfLog) {
-      gate_.finish([this](LcmReplayInput&& a) { enqueue(std::move(a)); },
-                   [this](LcmReplayInput&&, TimeTagRejection) { ++stats_.time_tag_rejected; });
+      gate_.finish([this](fsw::InputEvent&& a) { enqueue(std::move(a)); },
+                   [this](fsw::InputEvent&&, TimeTagRejection) { ++stats_.time_tag_rejected; });
       eof_ = true;
     } else {
       return st;

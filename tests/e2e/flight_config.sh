@@ -62,9 +62,13 @@ mc, mcc = j("mc/summary.json"), j("mc_changed/summary.json")
 a, b = mc["models"][0]["final_filter_sigma_deg"], mcc["models"][0]["final_filter_sigma_deg"]
 assert a != b, ("montecarlo did not fly the data directory's default.toml", a, b)
 flight = "15 (15-state, misalignments as consider states), 24 (24-state, misalignments estimated)"
-for c in ("sil", "replay", "fsw", "diagnose"):
+for c in ("sil", "replay", "fsw"):
     h = " ".join(open(f"{d}/help_{c}.txt").read().split())
     assert flight in h, (c, h)
+# The diagnosis takes the same model names (one selector) but its 15-state baseline has no consider
+# states: the misalignments are left out of it and tested as candidates.
+h = " ".join(open(f"{d}/help_diagnose.txt").read().split())
+assert "--baseline TEXT:{15,24}=15" in h and "misalignments are not modelled" in h and "consider" not in h, h
 h = " ".join(open(f"{d}/help_montecarlo.txt").read().split())
 assert flight + ", 15c (" in h and ", 15t (" in h, h
 print("flight config ok: digest", sil["digest"], "with and without the shipped file; changed file ->", chg["digest"],

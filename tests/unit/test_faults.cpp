@@ -368,7 +368,7 @@ TEST(TimeTagGate, ReplayKeepsTheLogAfterOneFarAheadSample) {
   }
   hal::LcmReplayReader rd;
   ASSERT_EQ(rd.open(path, hal::LcmReplayConfig{}), hal::LcmLogStatus::kOk);
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   std::vector<double> t;
   while (rd.next(in) == hal::LcmLogStatus::kOk) t.push_back(in.t_s);
   EXPECT_EQ(t.size(), 1999u);  // every good sample

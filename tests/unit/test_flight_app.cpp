@@ -67,18 +67,21 @@ TEST(FlightApp, InitialisesInMotionAndNavigatesThroughATurn) {
   cfg.exec = tools::executive_config(sc, tools::MonteCarloConfig{});
   static fsw::FlightApp<fsw::Layout24Full> app;
   ASSERT_EQ(app.init(cfg), fsw::Status::kOk);
-  tools::SensorEvent ev;
+  fsw::InputEvent ev;
   sim::TruthSample truth;
   fsw::FrameOutput out;
   tools::NavErrors at_init{}, last{};
   bool have_init_err = false;
   double worst_heading_after_turn_deg = 0.0;
   while (stream.next(ev, &truth)) {
+    // The one dispatch (FlightApp::on_event) every harness uses.
+    const fsw::Status st = app.on_event(ev, out);
     switch (ev.kind) {
-      case tools::SensorEvent::Kind::kAlmanac: app.on_almanac(ev.almanac); break;
-      case tools::SensorEvent::Kind::kGnss: app.on_gnss(ev.gnss); break;
-      case tools::SensorEvent::Kind::kImu:
-        ASSERT_NE(app.on_imu(ev.imu, out), fsw::Status::kBadInput);
+      case fsw::InputEvent::Kind::kAlmanac:
+      case fsw::InputEvent::Kind::kGnssRaw:
+      case fsw::InputEvent::Kind::kGnssPvt: break;
+      case fsw::InputEvent::Kind::kImu:
+        ASSERT_NE(st, fsw::Status::kBadInput);
         if (out.nav_valid) {
           last = tools::nav_errors(out.nav, truth);
           if (!have_init_err) {
@@ -137,22 +140,21 @@ TEST(FlightApp, CoastsThroughAGpsOutageAndRecovers) {
   cfg.exec = tools::executive_config(sc, tools::MonteCarloConfig{});
   static fsw::FlightApp<fsw::Layout15Full> app;
   ASSERT_EQ(app.init(cfg), fsw::Status::kOk);
-  tools::SensorEvent ev;
+  fsw::InputEvent ev;
   sim::TruthSample truth;
   fsw::FrameOutput out;
   double worst_pos_in_outage = 0.0, pos_before = 0.0;
   std::uint32_t updates_before = 0, updates_after_outage = 0;
   tools::NavErrors last{};
   while (stream.next(ev, &truth)) {
-    if (ev.kind == tools::SensorEvent::Kind::kAlmanac) app.on_almanac(ev.almanac);
-    if (ev.kind == tools::SensorEvent::Kind::kGnss) {
+    if (ev.kind == fsw::InputEvent::Kind::kGnssRaw) {
       const double t = ev.gnss.t_s;
       if (t > 100.0 && t <= 120.0) ev.gnss.n_meas = 0;  // no satellite
       if (t > 120.0 && t <= 130.0) ev.gnss.n_meas = 1;  // one satellite
-      app.on_gnss(ev.gnss);
     }
-    if (ev.kind != tools::SensorEvent::Kind::kImu) continue;
-    ASSERT_NE(app.on_imu(ev.imu, out), fsw::Status::kBadInput);
+    const fsw::Status st = app.on_event(ev, out);
+    if (ev.kind != fsw::InputEvent::Kind::kImu) continue;
+    ASSERT_NE(st, fsw::Status::kBadInput);
     if (!out.nav_valid) continue;
     last = tools::nav_errors(out.nav, truth);
     if (std::abs(truth.t_s - 100.5) < 1e-9) {  // after the last full epoch (t = 100) was used

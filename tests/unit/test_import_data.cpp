@@ -22,7 +22,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using Kind = hal::LcmReplayInput::Kind;
+using Kind = fsw::InputEvent::Kind;
 
 const std::string kData = test::recordings_dir();
 
@@ -30,7 +30,7 @@ bool have_convbin() { return lcm_test::run("command -v convbin > /dev/null 2>&1"
 
 struct Imported {
   nlohmann::json summary;
-  std::vector<hal::LcmReplayInput> inputs;  ///< every input in time order (GNSS_PVT included)
+  std::vector<fsw::InputEvent> inputs;  ///< every input in time order (GNSS_PVT included)
 };
 
 Imported import_and_read(const std::string& format, const std::string& dir, const std::string& name,
@@ -46,7 +46,7 @@ Imported import_and_read(const std::string& format, const std::string& dir, cons
   cfg.gnss_pvt_channel = hal::kLcmChannelGnssPvt;
   hal::LcmReplayReader rd;
   EXPECT_EQ(rd.open(opt.log_path, cfg), hal::LcmLogStatus::kOk);
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   while (rd.next(in) == hal::LcmLogStatus::kOk) r.inputs.push_back(in);
   EXPECT_EQ(rd.stats().rejected(), 0u);
   std::remove(opt.log_path.c_str());
@@ -61,12 +61,12 @@ struct Fix {
   fsw::Vec3 llh;
   int n_obs;
 };
-std::vector<Fix> fixes(const std::vector<hal::LcmReplayInput>& inputs) {
+std::vector<Fix> fixes(const std::vector<fsw::InputEvent>& inputs) {
   fsw::GpsAlmanacTable table;
   std::vector<Fix> out;
-  for (const hal::LcmReplayInput& in : inputs) {
+  for (const fsw::InputEvent& in : inputs) {
     if (in.kind == Kind::kAlmanac) EXPECT_EQ(table.set(in.almanac), fsw::Status::kOk);
-    if (in.kind != Kind::kGnss) continue;
+    if (in.kind != Kind::kGnssRaw) continue;
     fsw::GnssEpoch ep;
     fsw::GnssConversionStats st;
     EXPECT_EQ(fsw::gnss_epoch_from_raw(in.gnss, table, nullptr, ep, st), fsw::Status::kOk);
@@ -123,7 +123,7 @@ TEST(ImportData, WalkRawFixNearTheRtkSolutionAndImuOnTheSourcesTimeScale) {
   ASSERT_GT(f.size(), 500u);
   std::vector<hal::GnssPvtSample> pvt;
   for (const auto& in : r.inputs)
-    if (in.kind == Kind::kGnssPvt) pvt.push_back(in.pvt);
+    if (in.kind == Kind::kGnssPvt) pvt.push_back(hal::from_fsw(in.pvt));
   ASSERT_EQ(pvt.size(), 536u);
   std::size_t j = 0;
   int compared = 0;

@@ -17,7 +17,7 @@
 namespace {
 
 using fsw::Vec3;
-using Kind = hal::LcmReplayInput::Kind;
+using Kind = fsw::InputEvent::Kind;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -252,7 +252,7 @@ TEST(LcmGnssPvt, ReplayReaderDeliversSolutionsInTimeOrderWhenAsked) {
     rc.gnss_pvt_channel = hal::kLcmChannelGnssPvt;
     hal::LcmReplayReader rd;
     ASSERT_EQ(rd.open(path, rc), hal::LcmLogStatus::kOk);
-    hal::LcmReplayInput in;
+    fsw::InputEvent in;
     double last = -1.0;
     std::size_t n_pvt = 0;
     int imu = 0, gnss = 0;
@@ -261,12 +261,12 @@ TEST(LcmGnssPvt, ReplayReaderDeliversSolutionsInTimeOrderWhenAsked) {
       last = in.t_s;
       if (in.kind == Kind::kGnssPvt) {
         ASSERT_LT(n_pvt, pvts.size());
-        EXPECT_TRUE(same_pvt(in.pvt, pvts[n_pvt])) << n_pvt;
+        EXPECT_TRUE(same_pvt(hal::from_fsw(in.pvt), pvts[n_pvt])) << n_pvt;
         EXPECT_EQ(in.t_s, pvts[n_pvt].t_s);
         ++n_pvt;
       }
       imu += in.kind == Kind::kImu ? 1 : 0;
-      gnss += in.kind == Kind::kGnss ? 1 : 0;
+      gnss += in.kind == Kind::kGnssRaw ? 1 : 0;
     }
     EXPECT_EQ(n_pvt, pvts.size());
     EXPECT_EQ(imu, n_imu);
@@ -281,7 +281,7 @@ TEST(LcmGnssPvt, ReplayReaderDeliversSolutionsInTimeOrderWhenAsked) {
   {
     hal::LcmReplayReader rd;  // default: GNSS_PVT is not read
     ASSERT_EQ(rd.open(path), hal::LcmLogStatus::kOk);
-    hal::LcmReplayInput in;
+    fsw::InputEvent in;
     while (rd.next(in) == hal::LcmLogStatus::kOk) EXPECT_NE(in.kind, Kind::kGnssPvt);
     const hal::LcmReplayStats& st = rd.stats();
     EXPECT_EQ(st.gnss_pvt.accepted() + st.gnss_pvt.rejected(), 0u);

@@ -21,9 +21,11 @@
 namespace {
 
 using fsw::Vec3;
-using Kind = hal::LcmReplayInput::Kind;
+using Kind = fsw::InputEvent::Kind;
 
 bool bits_equal(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
+
+hal::ImuRecord record(const fsw::InputEvent& e) { return hal::ImuRecord{e.imu, e.imu_counter, e.imu_status}; }
 
 bool same_imu(const hal::ImuRecord& a, const hal::ImuRecord& b) {
   bool eq = bits_equal(a.sample.t_s, b.sample.t_s) && bits_equal(a.sample.dt_s, b.sample.dt_s) &&
@@ -80,10 +82,10 @@ TEST(LcmReplay, SimulatedRunReplaysBitExactInputsInTimeOrder) {
   ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
   EXPECT_FALSE(sink.telemetry().network_active());
 
-  std::vector<hal::LcmReplayInput> expected;  // in the order they must come back
+  std::vector<fsw::InputEvent> expected;  // in the order they must come back
   for (const fsw::GpsAlmanac& a : gps.almanac()) {
     ASSERT_EQ(sink.write_almanac(a, 0.0), hal::LcmLogStatus::kOk);
-    hal::LcmReplayInput in;
+    fsw::InputEvent in;
     in.kind = Kind::kAlmanac;
     in.almanac = a;
     expected.push_back(in);
@@ -100,10 +102,12 @@ TEST(LcmReplay, SimulatedRunReplaysBitExactInputsInTimeOrder) {
     r.sample.dv_mps = Vec3(2.5e-3 + 1e-5 * noise(rng), 1e-5 * noise(rng), 9.80665e-3 + 1e-5 * noise(rng));
     r.counter = k;
     ASSERT_EQ(sink.write_imu(r.sample), hal::LcmLogStatus::kOk);  // the sink's own counter: 0, 1, ...
-    hal::LcmReplayInput in;
+    fsw::InputEvent in;
     in.kind = Kind::kImu;
     in.t_s = r.sample.t_s;
-    in.imu = r;
+    in.imu = r.sample;
+    in.imu_counter = r.counter;
+    in.imu_status = r.status;
     expected.push_back(in);
     if ((k + 1) % 1000 == 0) {  // a receiver epoch at this sample's time
       sim::TruthSample ts;
@@ -118,8 +122,8 @@ TEST(LcmReplay, SimulatedRunReplaysBitExactInputsInTimeOrder) {
       ASSERT_GE(raw.n_meas, 4);
       pending.push_back(raw);
       pending_due.push_back(k + 50);
-      hal::LcmReplayInput g;
-      g.kind = Kind::kGnss;
+      fsw::InputEvent g;
+      g.kind = Kind::kGnssRaw;
       g.t_s = raw.t_s;
       g.gnss = raw;
       expected.push_back(g);
@@ -140,21 +144,21 @@ TEST(LcmReplay, SimulatedRunReplaysBitExactInputsInTimeOrder) {
   // Equal times keep the written order (stable): expected is already in that order except for
   // the epochs, which were written after samples of the same or later time.
   std::stable_sort(expected.begin(), expected.end(),
-                   [](const hal::LcmReplayInput& a, const hal::LcmReplayInput& b) { return a.t_s < b.t_s; });
+                   [](const fsw::InputEvent& a, const fsw::InputEvent& b) { return a.t_s < b.t_s; });
 
   hal::LcmReplayReader rd;
   ASSERT_EQ(rd.open(path), hal::LcmLogStatus::kOk);
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   std::size_t n = 0;
   double last_t = -1.0;
   while (rd.next(in) == hal::LcmLogStatus::kOk) {
     ASSERT_LT(n, expected.size());
-    const hal::LcmReplayInput& e = expected[n];
+    const fsw::InputEvent& e = expected[n];
     ASSERT_GE(in.t_s, last_t) << "not time ordered at " << n;
     last_t = in.t_s;
     ASSERT_EQ(in.kind, e.kind) << "input " << n << " at t " << in.t_s;
-    if (e.kind == Kind::kImu) ASSERT_TRUE(same_imu(in.imu, e.imu)) << n;
-    if (e.kind == Kind::kGnss) ASSERT_TRUE(same_gnss(in.gnss, e.gnss)) << n;
+    if (e.kind == Kind::kImu) ASSERT_TRUE(same_imu(record(in), record(e))) << n;
+    if (e.kind == Kind::kGnssRaw) ASSERT_TRUE(same_gnss(in.gnss, e.gnss)) << n;
     if (e.kind == Kind::kAlmanac) ASSERT_EQ(std::memcmp(&in.almanac, &e.almanac, sizeof(e.almanac)), 0) << n;
     ++n;
   }
@@ -249,15 +253,15 @@ TEST(LcmReplay, BadInputsAreCountedAndEveryGoodInputDelivered) {
 
   hal::LcmReplayReader rd;
   ASSERT_EQ(rd.open(path), hal::LcmLogStatus::kOk);
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   std::vector<int> got_counters;
   int gnss = 0, almanac = 0;
   double last_t = -1.0;
   while (rd.next(in) == hal::LcmLogStatus::kOk) {
     EXPECT_GE(in.t_s, last_t);
     last_t = in.t_s;
-    if (in.kind == Kind::kImu) got_counters.push_back(in.imu.counter);
-    if (in.kind == Kind::kGnss) {
+    if (in.kind == Kind::kImu) got_counters.push_back(in.imu_counter);
+    if (in.kind == Kind::kGnssRaw) {
       ++gnss;
       EXPECT_EQ(in.gnss.n_meas, 2);
       EXPECT_EQ(in.gnss.meas[1].prn, 3);
@@ -315,14 +319,14 @@ TEST(LcmReplay, ReorderWindowSortsLateInputsAndCountsTooLateOnes) {
   hal::LcmReplayConfig rc;
   rc.reorder_window_s = 1.0;
   ASSERT_EQ(rd.open(path, rc), hal::LcmLogStatus::kOk);
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   double last_t = -1.0;
   int n = 0;
   bool saw_epoch = false;
   while (rd.next(in) == hal::LcmLogStatus::kOk) {
     ASSERT_GE(in.t_s, last_t);
     last_t = in.t_s;
-    if (in.kind == Kind::kGnss) {
+    if (in.kind == Kind::kGnssRaw) {
       EXPECT_EQ(in.t_s, 1.2);
       saw_epoch = true;
     }
@@ -356,7 +360,7 @@ TEST(LcmReplay, WildTimeTagBehindTheWindowIsDroppedEvenBeforeAnythingWasReturned
   ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
   hal::LcmReplayReader rd;
   ASSERT_EQ(rd.open(path, hal::LcmReplayConfig{}), hal::LcmLogStatus::kOk);
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   std::vector<double> t;
   while (rd.next(in) == hal::LcmLogStatus::kOk) t.push_back(in.t_s);
   ASSERT_EQ(t.size(), 102u);

@@ -50,7 +50,7 @@ int run_replay() {
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   std::uint64_t raw_not_used = 0, withheld = 0;
   // GNSS outages: inputs at times within [t0 + k period, t0 + k period + length) are withheld.
   const auto in_outage = [&](double t) {
@@ -62,24 +62,16 @@ int run_replay() {
   const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
   while (reader.next(in) == hal::LcmLogStatus::kOk) {
     if (tools::interrupted()) break;
-    switch (in.kind) {
-      case hal::LcmReplayInput::Kind::kAlmanac: node.on_almanac(in.almanac, in.t_s); break;
-      case hal::LcmReplayInput::Kind::kGnss:
-        if (in_outage(in.t_s))
-          ++withheld;
-        else if (pvt)
-          ++raw_not_used;  // the configuration takes solutions
-        else
-          node.on_gnss(in.gnss);
-        break;
-      case hal::LcmReplayInput::Kind::kImu: node.on_imu(in.imu.sample, in.imu.counter, in.imu.status); break;
-      case hal::LcmReplayInput::Kind::kGnssPvt:
-        if (in_outage(in.t_s))
-          ++withheld;
-        else
-          node.on_gnss_pvt(in.pvt);
-        break;
+    const bool gnss = in.kind == fsw::InputEvent::Kind::kGnssRaw || in.kind == fsw::InputEvent::Kind::kGnssPvt;
+    if (gnss && in_outage(in.t_s)) {
+      ++withheld;
+      continue;
     }
+    if (in.kind == fsw::InputEvent::Kind::kGnssRaw && pvt) {
+      ++raw_not_used;  // the configuration takes solutions
+      continue;
+    }
+    node.on_event(in);
   }
   const bool stopped = tools::interrupted();
   if (stopped)

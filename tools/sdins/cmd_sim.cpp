@@ -185,14 +185,14 @@ int run_sim() {
 
   long long n_imu = 0, n_gnss = 0, n_truth = 0;
   std::size_t n_almanac = 0;
-  tools::SensorEvent ev;
+  fsw::InputEvent ev;
   sim::TruthSample truth;
   double t_imu_first = 0.0, t_imu_last = 0.0;
   while (stream.next(ev, &truth)) {
     switch (ev.kind) {
-      case tools::SensorEvent::Kind::kAlmanac:
+      case fsw::InputEvent::Kind::kAlmanac:
         break;  // written with the first IMU sample, at the start of its interval
-      case tools::SensorEvent::Kind::kImu:
+      case fsw::InputEvent::Kind::kImu:
         if (n_imu == 0) {
           // The almanac at the start of the data, on the navigation time scale, before any
           // epoch: a receiver that has its almanac at power-up.
@@ -210,10 +210,12 @@ int run_sim() {
           ++n_truth;
         }
         break;
-      case tools::SensorEvent::Kind::kGnss:
+      case fsw::InputEvent::Kind::kGnssRaw:
         check(sink.write_gnss(ev.gnss), "GNSS_RAW");
         ++n_gnss;
         break;
+      case fsw::InputEvent::Kind::kGnssPvt:
+        break;  // the simulated receiver gives raw epochs only
     }
   }
   if (sink.encode_failures() != 0) throw std::runtime_error("messages that did not encode: " + std::to_string(sink.encode_failures()));

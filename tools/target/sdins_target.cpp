@@ -60,22 +60,22 @@ int record(const std::string& log, const std::string& path, const std::string& f
   bool ok = std::fwrite("SDTR", 1, 4, f) == 4 && put(f, sdins_target::kFormatVersion) &&
             put(f, static_cast<std::uint32_t>(sdins_target::kFingerprintWords)) && put(f, fp) && put(f, cfg);
   std::uint64_t n_imu = 0, n_gnss = 0, n_alm = 0;
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   while (ok && reader.next(in) == hal::LcmLogStatus::kOk) {
     switch (in.kind) {
-      case hal::LcmReplayInput::Kind::kAlmanac:
+      case fsw::InputEvent::Kind::kAlmanac:
         ok = put_event(f, sdins_target::kTagAlmanac, in.almanac);
         ++n_alm;
         break;
-      case hal::LcmReplayInput::Kind::kGnss:
+      case fsw::InputEvent::Kind::kGnssRaw:
         ok = put_event(f, sdins_target::kTagGnss, in.gnss);
         ++n_gnss;
         break;
-      case hal::LcmReplayInput::Kind::kImu:
-        ok = put_event(f, sdins_target::kTagImu, in.imu.sample);
+      case fsw::InputEvent::Kind::kImu:
+        ok = put_event(f, sdins_target::kTagImu, in.imu);
         ++n_imu;
         break;
-      case hal::LcmReplayInput::Kind::kGnssPvt: break;  // not read (no gnss_pvt_channel)
+      case fsw::InputEvent::Kind::kGnssPvt: break;  // not read (no gnss_pvt_channel)
     }
   }
   ok = std::fclose(f) == 0 && ok;

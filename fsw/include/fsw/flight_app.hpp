@@ -10,6 +10,8 @@
 //                               executive's minor frames (the 200 Hz group; it releases the 1 Hz
 //                               group, which runs inside on_imu or, with exec.ekf_group_inline
 //                               false, in run_ekf_group() on the caller's other thread)
+//   on_event(InputEvent)     -> the one dispatch every harness uses: the entry of the event's kind
+//                               (fsw/input_event.hpp)
 //
 // In-motion initialisation (no host, no ground alignment): at the first epoch with at least
 // min_satellites_for_init satellites, PDOP <= max_init_pdop and a speed >= min_init_speed_mps,
@@ -102,6 +104,7 @@
 #include "fsw/executive.hpp"
 #include "fsw/gnss_pvt.hpp"
 #include "fsw/gps_orbit.hpp"
+#include "fsw/input_event.hpp"
 
 namespace fsw {
 
@@ -187,6 +190,10 @@ class FlightApp {
   Status on_gnss_pvt(const GnssPvtMeasurement& m);
   /// One IMU sample. out.nav_valid is set when the sample completed a minor frame.
   Status on_imu(const ImuSample& s, FrameOutput& out);
+  /// One input event (fsw/input_event.hpp), the way every harness feeds the application: calls
+  /// the entry of ev.kind. out is written by an IMU event only (the other kinds leave it as it
+  /// is): out.nav_valid when the sample completed a minor frame.
+  Status on_event(const InputEvent& ev, FrameOutput& out);
   /// InitMode::kGiven: starts navigation from nav (t_s, llh, vel_enu_mps, q_b_n). kBadConfig in any
   /// other mode or before init(), kBadInput for a non-finite state or when already initialised.
   Status start_given(const NavState& nav);

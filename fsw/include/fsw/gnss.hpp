@@ -59,6 +59,8 @@ struct GnssEpoch {
 /// (Ekf::update_pvt). Recorded data sets give these instead of raw pseudoranges (RTKLIB .pos).
 struct GnssPvtMeasurement {
   double t_s = 0.0;                    ///< time of the solution on the navigation time scale [s]
+  int gps_week = 0;                    ///< GPS time of the solution (carried, not used in flight): week ...
+  double gps_tow_s = 0.0;              ///< ... and seconds of the week
   Vec3 llh = Vec3::Zero();             ///< antenna: lat [rad], lon [rad], ellipsoidal h [m]
   Vec3 vel_enu_mps = Vec3::Zero();     ///< antenna velocity relative to the Earth, ENU
   Vec3 pos_sigma_enu_m = Vec3::Zero(); ///< the solver's 1-sigma, E N U [m] (> 0)

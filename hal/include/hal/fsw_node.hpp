@@ -62,12 +62,11 @@ class FswNode {
   /// kBadConfig for an invalid flight configuration; the log status when the log cannot be opened.
   /// error receives a one-line reason.
   bool open(const FswNodeConfig& cfg, std::string& error);
-  void on_almanac(const fsw::GpsAlmanac& sat, double t_s);
-  void on_gnss(const fsw::GnssRawEpoch& epoch);
-  /// A GNSS position/velocity solution (loosely coupled update; logged on GNSS_PVT with the inputs).
-  void on_gnss_pvt(const GnssPvtSample& pvt);
-  /// counter/status: the sensor's, when known (bus, log); -1 lets the sink count.
-  void on_imu(const fsw::ImuSample& s, std::int32_t counter = -1, std::int16_t status = 0);
+  /// One input event, the node's only way in: logged (with log_inputs: IMU with the sensor's
+  /// counter and status, imu_counter -1 lets the sink count; GNSS_RAW; GNSS_PVT; GPS_ALMANAC at
+  /// ev.t_s), then handed to FlightApp::on_event. An IMU event may complete a minor frame
+  /// (frame_completed(), last_frame()), whose outputs the node publishes.
+  void on_event(const fsw::InputEvent& ev);
   /// Truth (simulator runs only) on the TRUTH channel.
   void on_truth(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, const fsw::Mat3& C_b_n);
   /// Measured execution time of the previous minor frame (real-time mode).
@@ -82,7 +81,7 @@ class FswNode {
   const fsw::FlightAppHealth& app_health() const;
   const fsw::ExecutiveHealth& exec_health() const;
   const LcmLogSink& sink() const { return sink_; }
-  /// Whether the last on_imu() completed a minor frame, and its output.
+  /// Whether the last IMU event completed a minor frame, and its output.
   const fsw::FrameOutput& last_frame() const { return frame_; }
   bool frame_completed() const { return frame_done_; }
   /// The 1 Hz thread's execution times (empty with EkfGroup::kInline).

@@ -139,6 +139,8 @@ inline constexpr double kGnssPvtNoVelocity = -1.0;
 inline fsw::GnssPvtMeasurement to_fsw(const GnssPvtSample& s) {
   fsw::GnssPvtMeasurement m;
   m.t_s = s.t_s;
+  m.gps_week = s.gps_week;
+  m.gps_tow_s = s.gps_tow_s;
   m.llh = s.llh;
   m.vel_enu_mps = s.vel_enu_mps;
   m.pos_sigma_enu_m = s.pos_sigma_enu_m;
@@ -147,6 +149,22 @@ inline fsw::GnssPvtMeasurement to_fsw(const GnssPvtSample& s) {
   m.quality = s.quality;
   m.n_sat = s.n_sat;
   return m;
+}
+
+/// The solution of a measurement (the inverse of to_fsw: to_fsw keeps every field, the velocity
+/// sigmas of a solution without velocity included, so the round trip is exact).
+inline GnssPvtSample from_fsw(const fsw::GnssPvtMeasurement& m) {
+  GnssPvtSample s;
+  s.t_s = m.t_s;
+  s.gps_week = m.gps_week;
+  s.gps_tow_s = m.gps_tow_s;
+  s.llh = m.llh;
+  s.vel_enu_mps = m.vel_enu_mps;
+  s.pos_sigma_enu_m = m.pos_sigma_enu_m;
+  s.vel_sigma_enu_mps = m.has_velocity ? m.vel_sigma_enu_mps : fsw::Vec3::Constant(kGnssPvtNoVelocity);
+  s.quality = m.quality;
+  s.n_sat = m.n_sat;
+  return s;
 }
 
 /// Plausibility limits of a GNSS solution.

@@ -7,7 +7,9 @@
 //
 // LcmReplayReader: reads a log's IMU, GNSS_RAW and GPS_ALMANAC channels (names configurable), and
 // GNSS_PVT solutions when LcmReplayConfig::gnss_pvt_channel names it (off by default: a replay reads
-// them when its filter configuration takes solutions, gnss.source = "pvt"), and returns them as inputs in time order (t_s, then log order for equal times). Inputs may be
+// them when its filter configuration takes solutions, gnss.source = "pvt"), and returns them as
+// flight-software input events (fsw::InputEvent: an IMU sample keeps the sensor's counter and status,
+// a solution becomes fsw::GnssPvtMeasurement) in time order (t_s, then log order for equal times). Inputs may be
 // logged slightly out of order (e.g. an epoch written after the IMU samples that followed it); a
 // reorder window (reorder_window_s of input time) puts them back in order. Every input's time tag
 // passes hal::TimeTagGate (time_tag_gate.hpp) in log order: an input more than the window behind
@@ -29,6 +31,7 @@
 #include "fsw/ekf.hpp"
 #include "fsw/executive.hpp"
 #include "fsw/gps_orbit.hpp"
+#include "fsw/input_event.hpp"
 #include "fsw/strapdown.hpp"
 #include "hal/lcm_channels.hpp"
 #include "hal/lcm_convert.hpp"
@@ -123,17 +126,6 @@ struct LcmReplayConfig {
   std::size_t max_event_bytes = 64u << 20;
 };
 
-/// One flight-software input from a log.
-struct LcmReplayInput {
-  enum class Kind : std::uint8_t { kImu, kGnss, kAlmanac, kGnssPvt };
-  Kind kind = Kind::kImu;
-  double t_s = 0.0;
-  ImuRecord imu{};             ///< kind == kImu
-  fsw::GnssRawEpoch gnss{};    ///< kind == kGnss
-  fsw::GpsAlmanac almanac{};   ///< kind == kAlmanac
-  GnssPvtSample pvt{};         ///< kind == kGnssPvt (only with LcmReplayConfig::gnss_pvt_channel)
-};
-
 struct LcmReplayStats {
   LcmInputStats imu, gnss, almanac;  ///< per input channel: accepted and each rejection reason
   LcmInputStats gnss_pvt;            ///< GNSS_PVT (all zero while the channel is not read)
@@ -157,7 +149,7 @@ class LcmReplayReader {
  public:
   LcmLogStatus open(const std::string& path, const LcmReplayConfig& cfg = {});
   /// The next input in time order (kOk) or kEndOfLog.
-  LcmLogStatus next(LcmReplayInput& in);
+  LcmLogStatus next(fsw::InputEvent& in);
 
   const LcmReplayStats& stats() const { return stats_; }
   const LcmLogReadStats& log_stats() const { return log_.stats(); }
@@ -166,18 +158,18 @@ class LcmReplayReader {
  private:
   struct Pending {
     std::uint64_t seq;
-    LcmReplayInput input;
+    fsw::InputEvent input;
   };
   /// Decodes one event into pending_ (or counts why not).
   void take(const LcmLogEvent& ev);
-  void push(LcmReplayInput&& in);
-  void enqueue(LcmReplayInput&& in);
+  void push(fsw::InputEvent&& in);
+  void enqueue(fsw::InputEvent&& in);
 
   LcmLogReader log_;
   LcmReplayConfig cfg_{};
   LcmReplayStats stats_{};
   std::vector<Pending> pending_;  ///< min-heap on (t_s, seq)
-  TimeTagFilter<LcmReplayInput> gate_;
+  TimeTagFilter<fsw::InputEvent> gate_;
   std::uint64_t seq_ = 0;
   bool eof_ = false;
   bool have_newest_ = false;

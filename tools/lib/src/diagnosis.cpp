@@ -247,27 +247,10 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
     error = "cannot read " + path + ": " + rd.error();
     return false;
   }
-  hal::LcmReplayInput in;
+  fsw::InputEvent in;
   hal::LcmLogStatus st;
   while ((st = rd.next(in)) == hal::LcmLogStatus::kOk) {
-    switch (in.kind) {
-      case hal::LcmReplayInput::Kind::kImu:
-        out.order.push_back({RecordedData::Kind::kImu, static_cast<std::uint32_t>(out.imu.size())});
-        out.imu.push_back(in.imu.sample);
-        break;
-      case hal::LcmReplayInput::Kind::kGnss:
-        out.order.push_back({RecordedData::Kind::kGnss, static_cast<std::uint32_t>(out.gnss.size())});
-        out.gnss.push_back(in.gnss);
-        break;
-      case hal::LcmReplayInput::Kind::kAlmanac:
-        out.order.push_back({RecordedData::Kind::kAlmanac, static_cast<std::uint32_t>(out.almanac.size())});
-        out.almanac.push_back(in.almanac);
-        break;
-      case hal::LcmReplayInput::Kind::kGnssPvt:
-        out.order.push_back({RecordedData::Kind::kPvt, static_cast<std::uint32_t>(out.pvt.size())});
-        out.pvt.push_back(hal::to_fsw(in.pvt));
-        break;
-    }
+    out.push(in);
   }
   if (st != hal::LcmLogStatus::kEndOfLog) {
     error = "reading " + path + " failed: " + rd.error();
@@ -329,6 +312,46 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
   return true;
 }
 
+void RecordedData::input_event(const Event& e, fsw::InputEvent& ev) const {
+  switch (e.kind) {
+    case Kind::kAlmanac:
+      ev.kind = fsw::InputEvent::Kind::kAlmanac;
+      ev.t_s = 0.0;
+      ev.almanac = almanac[e.index];
+      return;
+    case Kind::kImu:
+      ev.kind = fsw::InputEvent::Kind::kImu;
+      ev.imu = imu[e.index];
+      ev.t_s = ev.imu.t_s;
+      ev.imu_counter = -1;
+      ev.imu_status = 0;
+      return;
+    case Kind::kGnss:
+      ev.kind = fsw::InputEvent::Kind::kGnssRaw;
+      ev.gnss = gnss[e.index];
+      ev.t_s = ev.gnss.t_s;
+      return;
+    case Kind::kPvt:
+      ev.kind = fsw::InputEvent::Kind::kGnssPvt;
+      ev.pvt = pvt[e.index];
+      ev.t_s = ev.pvt.t_s;
+      return;
+  }
+}
+
+void RecordedData::push(const fsw::InputEvent& ev) {
+  const auto add = [this](Kind k, auto& array, const auto& value) {
+    order.push_back({k, static_cast<std::uint32_t>(array.size())});
+    array.push_back(value);
+  };
+  switch (ev.kind) {
+    case fsw::InputEvent::Kind::kImu: return add(Kind::kImu, imu, ev.imu);
+    case fsw::InputEvent::Kind::kGnssRaw: return add(Kind::kGnss, gnss, ev.gnss);
+    case fsw::InputEvent::Kind::kGnssPvt: return add(Kind::kPvt, pvt, ev.pvt);
+    case fsw::InputEvent::Kind::kAlmanac: return add(Kind::kAlmanac, almanac, ev.almanac);
+  }
+}
+
 RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double truth_rate_hz) {
   RecordedData out;
   out.description = sc.name + ", seed " + std::to_string(seed);
@@ -336,25 +359,12 @@ RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double
   out.imu.reserve(static_cast<std::size_t>(stream.total_samples()));
   out.order.reserve(static_cast<std::size_t>(stream.total_samples()) * 21 / 20 + 64);
   const long long decim = std::max(1LL, std::llround(sc.imu.rate_hz / truth_rate_hz));
-  SensorEvent ev;
+  fsw::InputEvent ev;
   sim::TruthSample t;
   long long n_imu = 0;
   while (stream.next(ev, &t)) {
-    switch (ev.kind) {
-      case SensorEvent::Kind::kAlmanac:
-        out.order.push_back({RecordedData::Kind::kAlmanac, static_cast<std::uint32_t>(out.almanac.size())});
-        out.almanac.push_back(ev.almanac);
-        break;
-      case SensorEvent::Kind::kGnss:
-        out.order.push_back({RecordedData::Kind::kGnss, static_cast<std::uint32_t>(out.gnss.size())});
-        out.gnss.push_back(ev.gnss);
-        break;
-      case SensorEvent::Kind::kImu:
-        out.order.push_back({RecordedData::Kind::kImu, static_cast<std::uint32_t>(out.imu.size())});
-        out.imu.push_back(ev.imu);
-        if (n_imu++ % decim == 0) out.truth.push_back(TruthPoint{t.t_s, t.llh, t.vel_enu_mps, fsw::Quat(t.C_b_n)});
-        break;
-    }
+    out.push(ev);
+    if (ev.kind == fsw::InputEvent::Kind::kImu && n_imu++ % decim == 0) out.truth.push_back(sim::truth_point(t));
   }
   return out;
 }
@@ -421,38 +431,37 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
   // The likelihood's keys are the GNSS measurement times (the last epoch fed), not the IMU clock:
   // runs on re-timed IMU data (diagnosis_intervals.cpp) compare the same measurements.
   double last_gnss_t_s = 0.0;
+  fsw::InputEvent input;  // what the flight application is fed (FlightApp::on_event), one at a time
   for (const RecordedData::Event& ev : data.order) {
     if (ev.kind == RecordedData::Kind::kGnss && cfg.gnss_source == sim::GnssSource::kRaw) last_gnss_t_s = data.gnss[ev.index].t_s;
     if (ev.kind == RecordedData::Kind::kPvt && cfg.gnss_source == sim::GnssSource::kPvt) last_gnss_t_s = data.pvt[ev.index].t_s;
     switch (ev.kind) {
-      case RecordedData::Kind::kAlmanac: app->on_almanac(data.almanac[ev.index]); continue;
+      case RecordedData::Kind::kAlmanac:
+        data.input_event(ev, input);
+        app->on_event(input, out);
+        continue;
       case RecordedData::Kind::kGnss:
-        if (cfg.gnss_source != sim::GnssSource::kRaw) continue;
-        if (outage_window(data.gnss[ev.index].t_s) >= 0) {
+      case RecordedData::Kind::kPvt: {
+        // The GNSS input the configuration takes (raw epochs or solutions); the other is not fed.
+        const sim::GnssSource source = ev.kind == RecordedData::Kind::kGnss ? sim::GnssSource::kRaw : sim::GnssSource::kPvt;
+        if (cfg.gnss_source != source) continue;
+        data.input_event(ev, input);
+        if (outage_window(input.t_s) >= 0) {
           ++run.outages.epochs_withheld;
           in_outage = true;
           continue;
         }
         if (in_outage) await_reacquisition = true;
         in_outage = false;
-        app->on_gnss(data.gnss[ev.index]);
+        app->on_event(input, out);
         continue;
-      case RecordedData::Kind::kPvt:
-        if (cfg.gnss_source != sim::GnssSource::kPvt) continue;
-        if (outage_window(data.pvt[ev.index].t_s) >= 0) {
-          ++run.outages.epochs_withheld;
-          in_outage = true;
-          continue;
-        }
-        if (in_outage) await_reacquisition = true;
-        in_outage = false;
-        app->on_gnss_pvt(data.pvt[ev.index]);
-        continue;
+      }
       case RecordedData::Kind::kImu: break;
     }
     out.nav_valid = false;
     out.ekf_ran = false;
-    if (app->on_imu(data.imu[ev.index], out) != fsw::Status::kOk || !out.nav_valid) continue;
+    data.input_event(ev, input);
+    if (app->on_event(input, out) != fsw::Status::kOk || !out.nav_valid) continue;
     if (!run.initialised && app->initialised()) {
       run.initialised = true;
       run.init_t_s = app->health().init_t_s;
@@ -494,12 +503,13 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
       TruthPoint t;
       if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_at(out.nav.t_s), t)) {
         const fsw::Vec3 dp = scored_error_enu_m(t);
-        const fsw::Vec3 dv = out.nav.vel_enu_mps - t.vel_enu_mps;
+        const sim::NavErrors err = sim::nav_errors(out.nav, t);
+        const fsw::Vec3& dv = err.vel_enu_mps;
         nav_pos_ss += dp.squaredNorm();
         nav_vel_ss += dv.squaredNorm();
         ++run.nav.samples;
         if (t.has_attitude) {
-          const fsw::Vec3 phi = fsw::attitude_error_enu(out.nav.C_b_n(), t.q_b_n.toRotationMatrix());
+          const fsw::Vec3& phi = err.att_phi_enu_rad;
           nav_tilt_ss += phi.head<2>().squaredNorm();
           nav_head_ss += phi.z() * phi.z();
           ++run.nav.attitude_samples;
@@ -589,7 +599,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     if (!data.truth.empty()) {
       TruthPoint t;
       if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t) && t.has_attitude)
-        head = fsw::attitude_error_enu(out.nav.C_b_n(), t.q_b_n.toRotationMatrix()).z() * fsw::kRadToDeg;
+        head = sim::nav_errors(out.nav, t).att_phi_enu_rad.z() * fsw::kRadToDeg;
     }
     run.heading_err_deg.push_back(head);
     std::vector<double> est(static_cast<std::size_t>(na)), sig(static_cast<std::size_t>(na));

@@ -4,14 +4,6 @@
 
 namespace tools {
 
-NavErrors nav_errors(const fsw::NavState& nav, const sim::TruthSample& truth) {
-  NavErrors e;
-  e.pos_enu_m = fsw::enu_difference_m(nav.llh, truth.llh);
-  e.vel_enu_mps = nav.vel_enu_mps - truth.vel_enu_mps;
-  e.att_phi_enu_rad = fsw::attitude_error_enu(nav.C_b_n(), truth.C_b_n);
-  return e;
-}
-
 NavErrors run_free_inertial(const sim::Motion& motion, sim::ImuModel* imu, const FreeInertialConfig& cfg,
                             const FreeInertialCallback& on_frame, fsw::Status* status) {
   sim::TruthGenerator gen(motion, cfg.imu_rate_hz);

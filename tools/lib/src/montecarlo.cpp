@@ -41,8 +41,8 @@ struct ModelRunner {
   virtual ~ModelRunner() = default;
   virtual fsw::Status init(const fsw::FlightAppConfig& cfg, const std::vector<sim::AlmanacEntry>& almanac,
                            const fsw::NavState& nav) = 0;
-  virtual bool on_imu(const fsw::ImuSample& s) = 0;  ///< returns whether the EKF ran
-  virtual void on_gnss(const fsw::GnssRawEpoch& raw) = 0;
+  /// One input event (FlightApp::on_event); returns whether the EKF ran (IMU events only).
+  virtual bool on_event(const fsw::InputEvent& ev) = 0;
   virtual void record(const sim::TruthSample& truth) = 0;
   virtual std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg,
                                               std::vector<double>& cov) const = 0;
@@ -61,14 +61,14 @@ struct FlightAppRunner final : ModelRunner {
                    const fsw::NavState& nav) override {
     const fsw::Status st = app.init(cfg);
     if (st != fsw::Status::kOk) return st;
-    for (const sim::AlmanacEntry& a : almanac) (void)app.on_almanac(a);  // a rejected element is counted
+    for (const sim::AlmanacEntry& a : almanac)
+      (void)app.on_event(fsw::InputEvent::of_almanac(a, nav.t_s), out);  // a rejected element is counted
     return app.start_given(nav);
   }
-  bool on_imu(const fsw::ImuSample& s) override {
-    app.on_imu(s, out);
-    return out.ekf_ran;
+  bool on_event(const fsw::InputEvent& ev) override {
+    app.on_event(ev, out);
+    return ev.kind == fsw::InputEvent::Kind::kImu && out.ekf_ran;
   }
-  void on_gnss(const fsw::GnssRawEpoch& raw) override { app.on_gnss(raw); }
   fsw::ExecutiveHealth health() const override { return app.executive().health(); }
 
   void record(const sim::TruthSample& truth) override {
@@ -305,6 +305,9 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   std::array<fsw::GnssRawEpoch, kMaxSpf> raw{};
   std::array<const sim::TruthSample*, kMaxSpf> truth_at{};  ///< the epoch's truth, or nullptr
   Clock::duration d_sim{}, d_mech{}, d_ekf{};
+  fsw::InputEvent imu_ev, gnss_ev;  // reused: only the payload changes from one delivery to the next
+  imu_ev.kind = fsw::InputEvent::Kind::kImu;
+  gnss_ev.kind = fsw::InputEvent::Kind::kGnssRaw;
   for (std::size_t j0 = 0; j0 < truth.imu.size(); j0 += static_cast<std::size_t>(spf)) {
     // SIGINT/SIGTERM: a run stops within a frame (run_many then discards it and throws). Under
     // mpirun the launcher kills the ranks 1 s after forwarding the signal, so a rank must not wait
@@ -322,9 +325,15 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
     bool ekf_ran = false;
     for (int k = 0; k < nf; ++k) {
       const sim::TruthSample* te = truth_at[static_cast<std::size_t>(k)];
+      imu_ev.imu = frame[static_cast<std::size_t>(k)];
+      imu_ev.t_s = imu_ev.imu.t_s;
+      if (te) {
+        gnss_ev.gnss = raw[static_cast<std::size_t>(k)];
+        gnss_ev.t_s = gnss_ev.gnss.t_s;
+      }
       for (auto& r : runners) {
-        if (te) r->on_gnss(raw[static_cast<std::size_t>(k)]);
-        ekf_ran |= r->on_imu(frame[static_cast<std::size_t>(k)]);
+        if (te) r->on_event(gnss_ev);
+        ekf_ran |= r->on_event(imu_ev);
       }
       if (te)
         for (auto& r : runners) r->record(*te);

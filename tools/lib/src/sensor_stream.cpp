@@ -23,9 +23,10 @@ SensorStream::SensorStream(const sim::Scenario& sc, std::uint64_t seed) : sc_(sc
   gps_ = std::make_unique<sim::GpsModel>(sc_.gps, almanac_, sc_.effects, seed);
 }
 
-bool SensorStream::next(SensorEvent& ev, sim::TruthSample* truth) {
+bool SensorStream::next(fsw::InputEvent& ev, sim::TruthSample* truth) {
   if (almanac_sent_ < almanac_.size()) {
-    ev.kind = SensorEvent::Kind::kAlmanac;
+    ev.kind = fsw::InputEvent::Kind::kAlmanac;
+    ev.t_s = gen_->current().t_s;  // received at power-up, before the first IMU sample
     ev.almanac = almanac_[almanac_sent_++];
     return true;
   }
@@ -33,15 +34,18 @@ bool SensorStream::next(SensorEvent& ev, sim::TruthSample* truth) {
     epoch_due_ = false;
     fsw::GnssEpoch e;
     gps_->measure(gen_->current(), e);
-    ev.kind = SensorEvent::Kind::kGnss;
+    ev.kind = fsw::InputEvent::Kind::kGnssRaw;
     gps_->raw(e, ev.gnss);
+    ev.t_s = ev.gnss.t_s;
     return true;
   }
   if (sample_ >= n_samples_) return false;
   const sim::TruthSample& t = gen_->next();
   ++sample_;
-  ev.kind = SensorEvent::Kind::kImu;
+  ev.kind = fsw::InputEvent::Kind::kImu;
   ev.imu = imu_->measure(t);
+  ev.t_s = ev.imu.t_s;
+  ev.imu_counter = -1;
   if (truth != nullptr) *truth = t;
   epoch_due_ = sample_ % samples_per_epoch_ == 0;
   return true;
@@ -51,11 +55,11 @@ bool SensorStream::next(SensorStep& step) {
   almanac_sent_ = almanac_.size();
   step.imu.clear();
   step.has_epoch = false;
-  SensorEvent ev;
+  fsw::InputEvent ev;
   while (next(ev)) {
-    if (ev.kind == SensorEvent::Kind::kImu) {
+    if (ev.kind == fsw::InputEvent::Kind::kImu) {
       step.imu.push_back(ev.imu);
-    } else if (ev.kind == SensorEvent::Kind::kGnss) {
+    } else if (ev.kind == fsw::InputEvent::Kind::kGnssRaw) {
       step.has_epoch = true;
       step.epoch = ev.gnss;
       return true;

@@ -114,8 +114,10 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
   acfg.init_mode = cfg.init_mode;
   auto app = std::make_unique<fsw::FlightApp<Layout>>();  // the 56-state executives are ~100 KB
   fsw::Status st0 = app->init(acfg);
+  fsw::FrameOutput out;
   if (st0 == fsw::Status::kOk) {
-    for (const sim::AlmanacEntry& a : sensors.almanac()) (void)app->on_almanac(a);  // a rejected element is counted
+    for (const sim::AlmanacEntry& a : sensors.almanac())
+      (void)app->on_event(fsw::InputEvent::of_almanac(a, 0.0), out);  // a rejected element is counted
     if (cfg.init_mode == fsw::InitMode::kGiven) st0 = app->start_given(initial_nav_state(truth, sensors.errors(), mc, seed));
   }
   if (st0 != fsw::Status::kOk) throw std::runtime_error("timing audit: flight application init failed");
@@ -133,7 +135,9 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
 
   std::array<fsw::ImuSample, 2 * fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
   int n_in_frame = 0;
-  fsw::FrameOutput out;
+  fsw::InputEvent imu_ev, gnss_ev;  // reused: only the payload changes from one delivery to the next
+  imu_ev.kind = fsw::InputEvent::Kind::kImu;
+  gnss_ev.kind = fsw::InputEvent::Kind::kGnssRaw;
   bool frame_has_epoch = false, frame_init = false;
   double frame_s = 0.0;
   unsigned char frame_pre = 0;
@@ -146,12 +150,16 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
     if (is_epoch) {  // delivered before the IMU sample of its time, as the Monte Carlo does
       frame_has_epoch = true;
       const bool before = app->initialised();
-      frame_s += timed([&] { status = app->on_gnss(sensors.raw()); }, overhead_s, pre);
+      gnss_ev.gnss = sensors.raw();
+      gnss_ev.t_s = gnss_ev.gnss.t_s;
+      frame_s += timed([&] { status = app->on_event(gnss_ev, out); }, overhead_s, pre);
       frame_pre |= pre;
       if (!before && app->initialised()) frame_init = true;
       if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_gnss failed");
     }
-    frame_s += timed([&] { status = app->on_imu(sample, out); }, overhead_s, pre);
+    imu_ev.imu = sample;
+    imu_ev.t_s = sample.t_s;
+    frame_s += timed([&] { status = app->on_event(imu_ev, out); }, overhead_s, pre);
     frame_pre |= pre;
     if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_imu failed");
     // A frame ends with a navigation frame, or (before initialisation) with a frame's worth of samples.

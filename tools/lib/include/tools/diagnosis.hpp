@@ -46,23 +46,21 @@
 #include "fsw/filter_model.hpp"
 #include "fsw/flight_app.hpp"
 #include "fsw/gps_orbit.hpp"
+#include "fsw/input_event.hpp"
 #include "fsw/strapdown.hpp"
 #include "sim/filter_config.hpp"
 #include "sim/scenario.hpp"
+#include "sim/truth.hpp"
 
 namespace tools {
 
-/// A truth or reference sample (TRUTH channel).
-struct TruthPoint {
-  double t_s = 0.0;
-  fsw::Vec3 llh = fsw::Vec3::Zero();
-  fsw::Vec3 vel_enu_mps = fsw::Vec3::Zero();
-  fsw::Quat q_b_n = fsw::Quat::Identity();
-  bool has_attitude = true;  ///< false for a position/velocity reference (an imported GNSS solution)
-};
+/// A truth or reference sample (TRUTH channel): sim/truth.hpp, with the navigation-error metric.
+using sim::TruthPoint;
 
 /// A recording in memory, in arrival order: the inputs of the flight software and, separately,
-/// truth (used only to score navigation).
+/// truth (used only to score navigation). Stored by type (an fsw::InputEvent is about 1 KiB, an
+/// IMU sample 64 B) with an index of the arrival order; input_event() gives the flight
+/// application's input type for one entry of the order.
 struct RecordedData {
   enum class Kind : std::uint8_t { kAlmanac, kImu, kGnss, kPvt };
   struct Event {
@@ -78,6 +76,12 @@ struct RecordedData {
   std::string description;
   int damaged_stretches = 0;                ///< IMU holes > kDamagedImuGap_s (exclude_damaged_stretches)
   std::uint64_t excluded_imu_samples = 0;   ///< IMU samples outside the stretch kept
+
+  /// Fills ev (kind, t_s and that kind's payload; the other payloads are left as they are) with the
+  /// input of e. An almanac element's t_s is 0 (the recording keeps no receive time for it).
+  void input_event(const Event& e, fsw::InputEvent& ev) const;
+  /// Appends ev's payload to its array and its entry to the order (the inverse of input_event).
+  void push(const fsw::InputEvent& ev);
 };
 
 /// An IMU hole longer than this is a damaged stretch of a log (lost or rejected events).

@@ -8,17 +8,13 @@
 #include "fsw/strapdown.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/trajectory.hpp"
+#include "sim/truth.hpp"
 
 namespace tools {
 
-/// Errors of a navigation solution against truth at one instant.
-struct NavErrors {
-  fsw::Vec3 pos_enu_m = fsw::Vec3::Zero();      ///< nav minus truth
-  fsw::Vec3 vel_enu_mps = fsw::Vec3::Zero();    ///< nav minus truth
-  fsw::Vec3 att_phi_enu_rad = fsw::Vec3::Zero();  ///< attitude error phi (frames.hpp)
-};
-
-NavErrors nav_errors(const fsw::NavState& nav, const sim::TruthSample& truth);
+// The navigation error against truth: one definition, sim/truth.hpp.
+using sim::NavErrors;
+using sim::nav_errors;
 
 struct FreeInertialConfig {
   double duration_s = 1800.0;

@@ -1,4 +1,4 @@
-// The simulated sensors as the flight software receives them, in arrival order: the almanac
+// The simulated sensors as the flight software receives them (fsw::InputEvent), in arrival order: the almanac
 // first (as a receiver delivers it at power-up), then 1 kHz IMU samples and, after the IMU sample
 // of each GPS epoch time, the receiver's raw epoch. SIL (`sdins sil`), the bus simulator
 // (`sdins bus-sim`) and `sdins sim --log` all fly a scenario through this one stream, so they see
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "fsw/gps_orbit.hpp"
+#include "fsw/input_event.hpp"
 #include "fsw/strapdown.hpp"
 #include "sim/gps_model.hpp"
 #include "sim/imu_model.hpp"
@@ -17,14 +18,6 @@
 #include "sim/trajectory.hpp"
 
 namespace tools {
-
-struct SensorEvent {
-  enum class Kind { kAlmanac, kImu, kGnss };
-  Kind kind = Kind::kImu;
-  fsw::GpsAlmanac almanac{};
-  fsw::ImuSample imu{};
-  fsw::GnssRawEpoch gnss{};
-};
 
 /// One GPS interval of the stream: the IMU samples of (t - 1/gps_rate, t] and the epoch at t
 /// (has_epoch false only for a short last step). The almanac is not part of a step: almanac().
@@ -44,7 +37,7 @@ class SensorStream {
 
   /// The next event; false at the end of the scenario (duration reached). `truth` (optional)
   /// receives the truth sample of an IMU event's time.
-  bool next(SensorEvent& ev, sim::TruthSample* truth = nullptr);
+  bool next(fsw::InputEvent& ev, sim::TruthSample* truth = nullptr);
   /// The next GPS interval (one stream is read either by event or by step, not both); false at
   /// the end. The almanac events are skipped: take them from almanac().
   bool next(SensorStep& step);
