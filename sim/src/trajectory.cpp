@@ -122,6 +122,24 @@ std::unique_ptr<FlightMotion> FlightMotion::create(const Scenario& sc, std::stri
   const auto level = [&V](FlightPhase::Kind kind, double t0, double t1, double bank, int seg, int trn, bool coord) {
     return FlightPhase{kind, t0, t1, bank, seg, trn, V, V, 0.0, 0.0, coord};
   };
+  // A transition in (transition_s), a hold (duration_s, may be 0) and a transition back, wings
+  // level and straight: set(phase, is_in, is_out) gives each phase its start and end values.
+  const auto push_in_hold_out = [&](const Segment& s, int seg, const auto& set) {
+    const double T = s.transition_s;
+    FlightPhase in = level(FlightPhase::Kind::kStraight, t, t + T, 0.0, seg, -1, true);
+    set(in, true, false);
+    m->phases_.push_back(in);
+    if (s.duration_s > 0.0) {
+      FlightPhase hold = level(FlightPhase::Kind::kStraight, t + T, t + T + s.duration_s, 0.0, seg, -1, true);
+      set(hold, false, false);
+      m->phases_.push_back(hold);
+    }
+    FlightPhase out =
+        level(FlightPhase::Kind::kStraight, t + T + s.duration_s, t + 2.0 * T + s.duration_s, 0.0, seg, -1, true);
+    set(out, false, true);
+    m->phases_.push_back(out);
+    t += 2.0 * T + s.duration_s;
+  };
   while (t < sc.duration_s) {
     if (idx >= sc.segments.size()) {
       // No repeat: the closing straight phase below starts here (pushing one that ends at
@@ -184,41 +202,22 @@ std::unique_ptr<FlightMotion> FlightMotion::create(const Scenario& sc, std::stri
         break;
       }
       case SegmentType::kClimb: {
+        // Pull-up to the flight-path angle, hold, push-over back to level.
         const double g1 = s.flight_path_deg * kDegToRad;
-        const double T = s.transition_s;
-        FlightPhase up = level(FlightPhase::Kind::kStraight, t, t + T, 0.0, seg, -1, true);
-        up.gamma1_rad = g1;
-        m->phases_.push_back(up);
-        if (s.duration_s > 0.0) {
-          FlightPhase hold = level(FlightPhase::Kind::kStraight, t + T, t + T + s.duration_s, 0.0, seg, -1, true);
-          hold.gamma0_rad = hold.gamma1_rad = g1;
-          m->phases_.push_back(hold);
-        }
-        FlightPhase down = level(FlightPhase::Kind::kStraight, t + T + s.duration_s, t + 2.0 * T + s.duration_s, 0.0,
-                                 seg, -1, true);
-        down.gamma0_rad = g1;
-        m->phases_.push_back(down);
-        t += 2.0 * T + s.duration_s;
+        push_in_hold_out(s, seg, [g1](FlightPhase& p, bool in, bool out) {
+          p.gamma0_rad = in ? 0.0 : g1;
+          p.gamma1_rad = out ? 0.0 : g1;
+        });
         break;
       }
       case SegmentType::kCrab: {
         // Wings level and straight: only the nose moves off the track (kinematics: the velocity
         // is unchanged, the attitude's yaw is track + crab, the body yaw rate the crab's rate).
         const double c1 = sign * s.crab_deg * kDegToRad;
-        const double T = s.transition_s;
-        FlightPhase in = level(FlightPhase::Kind::kStraight, t, t + T, 0.0, seg, -1, true);
-        in.crab1_rad = c1;
-        m->phases_.push_back(in);
-        if (s.duration_s > 0.0) {
-          FlightPhase hold = level(FlightPhase::Kind::kStraight, t + T, t + T + s.duration_s, 0.0, seg, -1, true);
-          hold.crab0_rad = hold.crab1_rad = c1;
-          m->phases_.push_back(hold);
-        }
-        FlightPhase out = level(FlightPhase::Kind::kStraight, t + T + s.duration_s, t + 2.0 * T + s.duration_s, 0.0,
-                                seg, -1, true);
-        out.crab0_rad = c1;
-        m->phases_.push_back(out);
-        t += 2.0 * T + s.duration_s;
+        push_in_hold_out(s, seg, [c1](FlightPhase& p, bool in, bool out) {
+          p.crab0_rad = in ? 0.0 : c1;
+          p.crab1_rad = out ? 0.0 : c1;
+        });
         break;
       }
     }

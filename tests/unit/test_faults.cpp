@@ -65,20 +65,28 @@ struct ScratchDir {
 
 // ---- output files ----
 
-TEST(OutputFile, TargetKeepsItsOldContentsUntilCommit) {
-  ScratchDir d;
-  const std::string p = d / "out.txt";
+namespace {
+/// Replaces p ("old\n") with new contents; while the file is open and flushed, the target still
+/// holds the old contents and `named` temporaries stand beside it; after commit none.
+void replace_checking_meanwhile(const ScratchDir& d, const std::string& p, int named) {
   put(p, "old\n");
   hal::OutputFile f;
   ASSERT_TRUE(f.open(p));
   ASSERT_TRUE(f.write("new contents\n"));
   ASSERT_TRUE(f.flush());
   EXPECT_EQ(slurp(p), "old\n");  // still the old file while writing
-  EXPECT_EQ(temporaries_in(d.path), 0);  // the bytes are in an unnamed (O_TMPFILE) file
-  EXPECT_EQ(std::distance(fs::directory_iterator(d.path), fs::directory_iterator{}), 1);
+  EXPECT_EQ(temporaries_in(d.path), named);
   ASSERT_TRUE(f.commit()) << f.error();
   EXPECT_EQ(slurp(p), "new contents\n");
   EXPECT_EQ(temporaries_in(d.path), 0);
+}
+}  // namespace
+
+TEST(OutputFile, TargetKeepsItsOldContentsUntilCommit) {
+  ScratchDir d;
+  const std::string p = d / "out.txt";
+  replace_checking_meanwhile(d, p, 0);  // the bytes are in an unnamed (O_TMPFILE) file
+  EXPECT_EQ(std::distance(fs::directory_iterator(d.path), fs::directory_iterator{}), 1);
   // A new file appears whole, under its own name, at commit.
   const std::string q = d / "new.txt";
   hal::OutputFile g;
@@ -94,19 +102,9 @@ TEST(OutputFile, NamedTemporaryFallbackKeepsTheOldContentsUntilCommit) {
   // File systems without O_TMPFILE get a named ".NAME.sdins-tmp.PID.N" beside the target.
   ScratchDir d;
   const std::string p = d / "out.txt";
-  put(p, "old\n");
   hal::set_unnamed_temporaries(false);
-  hal::OutputFile f;
-  const bool opened = f.open(p);
+  replace_checking_meanwhile(d, p, 1);
   hal::set_unnamed_temporaries(true);
-  ASSERT_TRUE(opened);
-  ASSERT_TRUE(f.write("new contents\n"));
-  ASSERT_TRUE(f.flush());
-  EXPECT_EQ(slurp(p), "old\n");
-  EXPECT_EQ(temporaries_in(d.path), 1);
-  ASSERT_TRUE(f.commit()) << f.error();
-  EXPECT_EQ(slurp(p), "new contents\n");
-  EXPECT_EQ(temporaries_in(d.path), 0);
 }
 
 TEST(OutputFile, SigkillWhileWritingLeavesTheOldFileAndNothingElse) {

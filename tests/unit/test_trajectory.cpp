@@ -88,6 +88,34 @@ struct Fnv1a {
 // FlightMotion
 // ------------------------------------------------------------------------------------------------
 
+namespace {
+
+/// A perfect IMU flown free-inertial over the first 200 s of motion m stays on its truth (the
+/// truth kinematics are consistent): position within 5 cm, velocity 1 mm/s, attitude 1e-8 rad.
+void expect_free_inertial_on_truth(const sim::FlightMotion& m, const char* what) {
+  tools::FreeInertialConfig cfg;
+  cfg.duration_s = 200.0;
+  double max_pos = 0.0, max_vel = 0.0, max_att = 0.0;
+  fsw::Status st = fsw::Status::kOk;
+  tools::run_free_inertial(
+      m, nullptr, cfg,
+      [&](const sim::TruthSample& truth, const fsw::NavState& nav) {
+        const tools::NavErrors e = tools::nav_errors(nav, truth);
+        max_pos = std::max(max_pos, e.pos_enu_m.norm());
+        max_vel = std::max(max_vel, e.vel_enu_mps.norm());
+        max_att = std::max(max_att, e.att_phi_enu_rad.norm());
+      },
+      &st);
+  ASSERT_EQ(st, fsw::Status::kOk);
+  std::printf("%s, perfect IMU free-inertial over 200 s: position %.2e m, velocity %.2e m/s, attitude %.2e rad\n",
+              what, max_pos, max_vel, max_att);
+  EXPECT_LT(max_pos, 0.05);
+  EXPECT_LT(max_vel, 1e-3);
+  EXPECT_LT(max_att, 1e-8);
+}
+
+}  // namespace
+
 TEST(FlightMotion, SmoothStepShape) {
   EXPECT_EQ(sim::smooth_step(0.0), 0.0);
   EXPECT_EQ(sim::smooth_step(1.0), 1.0);
@@ -570,25 +598,7 @@ TEST(FlightMotion, SpeedChangeClimbAndRollWithoutTurning) {
   EXPECT_GT(max_vz, 50.0);
   EXPECT_GT(max_pitch_rate, 0.01);  // pull-up and push-over pitch the body
 
-  tools::FreeInertialConfig cfg;
-  cfg.duration_s = 200.0;
-  double max_pos = 0.0, max_vel = 0.0, max_att = 0.0;
-  fsw::Status st = fsw::Status::kOk;
-  tools::run_free_inertial(
-      *m, nullptr, cfg,
-      [&](const sim::TruthSample& truth, const fsw::NavState& nav) {
-        const tools::NavErrors e = tools::nav_errors(nav, truth);
-        max_pos = std::max(max_pos, e.pos_enu_m.norm());
-        max_vel = std::max(max_vel, e.vel_enu_mps.norm());
-        max_att = std::max(max_att, e.att_phi_enu_rad.norm());
-      },
-      &st);
-  ASSERT_EQ(st, fsw::Status::kOk);
-  std::printf("manoeuvres, perfect IMU free-inertial over 200 s: position %.2e m, velocity %.2e m/s, attitude %.2e rad\n",
-              max_pos, max_vel, max_att);
-  EXPECT_LT(max_pos, 0.05);
-  EXPECT_LT(max_vel, 1e-3);
-  EXPECT_LT(max_att, 1e-8);
+  expect_free_inertial_on_truth(*m, "manoeuvres");
 }
 
 // A crab (the nose off the track, wings level, the velocity unchanged: the heading a crosswind
@@ -642,25 +652,7 @@ TEST(FlightMotion, CrabTurnsTheNoseOffTheTrackWithTheVelocityUnchanged) {
   // velocity does not turn; what changes is gravity and the transport rate along 35 km).
   EXPECT_LT(max_lat_f, 1e-3);
 
-  tools::FreeInertialConfig cfg;
-  cfg.duration_s = 200.0;
-  double max_pos = 0.0, max_vel = 0.0, max_att = 0.0;
-  fsw::Status st = fsw::Status::kOk;
-  tools::run_free_inertial(
-      *m, nullptr, cfg,
-      [&](const sim::TruthSample& truth, const fsw::NavState& nav) {
-        const tools::NavErrors e = tools::nav_errors(nav, truth);
-        max_pos = std::max(max_pos, e.pos_enu_m.norm());
-        max_vel = std::max(max_vel, e.vel_enu_mps.norm());
-        max_att = std::max(max_att, e.att_phi_enu_rad.norm());
-      },
-      &st);
-  ASSERT_EQ(st, fsw::Status::kOk);
-  std::printf("crab, perfect IMU free-inertial over 200 s: position %.2e m, velocity %.2e m/s, attitude %.2e rad\n",
-              max_pos, max_vel, max_att);
-  EXPECT_LT(max_pos, 0.05);
-  EXPECT_LT(max_vel, 1e-3);
-  EXPECT_LT(max_att, 1e-8);
+  expect_free_inertial_on_truth(*m, "crab");
 }
 
 TEST(FlightMotion, SpeedChangeBelowTheMinimumIsRejected) {

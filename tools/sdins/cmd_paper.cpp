@@ -26,6 +26,16 @@
 namespace sdins {
 namespace {
 
+/// A figure that cannot be written fails the command (docs/faults.md), after the results, which
+/// are complete: summary.json and the CSVs do not depend on the figures. Returns the exit code.
+int figures_failed(const char* script, const std::filesystem::path& out) {
+  std::fprintf(stderr,
+               "sdins paper: error: the figures could not be made (%s's message above); the results in %s are "
+               "complete (--no-plots skips the figures)\n",
+               script, out.string().c_str());
+  return 1;
+}
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -338,8 +348,6 @@ int run_paper_body() {
   write_report(out, summary);
   tools::throw_if_interrupted("paper stopped before its summary; no summary.json written");
   run_dir->finish(summary);  // the completion marker; the figures below are drawn from it
-  // A figure that cannot be written fails the command (docs/faults.md), after the results, which
-  // are complete: summary.json and the CSVs do not depend on the figures.
   const bool plots_failed = opt.plots && run_plot_script("plot_paper.py", "\"" + out.string() + "\"") != 0;
   std::printf("\nclaims:\n");
   for (const auto& c : summary["claims"])
@@ -349,14 +357,7 @@ int run_paper_body() {
     std::printf("  %-4s %-90s %8.3f (limit %.3f%s)\n", c.pass ? "ok" : "FAIL", c.name.c_str(), c.value, c.limit,
                 c.limit2 != c.limit ? (" .. " + std::to_string(c.limit2)).c_str() : "");
   std::printf("wrote %s/{summary.json,report.md,mis*/stats_*.csv,*.png,analysis/}\n", out.string().c_str());
-  if (plots_failed) {
-    std::fprintf(stderr,
-                 "sdins paper: error: the figures could not be made (plot_paper.py's message above); the results in %s "
-                 "are complete (--no-plots skips the figures)\n",
-                 out.string().c_str());
-    return 1;
-  }
-  return 0;
+  return plots_failed ? figures_failed("plot_paper.py", out) : 0;
 }
 
 // ---- the turn-pattern study
@@ -441,14 +442,7 @@ int run_patterns_body() {
   const bool plots_failed = opt.plots && run_plot_script("plot_patterns.py", "\"" + out.string() + "\"") != 0;
   std::printf("\n%s\nwrote %s/{patterns.json,patterns.md,patterns.png,<pattern>/stats_*.csv}\n", paragraph.c_str(),
               out.string().c_str());
-  if (plots_failed) {
-    std::fprintf(stderr,
-                 "sdins paper: error: the pattern figure could not be made (plot_patterns.py's message above); the "
-                 "results in %s are complete (--no-plots skips the figures)\n",
-                 out.string().c_str());
-    return 1;
-  }
-  return 0;
+  return plots_failed ? figures_failed("plot_patterns.py", out) : 0;
 }
 
 // ---- the 15t tuning search

@@ -452,6 +452,19 @@ int run_guarded(const std::function<int()>& body) {
     std::fprintf(stderr, "sdins: MPI rank %d of %d: %s\n", w.rank, w.size, e.what());
     std::fflush(stderr);
     std::fflush(stdout);
+#if SDINS_WITH_MPI
+    // The launcher kills the whole job as soon as one rank exits non-zero: wait (at most 0.5 s, half
+    // of its grace period) until every rank has said how far it got, so no message is cut off.
+    MPI_Request req;
+    if (MPI_Ibarrier(MPI_COMM_WORLD, &req) == MPI_SUCCESS) {
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
+      int done = 0;
+      while (!done && std::chrono::steady_clock::now() < deadline) {
+        if (MPI_Test(&req, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS) break;
+        if (!done) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+    }
+#endif
     std::_Exit(tools::interrupt_exit_code());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sdins: error on MPI rank %d of %d: %s\n", w.rank, w.size, e.what());
