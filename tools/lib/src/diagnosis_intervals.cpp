@@ -236,6 +236,7 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
   // one is followed outward with doubling steps.
   add({x - 2.0 * s, x, x + 2.0 * s});
   double step_lo = 2.0 * s, step_hi = 2.0 * s;
+  int refine = 0;
   std::vector<double> dev;
   std::vector<std::size_t> order;
   for (int iter = 0;; ++iter) {
@@ -252,7 +253,40 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
     std::vector<double> more;
     if (dev.front() < level_z2 && x - t_lo < max_reach) more.push_back(t_lo - step_lo);
     if (dev.back() < level_z2 && t_hi - x < max_reach) more.push_back(t_hi + step_hi);
-    if (more.empty() || iter >= 8) break;
+    if (more.empty() || iter >= 8) {
+      // Resolve the maximum: the doubling steps can leave it between two points far apart, where
+      // a sharp or skewed profile's parabolic vertex lies beyond the crossing read off the coarse
+      // grid (seen on the walk's clock drift: the maximum outside its own interval). While that is
+      // so, halve the gaps beside the best point (at most 4 rounds; a Gaussian profile needs none).
+      if (refine >= 4) break;
+      const std::size_t b = static_cast<std::size_t>(std::min_element(dev.begin(), dev.end()) - dev.begin());
+      const double x0 = theta[order[b > 0 ? b - 1 : b]], x1 = theta[order[b]],
+                   x2 = theta[order[b + 1 < dev.size() ? b + 1 : b]];
+      double vertex = x1;
+      if (b > 0 && b + 1 < dev.size()) {
+        const double y0 = dev[b - 1], y1 = dev[b], y2 = dev[b + 1];
+        const double den = (x0 - x1) * (x0 - x2) * (x1 - x2);
+        const double A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den;
+        const double B = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / den;
+        if (A > 0.0) vertex = std::clamp(-B / (2.0 * A), x0, x2);
+      }
+      // Where the deviance crosses the level beside the best point (linear in sqrt(deviance)).
+      const auto crossing = [&](std::size_t i, std::size_t j) {
+        const double a = std::sqrt(std::max(0.0, dev[i])), cj = std::sqrt(dev[j]), r = std::sqrt(level_z2);
+        return theta[order[i]] + (theta[order[j]] - theta[order[i]]) * (r - a) / (cj - a);
+      };
+      const bool below_lo = b > 0 && dev[b - 1] >= level_z2 && vertex < crossing(b, b - 1);
+      const bool above_hi = b + 1 < dev.size() && dev[b + 1] >= level_z2 && vertex > crossing(b, b + 1);
+      std::vector<double> mid;
+      if (below_lo || above_hi) {
+        if (b > 0) mid.push_back(0.5 * (x0 + x1));
+        if (b + 1 < dev.size()) mid.push_back(0.5 * (x1 + x2));
+      }
+      if (mid.empty()) break;
+      ++refine;
+      add(mid);
+      continue;
+    }
     if (dev.front() < level_z2) step_lo *= 2.0;
     if (dev.back() < level_z2) step_hi *= 2.0;
     add(more);
