@@ -47,8 +47,12 @@ SDINS_STACK_ENTRIES(Layout24Full)
 // and, on a frame's last sample, Executive::tick with the 200 Hz group and, when due, the 1 Hz
 // group), the raw GNSS epoch (satellite positions from the almanac; before initialisation the
 // single-point solution and the initialisation it may complete), the solution input (validation,
-// initialisation from a solution).
+// initialisation from a solution), and the one dispatch every harness calls, on_event.
 #define SDINS_STACK_APP_ENTRIES(L)                                                                                \
+  extern "C" fsw::Status sdins_stack_entry_on_event_##L(fsw::FlightApp<fsw::L>& a, const fsw::InputEvent& ev,      \
+                                                        fsw::FrameOutput& out) {                                   \
+    return a.on_event(ev, out);                                                                                   \
+  }                                                                                                               \
   extern "C" fsw::Status sdins_stack_entry_on_imu_##L(fsw::FlightApp<fsw::L>& a, const fsw::ImuSample& s,          \
                                                       fsw::FrameOutput& out) {                                     \
     return a.on_imu(s, out);                                                                                      \

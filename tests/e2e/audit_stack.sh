@@ -24,7 +24,7 @@ j = json.load(open(sys.argv[1]))
 rc = int(sys.argv[2])
 layouts = ["Layout15", "Layout24", "Layout15Full", "Layout24Full"]
 names = [t["name"] for t in j["tasks"]]
-want = [f"{k}/{l}" for l in layouts for k in ("mech_200hz", "ekf_1hz")] + [f"{k}/{l}" for l in layouts[2:] for k in ("imu_input", "gnss_input", "pvt_input")]
+want = [f"{k}/{l}" for l in layouts for k in ("mech_200hz", "ekf_1hz")] + [f"{k}/{l}" for l in layouts[2:] for k in ("imu_input", "gnss_input", "pvt_input", "event_input")]
 assert names == want, names
 assert isinstance(j["static_ram_bytes"], int) and j["static_ram_bytes"] >= 0
 assert j["static_ram_bytes"] == j["static_ram"]["data"] + j["static_ram"]["bss"]
@@ -48,6 +48,8 @@ for l in layouts:  # two groups, two entries: the 200 Hz tick no longer contains
     assert "run_ekf_group" in by[f"ekf_1hz/{l}"]["deepest_path"][0]["short"], by[f"ekf_1hz/{l}"]["deepest_path"][0]
 for l in layouts[2:]:  # an IMU sample's input contains the 200 Hz tick
     assert by[f"imu_input/{l}"]["stack_bytes"] >= by[f"mech_200hz/{l}"]["stack_bytes"], l
+    # the one dispatch contains every input's path
+    assert by[f"event_input/{l}"]["stack_bytes"] >= max(by[f"{k}/{l}"]["stack_bytes"] for k in ("imu_input", "gnss_input", "pvt_input")), l
 assert (rc == 3) == bool(failing) and j["all_within_budget"] == (not failing), (rc, len(failing))
 print(f"stack audit report consistent: {len(j['tasks'])} tasks, budget {budget} B, static RAM {j['static_ram_bytes']} B")
 if failing:

@@ -9,7 +9,7 @@
 #include "hal/can_protocol.hpp"
 #include "hal/can_rx_assembler.hpp"
 #include "sim/scenario.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace {
 
@@ -29,11 +29,11 @@ struct Traffic {
 Traffic make_traffic(double duration_s) {
   sim::Scenario sc;
   sc.duration_s = duration_s;
-  tools::SensorStream stream(sc);
+  sim::SensorStream stream(sc);
   Traffic t;
   t.almanac = stream.almanac();
   CanStepEncoder enc;
-  tools::SensorStep step;
+  sim::SensorStep step;
   bool first = true;
   while (stream.next(step)) {
     const int n_alm = first ? static_cast<int>(t.almanac.size()) : 0;

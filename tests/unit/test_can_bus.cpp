@@ -23,7 +23,7 @@
 #include "hal/can_rx_assembler.hpp"
 #include "hal/can_transports.hpp"
 #include "sim/scenario.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace {
 
@@ -49,10 +49,10 @@ CanFrame fd_frame(std::uint32_t id, int len, std::uint8_t fill) {
 std::vector<CanFrame> sim_frames(double duration_s) {
   sim::Scenario sc;
   sc.duration_s = duration_s;
-  tools::SensorStream stream(sc);
+  sim::SensorStream stream(sc);
   hal::can::CanStepEncoder enc;
   std::vector<CanFrame> all;
-  tools::SensorStep step;
+  sim::SensorStep step;
   bool first = true;
   while (stream.next(step)) {
     const int na = first ? static_cast<int>(stream.almanac().size()) : 0;

@@ -10,7 +10,7 @@
 #include "sim/almanac.hpp"
 #include "sim/scenario.hpp"
 #include "sim/rng.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace {
 
@@ -81,8 +81,8 @@ TEST(CanProtocol, ImuRoundTripIsBitExactOnTheGrid) {
   // byte and the decoded fsw struct bit for bit (what makes SIL and HIL inputs identical).
   sim::Scenario sc;
   sc.duration_s = 2.0;
-  tools::SensorStream stream(sc);
-  tools::SensorStep step;
+  sim::SensorStream stream(sc);
+  sim::SensorStep step;
   ImuEncoder enc, enc2;
   int n = 0;
   while (stream.next(step))
@@ -233,8 +233,8 @@ TEST(CanProtocol, DecoderRejectsWrongIdLengthAndCorruption) {
 TEST(CanProtocol, GpsEpochRoundTrip) {
   sim::Scenario sc;
   sc.duration_s = 3.0;
-  tools::SensorStream stream(sc);
-  tools::SensorStep step;
+  sim::SensorStream stream(sc);
+  sim::SensorStep step;
   GpsEncoder enc(65534);  // crosses the 16-bit wrap
   int epochs = 0;
   while (stream.next(step)) {
@@ -378,8 +378,8 @@ TEST(CanProtocol, AlmanacAnglesWrapAndRangesAreChecked) {
 TEST(CanProtocol, StepEncoderEmitsBusOrderAndMatchesTheSingleEncoders) {
   sim::Scenario sc;
   sc.duration_s = 1.0;
-  tools::SensorStream stream(sc);
-  tools::SensorStep step;
+  sim::SensorStream stream(sc);
+  sim::SensorStep step;
   ASSERT_TRUE(stream.next(step));
   ASSERT_TRUE(step.has_epoch);
   const std::vector<fsw::GpsAlmanac>& alm = stream.almanac();

@@ -12,7 +12,7 @@
 #include "sim/gps_model.hpp"
 #include "tools/free_inertial.hpp"
 #include "tools/montecarlo.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace {
 
@@ -62,7 +62,7 @@ TEST(GnssPvt, ErrorFreeEpochGivesTheReceiverStateAndClock) {
 TEST(FlightApp, InitialisesInMotionAndNavigatesThroughATurn) {
   sim::Scenario sc;
   sc.duration_s = 200.0;  // 60 s straight, the first turn, straight again
-  tools::SensorStream stream(sc, 3);
+  sim::SensorStream stream(sc, 3);
   fsw::FlightAppConfig cfg;
   cfg.exec = tools::executive_config(sc, tools::MonteCarloConfig{});
   static fsw::FlightApp<fsw::Layout24Full> app;
@@ -135,7 +135,7 @@ namespace {
 TEST(FlightApp, CoastsThroughAGpsOutageAndRecovers) {
   sim::Scenario sc;
   sc.duration_s = 160.0;
-  tools::SensorStream stream(sc, 5);
+  sim::SensorStream stream(sc, 5);
   fsw::FlightAppConfig cfg;
   cfg.exec = tools::executive_config(sc, tools::MonteCarloConfig{});
   static fsw::FlightApp<fsw::Layout15Full> app;

@@ -16,7 +16,7 @@
 #include "hal/fsw_node.hpp"
 #include "tools/flight_config.hpp"
 #include "tools/hil.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace {
 
@@ -39,13 +39,13 @@ sim::Scenario short_scenario(double duration_s, std::uint64_t seed) {
 
 /// The reference: the same frames straight into CanFswInput, no bus, no threads.
 hal::FswNodeSummary in_process(const sim::Scenario& sc) {
-  tools::SensorStream stream(sc, sc.seed);
+  sim::SensorStream stream(sc, sc.seed);
   hal::FswNode node;
   std::string err;
   EXPECT_TRUE(node.open(node_config(), err)) << err;
   hal::CanFswInput in(node);
   can::CanStepEncoder enc;
-  tools::SensorStep step;
+  sim::SensorStep step;
   bool first = true;
   std::vector<CanFrame> out;
   while (stream.next(step)) {
@@ -230,7 +230,7 @@ HilRun run_hil_on_loop(const sim::Scenario& sc, const std::string& bus_name, int
   fc.node = node_config();
   fc.idle_timeout_s = 30.0;
   std::thread fsw_thread([&] { out.fsw = tools::run_fsw(fsw_bus, fc); });
-  tools::SensorStream stream(sc, sc.seed);
+  sim::SensorStream stream(sc, sc.seed);
   tools::BusSimConfig bc;
   bc.lockstep = true;
   bc.window_imu = window;
@@ -285,7 +285,7 @@ TEST(HilLockstep, SmallWindowMakesTheSimulatorWaitAndStillMatches) {
 TEST(HilLockstep, BusSimWithoutFlightSoftwareReportsTheTimeout) {
   hal::CanBus bus;
   ASSERT_EQ(bus.open("loop:hil-nobody"), hal::CanBusStatus::kOk);
-  tools::SensorStream stream(short_scenario(2.0, 1));
+  sim::SensorStream stream(short_scenario(2.0, 1));
   tools::BusSimConfig bc;
   bc.ack_timeout_s = 0.3;
   const tools::BusSimResult r = tools::run_bus_sim(bus, stream, bc);

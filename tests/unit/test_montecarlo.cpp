@@ -2,7 +2,11 @@
 // convergence, no rejected measurements, and determinism across thread counts.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 
 #include "sim/almanac.hpp"
 #include "tools/montecarlo.hpp"
@@ -12,13 +16,13 @@ namespace {
 struct Fixture {
   sim::Scenario sc;
   std::vector<sim::AlmanacEntry> almanac;
-  tools::TruthTrack truth;
+  sim::TruthTrack truth;
   explicit Fixture(double duration_s) {
     sc.duration_s = duration_s;
     const sim::AlmanacParseResult r = sim::parse_yuma_file(sim::almanac_path(sc.gps));
     EXPECT_TRUE(r.ok()) << r.error;
     if (r.ok()) almanac = *r.almanac;
-    truth = tools::TruthTrack::generate(sc);
+    truth = sim::TruthTrack::generate(sc);
   }
 };
 
@@ -89,4 +93,35 @@ TEST(MonteCarlo, ChiSquareBoundsMatchTables) {
   const auto c = tools::chi2_mean_bounds(3, 10);  // chi2(30): 16.79, 46.98
   EXPECT_NEAR(c[0], 1.679, 0.01);
   EXPECT_NEAR(c[1], 4.698, 0.01);
+}
+
+TEST(MonteCarlo, FilterConfigFileIsTheBaseUnderTheScenarioOverlay) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("sdins_mc_cfg_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string good = (dir / "good.toml").string(), pvt = (dir / "pvt.toml").string();
+  std::ofstream(good) << "name = \"t\"\n[executive]\ngnss_wait_s = 0.1\n[gnss]\ngate_chi2 = 20.0\n";
+  std::ofstream(pvt) << "name = \"t\"\n[gnss]\nsource = \"pvt\"\n";
+  sim::Scenario sc;
+  tools::MonteCarloConfig mc;
+  EXPECT_FALSE(tools::monte_carlo_flight_config("").has_value());
+  const fsw::FlightAppConfig shipped = tools::flight_app_config(sc, mc);
+  mc.flight = tools::monte_carlo_flight_config(good);
+  ASSERT_TRUE(mc.flight.has_value());
+  const fsw::FlightAppConfig flown = tools::flight_app_config(sc, mc);
+  // The file's keys reach the flight software ...
+  EXPECT_EQ(flown.exec.gnss_wait_frames, 20);
+  EXPECT_NE(shipped.exec.gnss_wait_frames, 20);
+  EXPECT_EQ(flown.exec.ekf.gate_chi2, 20.0);
+  // ... and the scenario overlay still sets what follows from the scenario.
+  EXPECT_EQ(flown.exec.ekf.att_sigma_rad, shipped.exec.ekf.att_sigma_rad);
+  EXPECT_EQ(flown.init_mode, fsw::InitMode::kGiven);
+  // A GNSS input the simulation does not produce, or a broken file: refused, naming the file.
+  try {
+    (void)tools::monte_carlo_flight_config(pvt);
+    ADD_FAILURE() << "gnss.source = pvt accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("pvt.toml"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)tools::monte_carlo_flight_config((dir / "missing.toml").string()), std::runtime_error);
+  std::filesystem::remove_all(dir);
 }

@@ -238,7 +238,7 @@ TEST(PaperVerdict, TiltKickOfOneTurnMatchesTheBankTurnGeometry) {
   // North kick vanishes by symmetry, and the left turn kicks East the same way.
   sim::Scenario sc;
   sc.duration_s = 260.0;
-  const auto kicks = tools::paper::turn_kicks(tools::TruthTrack::generate(sc));
+  const auto kicks = tools::paper::turn_kicks(sim::TruthTrack::generate(sc));
   ASSERT_EQ(kicks.size(), 2u);
   for (const auto& k : kicks) {
     const double e_xy = k.per_rad[0][0], n_xy = k.per_rad[0][1];
@@ -260,7 +260,7 @@ TEST(PaperVerdict, TiltKickOfOneTurnMatchesTheBankTurnGeometry) {
   const auto pats = tools::paper::turn_patterns(sc);
   const auto& race = pats[3];
   ASSERT_EQ(race.name, "racetrack");
-  const auto rk = tools::paper::turn_kicks(tools::TruthTrack::generate(race.scenario));
+  const auto rk = tools::paper::turn_kicks(sim::TruthTrack::generate(race.scenario));
   ASSERT_EQ(rk.size(), 2u);
   EXPECT_LT(rk[0].per_rad[0][0] * rk[1].per_rad[0][0], 0.0);
 }

@@ -13,7 +13,7 @@
 #include "fsw/nav_digest.hpp"
 #include "sim/almanac.hpp"
 #include "tools/montecarlo.hpp"
-#include "tools/run_sensors.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace {
 
@@ -28,32 +28,36 @@ struct Flight {
 /// returns whether to run the released group now.
 using Policy = std::function<bool(const fsw::FlightApp<fsw::Layout24Full>&, long frame, long released_at)>;
 
-/// Flies 12 s of the default scenario (Monte Carlo run 0's sensors, given start) through the flight
+/// Flies 12 s of the default scenario (the sensor stream of Monte Carlo run 0, given start) through the flight
 /// application; inline = true runs the 1 Hz group inside on_imu, else as the policy says.
 Flight fly(bool inline_group, const Policy& policy, int latency_frames = 10) {
   sim::Scenario sc;
   sc.duration_s = 12.0;
-  const tools::TruthTrack truth = tools::TruthTrack::generate(sc);
+  const sim::TruthTrack truth = sim::TruthTrack::generate(sc);
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
   EXPECT_TRUE(alm.ok()) << alm.error;
   tools::MonteCarloConfig mc;
   mc.model_gps_errors = true;
   mc.models = {fsw::FilterModel::k24};
-  tools::RunSensors sensors(sc, truth, *alm.almanac, sc.seed);
+  sim::SensorStream stream(sc, truth, *alm.almanac, sc.seed);
   fsw::FlightAppConfig cfg = tools::flight_app_config(sc, mc);
   cfg.exec.ekf_group_inline = inline_group;
   cfg.exec.ekf_latency_frames = latency_frames;
   auto app = std::make_unique<fsw::FlightApp<fsw::Layout24Full>>();
   EXPECT_EQ(app->init(cfg), fsw::Status::kOk);
-  for (const sim::AlmanacEntry& a : sensors.almanac()) (void)app->on_almanac(a);
-  EXPECT_EQ(app->start_given(tools::initial_nav_state(truth, sensors.errors(), mc, sc.seed)), fsw::Status::kOk);
+  fsw::InputEvent ev;
+  bool more = false;
+  while ((more = stream.next(ev)) && ev.kind == fsw::InputEvent::Kind::kAlmanac) (void)app->on_almanac(ev.almanac);
+  EXPECT_EQ(app->start_given(tools::initial_nav_state(truth, stream.imu_errors(), mc, sc.seed)), fsw::Status::kOk);
   Flight f;
   fsw::FrameOutput out;
   long frame = 0, pending_release = -1;
-  for (std::size_t j = 0; j < truth.imu.size(); ++j) {
-    fsw::ImuSample s;
-    if (sensors.measure(j, s) != nullptr) EXPECT_EQ(app->on_gnss(sensors.raw()), fsw::Status::kOk);
-    EXPECT_EQ(app->on_imu(s, out), fsw::Status::kOk);
+  for (; more; more = stream.next(ev)) {
+    if (ev.kind == fsw::InputEvent::Kind::kGnssRaw) {
+      EXPECT_EQ(app->on_gnss(ev.gnss), fsw::Status::kOk);
+      continue;
+    }
+    EXPECT_EQ(app->on_imu(ev.imu, out), fsw::Status::kOk);
     if (!out.nav_valid) continue;
     if (out.ekf_released) {
       f.released.push_back(frame);

@@ -54,7 +54,7 @@ void register_bus_sim(CLI::App& app) {
 int run_bus_sim() {
   tools::require_distinct({opt.json}, {opt.scenario.file});
   const sim::Scenario sc = opt.scenario.load();
-  tools::SensorStream stream(sc);
+  sim::SensorStream stream(sc);
   hal::CanBus bus;
   if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
   tools::BusSimConfig cfg;

@@ -19,7 +19,7 @@
 #include "hal/can_log.hpp"
 #include "hal/can_protocol.hpp"
 #include "hal/can_rx_assembler.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace sdins {
 namespace {
@@ -74,7 +74,7 @@ class ExpectedCsv {
 int run_encode() {
   tools::require_distinct({opt.out, opt.expected}, {opt.scenario.file});
   const sim::Scenario sc = opt.scenario.load();
-  tools::SensorStream stream(sc);
+  sim::SensorStream stream(sc);
   hal::CandumpWriter w;
   if (!w.open(opt.out)) throw std::runtime_error(w.error());
   ExpectedCsv csv;
@@ -84,7 +84,7 @@ int run_encode() {
   // hal::can::CanStepEncoder keeps it; frames are written one by one to pair them with the CSV.
   hal::can::CanStepEncoder enc;
   const std::vector<fsw::GpsAlmanac>& alm = stream.almanac();
-  tools::SensorStep step;
+  sim::SensorStep step;
   long line = 0;
   std::size_t alm_next = 0;
   bool first = true;

@@ -51,7 +51,17 @@ struct Options {
   double pattern_level = 15.0;
   bool tune15t = false;
   int tune_first = 0, tune_step = 1;
+  std::string filter_config;
 } opt;
+
+/// A case's Monte Carlo configuration: --runs, --threads, --filter-config.
+tools::MonteCarloConfig case_config() {
+  tools::MonteCarloConfig mc;
+  mc.runs = opt.runs;
+  mc.threads = opt.threads;
+  mc.flight = tools::monte_carlo_flight_config(opt.filter_config);
+  return mc;
+}
 
 std::string level_dir(double level) {
   char buf[32];
@@ -198,7 +208,7 @@ tools::paper::AnalysisSummary read_analysis(const fs::path& file) {
 
 /// The truth track of a scenario (seed-independent), for the tilt-kick prediction.
 std::vector<tools::paper::TurnKick> kicks_of(const sim::Scenario& sc) {
-  return tools::paper::turn_kicks(tools::TruthTrack::generate(sc));
+  return tools::paper::turn_kicks(sim::TruthTrack::generate(sc));
 }
 
 sim::Scenario at_level(const sim::Scenario& base, double level) {
@@ -228,6 +238,7 @@ void register_paper(CLI::App& app) {
   sub->add_option("--levels", opt.levels, "gyro misalignment 1-sigma levels [arcsec]")->delimiter(',')->capture_default_str();
   sub->add_option("--threads", opt.threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   sub->add_option("--out", opt.out, "output directory")->capture_default_str();
+  add_mc_filter_config_option(sub, opt.filter_config);
   sub->add_flag("!--no-plots", opt.plots, "skip the PNG figures (matplotlib)");
   sub->add_flag("!--no-analysis", opt.analysis, "skip the section-II analysis");
   auto* pat = sub->add_flag("--patterns", opt.patterns,
@@ -257,7 +268,7 @@ int run_paper_body() {
   const sim::Scenario base = opt.scenario.load();
   const fs::path out(opt.out);
   const bool root_rank = mpi_world().rank == 0;
-  tools::require_distinct({opt.out}, {opt.scenario.file});
+  tools::require_distinct({opt.out}, {opt.scenario.file, opt.filter_config});
   std::optional<tools::RunDirectory> run_dir;  // docs/faults.md: summary.json removed now, written last
   if (root_rank) run_dir.emplace(opt.out);
   const tools::InterruptPolling polling;
@@ -265,14 +276,12 @@ int run_paper_body() {
   bool root = true;
   double wall_total = 0.0;
   const tools::MonteCarloConfig defaults;
-  const double paper_arw = tools::shipped_filter_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
+  const double paper_arw = tools::executive_config(base, case_config()).ekf.arw_rad_per_rts;  // the flight configuration's
   std::vector<tools::paper::LevelSummary> levels;
   const std::vector<tools::paper::TurnKick> kicks = root_rank ? kicks_of(base) : std::vector<tools::paper::TurnKick>{};
   for (double level : opt.levels) {
     const sim::Scenario sc = at_level(base, level);
-    tools::MonteCarloConfig mc;
-    mc.runs = opt.runs;
-    mc.threads = opt.threads;
+    tools::MonteCarloConfig mc = case_config();
     mc.models = {fsw::FilterModel::k15, fsw::FilterModel::k15c, fsw::FilterModel::k15t, fsw::FilterModel::k24};
     mc.tuned15t_arw_rad_per_rts = tools::paper::tuned15t_arw_rad_per_rts(level);
     const std::string dir = level_dir(level);
@@ -310,6 +319,7 @@ int run_paper_body() {
   summary["scenario"] = base.name;
   summary["duration_s"] = base.duration_s;
   summary["runs"] = opt.runs;
+  summary["filter_config"] = opt.filter_config.empty() ? std::string("shipped") : opt.filter_config;
   summary["seed"] = base.seed;
   summary["cases"] = cases;
   {
@@ -372,9 +382,7 @@ int run_patterns_body() {
   bool root = true;
   for (const auto& p : tools::paper::turn_patterns(base)) {
     const sim::Scenario sc = at_level(p.scenario, opt.pattern_level);
-    tools::MonteCarloConfig mc;
-    mc.runs = opt.runs;
-    mc.threads = opt.threads;
+    tools::MonteCarloConfig mc = case_config();
     mc.models = {fsw::FilterModel::k15, fsw::FilterModel::k24};
     if (root_rank) fs::create_directories(out / p.name);
     std::printf("pattern %s (%s): %d runs at %.0f arcsec, filters 15, 24\n", p.name.c_str(), p.description.c_str(),
@@ -454,8 +462,8 @@ int run_tune_body() {
   fs::create_directories(out);
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(base.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
-  const tools::TruthTrack truth = tools::TruthTrack::generate(base);
-  const double paper_arw = tools::shipped_filter_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
+  const sim::TruthTrack truth = sim::TruthTrack::generate(base);
+  const double paper_arw = tools::executive_config(base, case_config()).ekf.arw_rad_per_rts;  // the flight configuration's
   json levels = json::array();
   bool all_found = true;
   // Per misalignment level (the IMU's specification), grid: the paper's ARW times 2^(k/2) for
@@ -467,9 +475,7 @@ int run_tune_body() {
     double chosen = 0.0;
     for (int k = opt.tune_first; k <= 40 && chosen == 0.0; k += opt.tune_step) {
       const double arw = paper_arw * std::pow(std::sqrt(2.0), k);
-      tools::MonteCarloConfig mc;
-      mc.runs = opt.runs;
-      mc.threads = opt.threads;
+      tools::MonteCarloConfig mc = case_config();
       mc.models = {fsw::FilterModel::k15t};
       mc.tuned15t_arw_rad_per_rts = arw;
       mc.tuned15t_gyro_bias_rw_radps_per_rts = 0.0;

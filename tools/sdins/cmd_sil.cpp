@@ -13,7 +13,7 @@
 #include "tools/free_inertial.hpp"
 #include "tools/fsw_report.hpp"
 #include "tools/output_file.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace sdins {
 namespace {
@@ -34,14 +34,14 @@ void register_sil(CLI::App& app) {
 int run_sil() {
   tools::require_distinct({opt.run.log, opt.run.json}, {opt.scenario.file, opt.run.filter_config});
   const sim::Scenario sc = opt.scenario.load();
-  tools::SensorStream stream(sc);
+  sim::SensorStream stream(sc);
   const hal::FswNodeConfig cfg = opt.run.node_config();
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
   hal::CanFswInput input(node);
   hal::can::CanStepEncoder enc;
-  tools::SensorStep step;
+  sim::SensorStep step;
   std::vector<hal::CanFrame> frames;
   bool first = true;
   std::uint64_t n_frames = 0;

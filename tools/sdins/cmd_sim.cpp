@@ -1,5 +1,5 @@
 // sdins sim: measured data without flight software. The truth simulator flies a scenario through
-// the same sensor stream as sil/bus-sim (tools::SensorStream) and writes what a recording of the
+// the same sensor stream as sil/bus-sim (sim::SensorStream) and writes what a recording of the
 // aircraft would hold: every IMU sample, every GPS receiver epoch, the almanac, plus truth on the
 // TRUTH channel. What was simulated (seed, error set, effects switched on, the drawn IMU errors)
 // goes into a JSON sidecar OUT.json next to the log, never into the channels the flight software
@@ -20,7 +20,7 @@
 #include "hal/lcm_log_sink.hpp"
 #include "sim/effects.hpp"
 #include "sim/imu_model.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace sdins {
 namespace {
@@ -175,7 +175,7 @@ int run_sim() {
   const long long samples_per_truth = std::llround(spt);
 
   const auto t_start = std::chrono::steady_clock::now();
-  tools::SensorStream stream(sc);
+  sim::SensorStream stream(sc);
   hal::LcmLogSink sink;
   hal::LcmTelemetryConfig tcfg;
   tcfg.lcm_url = "none";

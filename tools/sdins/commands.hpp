@@ -89,6 +89,8 @@ struct FswRunOptions {
   /// The same with a filter configuration already read (one parse per run).
   hal::FswNodeConfig node_config(const sim::FilterConfig& f) const;
 };
+/// --filter-config of montecarlo and paper (tools::monte_carlo_flight_config reads it).
+void add_mc_filter_config_option(CLI::App* sub, std::string& path);
 void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& default_lcm_url);
 
 /// s quoted for a POSIX shell.

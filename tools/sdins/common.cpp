@@ -86,6 +86,13 @@ void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& d
                   "shipped file alone)");
 }
 
+void add_mc_filter_config_option(CLI::App* sub, std::string& path) {
+  sub->add_option("--filter-config", path,
+                  "filter configuration TOML (config/README.md) applied on top of the shipped flight configuration "
+                  "<data dir>/config/default.toml, under the scenario overlay the Monte Carlo applies (config/README.md; "
+                  "gnss.source must be \"raw\"; default: none, the shipped file alone)");
+}
+
 std::string shell_quote(const std::string& s) {
   std::string q = "'";
   for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);

@@ -285,7 +285,7 @@ CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig&
   const MpiWorld& w = mpi_world();
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
-  const tools::TruthTrack truth = tools::TruthTrack::generate(sc);
+  const sim::TruthTrack truth = sim::TruthTrack::generate(sc);
   // This rank's block of runs; with one rank, all of them.
   tools::MonteCarloConfig local = mc;
   const int begin = block_begin(mc.runs, w.size, w.rank), end = block_begin(mc.runs, w.size, w.rank + 1);

@@ -17,7 +17,7 @@
 #include "hal/lcm_log_sink.hpp"
 #include "tools/diagnosis_intervals.hpp"
 #include "tools/flight_config.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace tools {
 namespace {
@@ -355,7 +355,7 @@ void RecordedData::push(const fsw::InputEvent& ev) {
 RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double truth_rate_hz) {
   RecordedData out;
   out.description = sc.name + ", seed " + std::to_string(seed);
-  SensorStream stream(sc, seed);
+  sim::SensorStream stream(sc, seed);
   out.imu.reserve(static_cast<std::size_t>(stream.total_samples()));
   out.order.reserve(static_cast<std::size_t>(stream.total_samples()) * 21 / 20 + 64);
   const long long decim = std::max(1LL, std::llround(sc.imu.rate_hz / truth_rate_hz));

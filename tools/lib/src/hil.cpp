@@ -34,7 +34,7 @@ struct EncodedStep {
 /// next GPS interval never stalls the bus (it matters in real time: a step takes tens of ms).
 class StepProducer {
  public:
-  StepProducer(SensorStream& stream, const std::atomic<bool>* stop) : stream_(stream), stop_(stop) {
+  StepProducer(sim::SensorStream& stream, const std::atomic<bool>* stop) : stream_(stream), stop_(stop) {
     th_ = std::thread([this] { produce(); });
   }
   ~StepProducer() {
@@ -64,7 +64,7 @@ class StepProducer {
   void produce() {
     try {
       can::CanStepEncoder enc;
-      SensorStep step;
+      sim::SensorStep step;
       bool first = true;
       while (stream_.next(step)) {
         EncodedStep e;
@@ -92,7 +92,7 @@ class StepProducer {
   }
 
   static constexpr std::size_t kAhead = 3;
-  SensorStream& stream_;
+  sim::SensorStream& stream_;
   const std::atomic<bool>* stop_;
   std::mutex mu_;
   std::condition_variable cv_;
@@ -119,7 +119,7 @@ std::string fmt(const char* f, double a) {
 
 // ---- bus simulator ------------------------------------------------------------------------------
 
-BusSimResult run_bus_sim(hal::CanBus& bus, SensorStream& stream, const BusSimConfig& cfg,
+BusSimResult run_bus_sim(hal::CanBus& bus, sim::SensorStream& stream, const BusSimConfig& cfg,
                          const std::atomic<bool>* stop) {
   BusSimResult r;
   const double t_begin = hal::mono_now_s();

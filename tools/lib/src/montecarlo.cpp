@@ -21,9 +21,10 @@
 #include "sim/gps_model.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/rng.hpp"
+#include "sim/sensor_stream.hpp"
+#include "sim/truth.hpp"
 #include "tools/flight_config.hpp"
 #include "tools/free_inertial.hpp"
-#include "tools/run_sensors.hpp"
 
 namespace tools {
 namespace {
@@ -32,18 +33,25 @@ using fsw::Block;
 using fsw::Vec3;
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 constexpr std::uint64_t kStreamInitialErrors = 20;
 
-/// One model's flight application plus what the run records from it.
+/// One model's flight application plus what the run records from it. A record is taken at every
+/// GNSS epoch: the navigation error at the epoch's time (the frame that ends at it, before the
+/// epoch's own correction lands) against the filter's covariance after the epoch's update, which
+/// the 1 Hz group computes at the next minor frame (sim/sensor_stream.hpp: the epoch arrives after
+/// the IMU sample of its time). So the error is taken at the epoch and completed with the
+/// covariance when the EKF has run (or at the next epoch or the end, if it did not).
 struct ModelRunner {
   virtual ~ModelRunner() = default;
-  virtual fsw::Status init(const fsw::FlightAppConfig& cfg, const std::vector<sim::AlmanacEntry>& almanac,
-                           const fsw::NavState& nav) = 0;
+  virtual fsw::Status init(const fsw::FlightAppConfig& cfg) = 0;
+  virtual fsw::Status start(const fsw::NavState& nav) = 0;
   /// One input event (FlightApp::on_event); returns whether the EKF ran (IMU events only).
   virtual bool on_event(const fsw::InputEvent& ev) = 0;
-  virtual void record(const sim::TruthSample& truth) = 0;
+  /// The epoch just delivered: its truth.
+  virtual void epoch(const sim::TruthSample& truth) = 0;
+  /// The end of the run: completes the last record.
+  virtual void finish() = 0;
   virtual std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg,
                                               std::vector<double>& cov) const = 0;
   virtual fsw::ExecutiveHealth health() const = 0;
@@ -56,23 +64,30 @@ template <class Layout>
 struct FlightAppRunner final : ModelRunner {
   fsw::FlightApp<Layout> app;
   fsw::FrameOutput out;
+  bool pending = false;  ///< a record waits for its epoch's covariance
+  sim::NavErrors pending_err;
 
-  fsw::Status init(const fsw::FlightAppConfig& cfg, const std::vector<sim::AlmanacEntry>& almanac,
-                   const fsw::NavState& nav) override {
-    const fsw::Status st = app.init(cfg);
-    if (st != fsw::Status::kOk) return st;
-    for (const sim::AlmanacEntry& a : almanac)
-      (void)app.on_event(fsw::InputEvent::of_almanac(a, nav.t_s), out);  // a rejected element is counted
-    return app.start_given(nav);
-  }
+  fsw::Status init(const fsw::FlightAppConfig& cfg) override { return app.init(cfg); }
+  fsw::Status start(const fsw::NavState& nav) override { return app.start_given(nav); }
   bool on_event(const fsw::InputEvent& ev) override {
-    app.on_event(ev, out);
-    return ev.kind == fsw::InputEvent::Kind::kImu && out.ekf_ran;
+    app.on_event(ev, out);  // a rejected input is counted in the health
+    const bool ran = ev.kind == fsw::InputEvent::Kind::kImu && out.ekf_ran;
+    if (ran && pending) complete();
+    return ran;
+  }
+  void epoch(const sim::TruthSample& truth) override {
+    if (pending) complete();
+    pending_err = nav_errors(out.nav, truth);
+    pending = true;
+  }
+  void finish() override {
+    if (pending) complete();
   }
   fsw::ExecutiveHealth health() const override { return app.executive().health(); }
 
-  void record(const sim::TruthSample& truth) override {
-    const NavErrors e = nav_errors(out.nav, truth);
+  void complete() {
+    pending = false;
+    const sim::NavErrors& e = pending_err;
     const auto& P = app.executive().ekf().P();
     EpochRecord r{};
     Eigen::Matrix<double, 9, 1> err;
@@ -152,33 +167,26 @@ struct FlightAppRunner final : ModelRunner {
 
 }  // namespace
 
-TruthTrack TruthTrack::generate(const sim::Scenario& sc) {
-  const auto t0 = Clock::now();
-  std::string err;
-  auto motion = sim::FlightMotion::create(sc, err);
-  if (!motion) throw std::runtime_error(err);
-  TruthTrack tt;
-  const double spe = sc.imu.rate_hz / sc.gps.rate_hz;
-  if (std::abs(spe - std::round(spe)) > 1e-9 || spe < 1.0)
-    throw std::runtime_error("the GPS rate must divide the IMU rate");
-  tt.samples_per_epoch = static_cast<int>(std::lround(spe));
-  const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
-  tt.imu.reserve(static_cast<std::size_t>(n));
-  tt.epochs.reserve(static_cast<std::size_t>(n / tt.samples_per_epoch + 1));
-  sim::TruthGenerator gen(*motion, sc.imu.rate_hz);
-  tt.epochs.push_back(gen.current());
-  for (long long k = 1; k <= n; ++k) {
-    const sim::TruthSample& s = gen.next();
-    tt.imu.push_back({s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps});
-    if (k % tt.samples_per_epoch == 0) tt.epochs.push_back(s);
-  }
-  tt.generate_wall_s = seconds_since(t0);
-  return tt;
+namespace {
+/// The flight configuration the overlay goes on: --filter-config's, else the shipped file's.
+const fsw::FlightAppConfig& base_flight_config(const MonteCarloConfig& mc) {
+  return mc.flight ? *mc.flight : shipped_filter_config().app;
+}
+}  // namespace
+
+std::optional<fsw::FlightAppConfig> monte_carlo_flight_config(const std::string& path) {
+  if (path.empty()) return std::nullopt;
+  const sim::FilterConfig f = filter_config(path);
+  if (f.gnss_source != sim::GnssSource::kRaw)
+    throw std::runtime_error(path + ": gnss.source = \"" + std::string(sim::to_string(f.gnss_source)) +
+                             "\", but the Monte Carlo simulates raw receiver epochs; use \"raw\"");
+  return f.app;
 }
 
 fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloConfig& mc) {
-  // The shipped flight configuration, then the scenario overlay (the header says what it sets).
-  fsw::ExecutiveConfig cfg = shipped_filter_config().app.exec;
+  // The flight configuration (shipped, or --filter-config), then the scenario overlay (the header
+  // says what it sets).
+  fsw::ExecutiveConfig cfg = base_flight_config(mc).exec;
   cfg.imu_samples_per_frame = static_cast<int>(sc.imu.rate_hz / cfg.nav_rate_hz);
   cfg.frames_per_ekf = static_cast<int>(std::lround(cfg.nav_rate_hz / sc.gps.rate_hz));
   const sim::ImuErrorSigmas& s = sc.imu.sigmas;
@@ -205,7 +213,7 @@ fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloC
   if (mc.model_gps_errors) {
     // Correlated part as channel states; the white part as measurement noise, at least the shipped
     // file's white noise (which keeps P well conditioned when the simulator adds none).
-    const fsw::EkfConfig& shipped = shipped_filter_config().app.exec.ekf;
+    const fsw::EkfConfig& shipped = base_flight_config(mc).exec.ekf;
     e.range_gm_sigma_m = std::max(sc.gps.pseudorange_gm_sigma_m, 0.01);
     e.range_gm_tau_s = sc.gps.pseudorange_gm_tau_s;
     e.range_rate_gm_sigma_mps = std::max(sc.gps.pseudorange_rate_gm_sigma_mps, 0.001);
@@ -222,7 +230,7 @@ fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloC
 }
 
 fsw::FlightAppConfig flight_app_config(const sim::Scenario& sc, const MonteCarloConfig& mc) {
-  fsw::FlightAppConfig c = shipped_filter_config().app;
+  fsw::FlightAppConfig c = base_flight_config(mc);
   c.exec = executive_config(sc, mc);
   c.init_mode = fsw::InitMode::kGiven;
   c.init_pos_sigma_m = c.exec.ekf.pos_sigma_m;
@@ -242,7 +250,7 @@ fsw::FlightAppConfig model_config(const fsw::FlightAppConfig& base, const MonteC
   return cfg;
 }
 
-fsw::NavState initial_nav_state(const TruthTrack& truth, const sim::ImuErrors& errors, const MonteCarloConfig& mc,
+fsw::NavState initial_nav_state(const sim::TruthTrack& truth, const sim::ImuErrors& errors, const MonteCarloConfig& mc,
                                 std::uint64_t seed) {
   // Initial errors: the attitude that self-alignment leaves for this run's biases (at the start
   // attitude), plus drawn position and velocity errors.
@@ -263,14 +271,14 @@ fsw::NavState initial_nav_state(const TruthTrack& truth, const sim::ImuErrors& e
   return init;
 }
 
-RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
+RunResult run_one(const sim::Scenario& sc, const sim::TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
                   const MonteCarloConfig& mc, int run) {
   RunResult res;
   res.run = run;
   res.seed = sc.seed + static_cast<std::uint64_t>(run);
   const std::uint64_t seed = res.seed;
-  RunSensors sensors(sc, truth, almanac, seed);
-  const sim::ImuErrors& errors = sensors.errors();
+  sim::SensorStream stream(sc, truth, almanac, seed);
+  const sim::ImuErrors& errors = stream.imu_errors();
   const fsw::NavState init = initial_nav_state(truth, errors, mc, seed);
 
   const fsw::FlightAppConfig app_cfg = flight_app_config(sc, mc);
@@ -290,56 +298,52 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
                              : std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout24>));
     res.epochs[m].reserve(truth.epochs.size());
     runners[m]->records = &res.epochs[m];
-    if (runners[m]->init(model_config(app_cfg, mc, mc.models[m]), sensors.almanac(), init) != fsw::Status::kOk)
+    if (runners[m]->init(model_config(app_cfg, mc, mc.models[m])) != fsw::Status::kOk)
       throw std::runtime_error(std::string("flight application init failed for model ") + fsw::to_string(mc.models[m]));
   }
 
-  // The flight application batches the samples into its minor frames; the receiver's raw epoch
-  // of time t is delivered just before the IMU sample of time t, so the frame that ends at t
-  // carries it (the EKF runs and feeds back at the epoch) and the record compares with truth at t.
-  // The sensor models run a minor frame of samples ahead of the flight software (they do not
-  // depend on it), so the clock is read three times per frame.
+  // Every model reads the one sensor stream's events (sim/sensor_stream.hpp): the almanac, then
+  // the IMU samples with each raw epoch right after the sample of its time. The runs start from
+  // their given initial state once the almanac is in. The events are read a minor frame's worth
+  // at a time (the sensor models do not depend on the flight software), so the clock that splits
+  // the run's time between the models and the flight software is read three times per frame.
   const int spf = cfg.imu_samples_per_frame;
-  constexpr int kMaxSpf = fsw::FrameBuilder::kMaxSamplesPerFrame;
-  std::array<fsw::ImuSample, kMaxSpf> frame{};
-  std::array<fsw::GnssRawEpoch, kMaxSpf> raw{};
-  std::array<const sim::TruthSample*, kMaxSpf> truth_at{};  ///< the epoch's truth, or nullptr
+  constexpr int kMaxEvents = 2 * fsw::FrameBuilder::kMaxSamplesPerFrame;
+  std::array<fsw::InputEvent, kMaxEvents> evs;
+  std::array<sim::TruthSample, kMaxEvents> epoch_truth;  ///< of the GNSS events in evs
   Clock::duration d_sim{}, d_mech{}, d_ekf{};
-  fsw::InputEvent imu_ev, gnss_ev;  // reused: only the payload changes from one delivery to the next
-  imu_ev.kind = fsw::InputEvent::Kind::kImu;
-  gnss_ev.kind = fsw::InputEvent::Kind::kGnssRaw;
-  for (std::size_t j0 = 0; j0 < truth.imu.size(); j0 += static_cast<std::size_t>(spf)) {
+  bool started = false;
+  for (;;) {
     // SIGINT/SIGTERM: a run stops within a frame (run_many then discards it and throws). Under
     // mpirun the launcher kills the ranks 1 s after forwarding the signal, so a rank must not wait
     // for the end of a long run to notice it (docs/faults.md).
     if (interrupted()) break;
     const auto c0 = Clock::now();
-    const int nf = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(spf), truth.imu.size() - j0));
-    for (int k = 0; k < nf; ++k) {
-      const std::size_t kk = static_cast<std::size_t>(k);
-      truth_at[kk] = sensors.measure(j0 + kk, frame[kk]);
-      if (truth_at[kk]) raw[kk] = sensors.raw();
+    int n = 0, n_imu = 0;
+    while (n < kMaxEvents && n_imu < spf && stream.next(evs[static_cast<std::size_t>(n)])) {
+      const fsw::InputEvent& ev = evs[static_cast<std::size_t>(n)];
+      if (ev.kind == fsw::InputEvent::Kind::kImu) ++n_imu;
+      if (ev.kind == fsw::InputEvent::Kind::kGnssRaw) epoch_truth[static_cast<std::size_t>(n)] = stream.epoch_truth();
+      ++n;
     }
+    if (n == 0) break;
     const auto c1 = Clock::now();
     d_sim += c1 - c0;
     bool ekf_ran = false;
-    for (int k = 0; k < nf; ++k) {
-      const sim::TruthSample* te = truth_at[static_cast<std::size_t>(k)];
-      imu_ev.imu = frame[static_cast<std::size_t>(k)];
-      imu_ev.t_s = imu_ev.imu.t_s;
-      if (te) {
-        gnss_ev.gnss = raw[static_cast<std::size_t>(k)];
-        gnss_ev.t_s = gnss_ev.gnss.t_s;
+    for (int k = 0; k < n; ++k) {
+      const fsw::InputEvent& ev = evs[static_cast<std::size_t>(k)];
+      if (ev.kind != fsw::InputEvent::Kind::kAlmanac && !started) {
+        for (auto& r : runners)
+          if (r->start(init) != fsw::Status::kOk) throw std::runtime_error("flight application start failed");
+        started = true;
       }
-      for (auto& r : runners) {
-        if (te) r->on_event(gnss_ev);
-        ekf_ran |= r->on_event(imu_ev);
-      }
-      if (te)
-        for (auto& r : runners) r->record(*te);
+      for (auto& r : runners) ekf_ran |= r->on_event(ev);
+      if (ev.kind == fsw::InputEvent::Kind::kGnssRaw)
+        for (auto& r : runners) r->epoch(epoch_truth[static_cast<std::size_t>(k)]);
     }
     (ekf_ran ? d_ekf : d_mech) += Clock::now() - c1;
   }
+  for (auto& r : runners) r->finish();
   res.sensors.assign(n_models, {});
   res.sensor_cov.assign(n_models, {});
   res.health.assign(n_models, {});
@@ -357,7 +361,7 @@ RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::v
   return res;
 }
 
-std::vector<RunResult> run_many(const sim::Scenario& sc, const TruthTrack& truth,
+std::vector<RunResult> run_many(const sim::Scenario& sc, const sim::TruthTrack& truth,
                                 const std::vector<sim::AlmanacEntry>& almanac, const MonteCarloConfig& mc) {
   std::vector<RunResult> results(static_cast<std::size_t>(std::max(mc.runs, 0)));
   int threads = mc.threads > 0 ? mc.threads : static_cast<int>(std::thread::hardware_concurrency());
@@ -394,7 +398,7 @@ std::array<double, 2> chi2_mean_bounds(int dof, int runs) {
           fsw::chi2_quantile_wilson_hilferty(k, 1.959963985) / runs};
 }
 
-ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, fsw::FilterModel model, const TruthTrack& truth) {
+ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, fsw::FilterModel model, const sim::TruthTrack& truth) {
   ModelStats s;
   s.model = model;
   s.runs = static_cast<int>(results.size());

@@ -59,7 +59,7 @@ ModelSummary summarize(const ModelStats& s) {
   return m;
 }
 
-std::vector<TurnKick> turn_kicks(const TruthTrack& truth) {
+std::vector<TurnKick> turn_kicks(const sim::TruthTrack& truth) {
   std::vector<TurnKick> out;
   const std::size_t spe = static_cast<std::size_t>(truth.samples_per_epoch);
   const std::size_t ne = truth.epochs.size();

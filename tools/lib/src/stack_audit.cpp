@@ -607,7 +607,10 @@ void fsw_task_specs(const CallGraph& g, long budget_bytes, long red_zone_bytes, 
           {"gnss_input", "on_gnss_",
            "on_gnss (raw epoch -> satellite positions from the almanac; before initialisation the single-point "
            "solution and the initialisation it may complete)"},
-          {"pvt_input", "on_gnss_pvt_", "on_gnss_pvt (validation; initialisation from a solution)"}}) {
+          {"pvt_input", "on_gnss_pvt_", "on_gnss_pvt (validation; initialisation from a solution)"},
+          {"event_input", "on_event_",
+           "on_event, the one entry every harness calls (SIL, HIL, replay, Monte Carlo, audits, diagnosis, the "
+           "Cortex-M7 image): dispatches an fsw::InputEvent to on_imu, on_gnss, on_gnss_pvt or on_almanac"}}) {
       TaskSpec t;
       t.name = task + "/" + l;
       t.root = single_callee(g, w + entry + l);

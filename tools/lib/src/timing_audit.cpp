@@ -15,7 +15,7 @@
 #include "sim/gps_model.hpp"
 #include "sim/imu_model.hpp"
 #include "tools/montecarlo.hpp"
-#include "tools/run_sensors.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace tools {
 namespace {
@@ -97,30 +97,31 @@ std::string frame_work(const fsw::FrameOutput& out, bool had_epoch, int epoch_sa
   return w;
 }
 
-/// Flies the scenario through the flight application (the Monte Carlo's sensors: raw receiver
-/// epochs, IMU samples) with its two rate groups timed apart: every 200 Hz frame (its on_gnss and
+/// Flies the scenario through the flight application (the one simulated sensor stream,
+/// sim/sensor_stream.hpp, on the shared truth: raw receiver epochs, IMU samples) with its two rate groups timed apart: every 200 Hz frame (its on_gnss and
 /// on_imu calls) and every run of the 1 Hz group (run_ekf_group, called after the frame that
 /// released it, as a lower-priority task would run). Initialisation as cfg.init_mode: kTrack is what
 /// HIL flies (in-motion initialisation from the first good epoch; the frames before it are the
 /// levelling calls, grouped by the frame's IMU samples), kGiven the Monte Carlo's start.
 template <class Layout>
-Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
+Pass fly(const sim::Scenario& sc, const sim::TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
          const MonteCarloConfig& mc, const TimingAuditConfig& cfg, double overhead_s) {
   const auto w0 = Clock::now();
   const std::uint64_t seed = sc.seed + static_cast<std::uint64_t>(cfg.run);
-  RunSensors sensors(sc, truth, almanac, seed);
+  sim::SensorStream stream(sc, truth, almanac, seed);
   fsw::FlightAppConfig acfg = flight_app_config(sc, mc);
   acfg.exec.ekf_group_inline = false;  // the 1 Hz group is run (and timed) apart
   acfg.init_mode = cfg.init_mode;
   auto app = std::make_unique<fsw::FlightApp<Layout>>();  // the 56-state executives are ~100 KB
-  fsw::Status st0 = app->init(acfg);
   fsw::FrameOutput out;
-  if (st0 == fsw::Status::kOk) {
-    for (const sim::AlmanacEntry& a : sensors.almanac())
-      (void)app->on_event(fsw::InputEvent::of_almanac(a, 0.0), out);  // a rejected element is counted
-    if (cfg.init_mode == fsw::InitMode::kGiven) st0 = app->start_given(initial_nav_state(truth, sensors.errors(), mc, seed));
-  }
-  if (st0 != fsw::Status::kOk) throw std::runtime_error("timing audit: flight application init failed");
+  fsw::InputEvent ev;  // reused: only the payload changes from one delivery to the next
+  bool more = app->init(acfg) == fsw::Status::kOk;
+  if (!more) throw std::runtime_error("timing audit: flight application init failed");
+  // The almanac (untimed, power-up), then the given start for kGiven.
+  while ((more = stream.next(ev)) && ev.kind == fsw::InputEvent::Kind::kAlmanac) (void)app->on_event(ev, out);
+  if (cfg.init_mode == fsw::InitMode::kGiven &&
+      app->start_given(initial_nav_state(truth, stream.imu_errors(), mc, seed)) != fsw::Status::kOk)
+    throw std::runtime_error("timing audit: flight application start failed");
 
   Pass p;
   const int spf = acfg.exec.imu_samples_per_frame;
@@ -135,31 +136,27 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
 
   std::array<fsw::ImuSample, 2 * fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
   int n_in_frame = 0;
-  fsw::InputEvent imu_ev, gnss_ev;  // reused: only the payload changes from one delivery to the next
-  imu_ev.kind = fsw::InputEvent::Kind::kImu;
-  gnss_ev.kind = fsw::InputEvent::Kind::kGnssRaw;
   bool frame_has_epoch = false, frame_init = false;
   double frame_s = 0.0;
   unsigned char frame_pre = 0;
   fsw::Status status = fsw::Status::kOk;
-  for (std::size_t j = 0; j < truth.imu.size(); ++j) {
-    fsw::ImuSample sample;
-    const bool is_epoch = sensors.measure(j, sample) != nullptr;
-    if (n_in_frame < static_cast<int>(frame.size())) frame[static_cast<std::size_t>(n_in_frame++)] = sample;
+  // The stream's order (sim/sensor_stream.hpp): an epoch arrives after the IMU sample of its time,
+  // so it belongs to the next frame, the one whose end releases its EKF step.
+  for (; more; more = stream.next(ev)) {
     unsigned char pre = 0;
-    if (is_epoch) {  // delivered before the IMU sample of its time, as the Monte Carlo does
+    if (ev.kind == fsw::InputEvent::Kind::kGnssRaw) {
       frame_has_epoch = true;
       const bool before = app->initialised();
-      gnss_ev.gnss = sensors.raw();
-      gnss_ev.t_s = gnss_ev.gnss.t_s;
-      frame_s += timed([&] { status = app->on_event(gnss_ev, out); }, overhead_s, pre);
+      frame_s += timed([&] { status = app->on_event(ev, out); }, overhead_s, pre);
       frame_pre |= pre;
       if (!before && app->initialised()) frame_init = true;
       if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_gnss failed");
+      continue;
     }
-    imu_ev.imu = sample;
-    imu_ev.t_s = sample.t_s;
-    frame_s += timed([&] { status = app->on_event(imu_ev, out); }, overhead_s, pre);
+    if (ev.kind != fsw::InputEvent::Kind::kImu) continue;
+    const fsw::ImuSample& sample = ev.imu;
+    if (n_in_frame < static_cast<int>(frame.size())) frame[static_cast<std::size_t>(n_in_frame++)] = sample;
+    frame_s += timed([&] { status = app->on_event(ev, out); }, overhead_s, pre);
     frame_pre |= pre;
     if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_imu failed");
     // A frame ends with a navigation frame, or (before initialisation) with a frame's worth of samples.
@@ -168,7 +165,7 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
     fsw::FrameInput in;  // the frame's stages see its input (untimed prepare), timed apart
     in.imu = frame.data();
     in.n_imu = n_in_frame;
-    in.gnss = frame_has_epoch ? &sensors.epoch() : nullptr;
+    in.gnss = frame_has_epoch ? &stream.epoch() : nullptr;
     for (std::size_t s = 0; s < cfg.frame_stages.size(); ++s) {
       const FrameStage& stg = cfg.frame_stages[s];
       if (stg.prepare) stg.prepare(in);
@@ -184,7 +181,7 @@ Pass fly(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim
     p.t_s.push_back(out.nav_valid ? out.nav.t_s : sample.t_s);
     if (frame_init) p.init_frame = static_cast<long>(k);
     p.work.push_back(out.ekf_ran || out.ekf_released || frame_has_epoch
-                         ? frame_work(out, frame_has_epoch, sensors.epoch().n_obs, frame_init)
+                         ? frame_work(out, frame_has_epoch, stream.epoch().n_obs, frame_init)
                          : std::string());
     if (out.ekf_updated) p.sats.push_back(out.report.n_obs);
     if (out.ekf_released) {  // the 1 Hz group, after the frame that released it
@@ -296,7 +293,7 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
       throw std::runtime_error("timing audit: unknown layout '" + l + "' (Layout15, Layout24, Layout15Full, Layout24Full)");
   for (const FrameStage& st : cfg.frame_stages)
     if (st.name.empty() || !st.run) throw std::runtime_error("timing audit: a frame stage needs a name and run()");
-  const TruthTrack truth = TruthTrack::generate(sc);
+  const sim::TruthTrack truth = sim::TruthTrack::generate(sc);
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
 

@@ -95,7 +95,7 @@ void exclude_damaged_stretches(RecordedData& d);
 /// are summarised in `report`.
 bool load_recorded_data(const std::string& path, RecordedData& out, std::string& error, std::string& report);
 
-/// Flies a scenario through the simulator (tools::SensorStream) into memory, with truth at
+/// Flies a scenario through the simulator (sim::SensorStream) into memory, with truth at
 /// truth_rate_hz: the same data `sdins sim --log` writes, without the file.
 RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double truth_rate_hz = 10.0);
 

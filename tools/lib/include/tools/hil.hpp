@@ -2,7 +2,7 @@
 // (`sdins bus-sim`, `sdins fsw`) stay thin and the tests can run both on two threads over a
 // `loop:` bus:
 //
-//   run_bus_sim: tools::SensorStream -> hal::can::CanStepEncoder -> bus, with SIM_CONTROL
+//   run_bus_sim: sim::SensorStream -> hal::can::CanStepEncoder -> bus, with SIM_CONTROL
 //                start/end; lockstep (never more than `window_imu` IMU samples beyond the last
 //                FSW_ACK) or real time (paced on CLOCK_MONOTONIC per IMU sample).
 //   run_fsw:     bus -> hal::CanFswInput -> hal::FswNode, answering with FSW_ACK; exits on the
@@ -24,7 +24,7 @@
 #include "hal/can_protocol.hpp"
 #include "hal/can_rx_assembler.hpp"
 #include "hal/fsw_node.hpp"
-#include "tools/sensor_stream.hpp"
+#include "sim/sensor_stream.hpp"
 
 namespace tools {
 
@@ -61,7 +61,7 @@ struct BusSimResult {
 };
 
 /// Plays the stream onto bus (opened by the caller). stop (optional) aborts the run.
-BusSimResult run_bus_sim(hal::CanBus& bus, SensorStream& stream, const BusSimConfig& cfg,
+BusSimResult run_bus_sim(hal::CanBus& bus, sim::SensorStream& stream, const BusSimConfig& cfg,
                          const std::atomic<bool>* stop = nullptr);
 nlohmann::json to_json(const BusSimResult& r);
 

@@ -3,14 +3,16 @@
 // model, the same inputs for both; the flight application SIL, HIL and replay fly), with the
 // statistics across runs that the paper's figures show.
 //
-// The truth trajectory does not depend on the seed, so it is generated once (TruthTrack) and
-// shared by every run; each run draws its own IMU errors, GPS errors, clock and initial errors
-// from seed = scenario seed + run index. Results are kept per run and reduced in run order, so
+// The truth trajectory does not depend on the seed, so it is generated once (sim::TruthTrack)
+// and shared by every run's sensor stream (sim::SensorStream, the one every simulated run reads);
+// each run draws its own IMU errors, GPS errors, clock and initial errors from
+// seed = scenario seed + run index. Results are kept per run and reduced in run order, so
 // the statistics are bit-identical for any number of threads or MPI ranks.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,26 +22,10 @@
 #include "sim/almanac.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/scenario.hpp"
+#include "sim/sensor_stream.hpp"
 #include "sim/trajectory.hpp"
 
 namespace tools {
-
-/// The seed-independent truth of a scenario: IMU increments at the IMU rate and full truth at
-/// every GNSS epoch.
-struct TruthTrack {
-  struct Increment {
-    double t_s;
-    double dt_s;
-    fsw::Vec3 dtheta_rad;
-    fsw::Vec3 dv_mps;
-  };
-  std::vector<Increment> imu;            ///< samples 1..n (the sample at t = 0 has no increment)
-  std::vector<sim::TruthSample> epochs;  ///< truth at t = k / gps_rate, k = 0..; epochs[0] is t = 0
-  int samples_per_epoch = 1000;          ///< IMU samples between GNSS epochs
-  double generate_wall_s = 0.0;
-  /// Throws std::runtime_error for a scenario it cannot fly (e.g. rates that do not divide).
-  static TruthTrack generate(const sim::Scenario& sc);
-};
 
 /// The models (fsw/filter_model.hpp): k15, the 15-state model with the misalignments as Schmidt
 /// consider states (consistent); k15c, the conventional 15-state model that ignores them, with the
@@ -62,7 +48,17 @@ struct MonteCarloConfig {
   /// Carry the GPS model's time-correlated errors as per-channel states (Layout15Full/24Full); false:
   /// the paper's plain layouts with the total error as white measurement noise.
   bool model_gps_errors = true;
+  /// The flight configuration under the scenario overlay (executive_config): empty, the shipped
+  /// config/default.toml (tools::shipped_filter_config); set by `--filter-config FILE` of
+  /// `sdins montecarlo` / `sdins paper` (tools::monte_carlo_flight_config).
+  std::optional<fsw::FlightAppConfig> flight;
 };
+
+/// The flight configuration of `--filter-config FILE` for the Monte Carlo (the shipped file with
+/// FILE on top; empty path: nullopt, the shipped file). Throws std::runtime_error with the file's
+/// error, or when the file asks for a GNSS input the simulation does not produce (gnss.source
+/// other than "raw": the Monte Carlo flies raw receiver epochs).
+std::optional<fsw::FlightAppConfig> monte_carlo_flight_config(const std::string& path);
 
 /// The executive configuration the Monte Carlo flies for a scenario: the shipped flight
 /// configuration (config/default.toml, tools::shipped_filter_config) with the scenario overlay on
@@ -87,7 +83,7 @@ fsw::FlightAppConfig model_config(const fsw::FlightAppConfig& base, const MonteC
 /// The executive's initial solution for a run: truth at t = 0 with the attitude error that
 /// self-alignment leaves for the run's IMU biases and drawn position / velocity errors (seed: the
 /// run's seed).
-fsw::NavState initial_nav_state(const TruthTrack& truth, const sim::ImuErrors& errors, const MonteCarloConfig& mc,
+fsw::NavState initial_nav_state(const sim::TruthTrack& truth, const sim::ImuErrors& errors, const MonteCarloConfig& mc,
                                 std::uint64_t seed);
 
 /// Per-epoch quantities of one run and one model, after the epoch's feedback.
@@ -128,11 +124,11 @@ struct RunResult {
 };
 
 /// Flies one run (index `run`) through all models of the config.
-RunResult run_one(const sim::Scenario& sc, const TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
+RunResult run_one(const sim::Scenario& sc, const sim::TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
                   const MonteCarloConfig& mc, int run);
 
 /// Runs runs [first_run, first_run + runs) on `threads` threads; results in run order.
-std::vector<RunResult> run_many(const sim::Scenario& sc, const TruthTrack& truth,
+std::vector<RunResult> run_many(const sim::Scenario& sc, const sim::TruthTrack& truth,
                                 const std::vector<sim::AlmanacEntry>& almanac, const MonteCarloConfig& mc);
 
 /// Statistics across runs for one model.
@@ -173,7 +169,7 @@ inline constexpr double kObservableSigmaRatio = 0.5;
 std::vector<MisalignmentCombination> misalignment_combinations(const ModelStats& s);
 
 ModelStats reduce(const std::vector<RunResult>& results, std::size_t model_index, fsw::FilterModel model,
-                  const TruthTrack& truth);
+                  const sim::TruthTrack& truth);
 
 /// Two-sided 95% bounds of the average of `runs` independent chi-square(dof) variables.
 std::array<double, 2> chi2_mean_bounds(int dof, int runs);

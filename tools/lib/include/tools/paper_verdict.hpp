@@ -46,7 +46,7 @@ struct TurnKick {
 };
 
 /// Every complete turn of the flight (a maximal run of turning epochs followed by level flight).
-std::vector<TurnKick> turn_kicks(const TruthTrack& truth);
+std::vector<TurnKick> turn_kicks(const sim::TruthTrack& truth);
 
 /// The one-turn East tilt kick of gamma_xy and gamma_yx, independent draws of 1-sigma
 /// `sigma_arcsec` each: sigma * hypot(k_xy,E, k_yx,E) of the last complete turn [deg]. This is the

@@ -1,0 +1,124 @@
+// The simulated sensors as the flight software receives them: truth -> the IMU and GPS receiver
+// models -> fsw::InputEvent, in arrival order. Every simulated run reads this one stream: SIL
+// (`sdins sil`), the bus simulator (`sdins bus-sim`, HIL), `sdins sim --log`, the Monte Carlo and
+// `sdins paper`, the timing audit and the diagnosis's simulated flights. For the same scenario and
+// seed they all see the same events in the same order.
+//
+// The order (one definition, docs/architecture-data-path.md): the almanac first, one element per
+// event (as a receiver delivers it at power-up), then the IMU samples at the IMU rate and, right
+// after the IMU sample of each GPS epoch time t, the receiver's raw epoch of time t. A receiver's
+// measurement of time t cannot reach the flight software before the IMU sample of the same
+// instant: it is formed at t and sent after it. The flight software therefore releases the EKF
+// step of epoch t at the first minor frame after t and aligns the solution to t (fsw/executive.hpp).
+//
+// The truth comes from one of two sources, with the same values:
+//   - a TruthGenerator run alongside the stream (SensorStream(scenario, seed)), or
+//   - a TruthTrack generated once and shared by many streams (the Monte Carlo's runs differ only
+//     in their sensor errors, so the seed-independent truth is integrated once).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "fsw/gps_orbit.hpp"
+#include "fsw/input_event.hpp"
+#include "fsw/strapdown.hpp"
+#include "sim/gps_model.hpp"
+#include "sim/imu_model.hpp"
+#include "sim/scenario.hpp"
+#include "sim/trajectory.hpp"
+
+namespace sim {
+
+/// The seed-independent truth of a scenario: IMU increments at the IMU rate and full truth at
+/// every GNSS epoch.
+struct TruthTrack {
+  struct Increment {
+    double t_s;
+    double dt_s;
+    fsw::Vec3 dtheta_rad;
+    fsw::Vec3 dv_mps;
+  };
+  std::vector<Increment> imu;       ///< samples 1..n (the sample at t = 0 has no increment)
+  std::vector<TruthSample> epochs;  ///< truth at t = k / gps_rate, k = 0..; epochs[0] is t = 0
+  int samples_per_epoch = 1000;     ///< IMU samples between GNSS epochs
+  double generate_wall_s = 0.0;
+  /// Throws std::runtime_error for a scenario it cannot fly (e.g. rates that do not divide).
+  static TruthTrack generate(const Scenario& sc);
+};
+
+/// IMU samples per GNSS epoch of a scenario; throws std::runtime_error unless the GPS rate divides
+/// the IMU rate.
+int imu_samples_per_epoch(const Scenario& sc);
+
+/// One GPS interval of the stream: the IMU samples of (t - 1/gps_rate, t] and the epoch at t
+/// (has_epoch false only for a short last step). The almanac is not part of a step: almanac().
+struct SensorStep {
+  std::vector<fsw::ImuSample> imu;
+  bool has_epoch = false;
+  fsw::GnssRawEpoch epoch{};
+};
+
+class SensorStream {
+ public:
+  /// The scenario's own seed, truth generated alongside.
+  explicit SensorStream(const Scenario& sc) : SensorStream(sc, sc.seed) {}
+  /// Throws std::runtime_error for a scenario the simulator rejects or an unreadable almanac.
+  /// seed: the run's seed (IMU errors, noise, GPS errors, clock).
+  SensorStream(const Scenario& sc, std::uint64_t seed);
+  /// The truth of a shared track (which must outlive the stream) and an almanac already read.
+  SensorStream(const Scenario& sc, const TruthTrack& track, const std::vector<AlmanacEntry>& almanac,
+               std::uint64_t seed);
+  ~SensorStream();
+  SensorStream(const SensorStream&) = delete;
+  SensorStream& operator=(const SensorStream&) = delete;
+
+  /// The next event; false at the end of the scenario (duration reached). `truth` (optional)
+  /// receives, for an IMU event, the truth sample of its time: with a shared track only its time
+  /// and increments (t_s, dt_s, dtheta_rad, dv_mps) are filled; for a GNSS event the full truth of
+  /// the epoch (as epoch_truth()).
+  bool next(fsw::InputEvent& ev, TruthSample* truth = nullptr);
+  /// The next GPS interval (one stream is read either by event or by step, not both); false at
+  /// the end. The almanac events are skipped: take them from almanac().
+  bool next(SensorStep& step);
+
+  /// The truth at the time of the last GNSS event (full, from either source); valid until the
+  /// next event (a shared track's: as long as the track).
+  const TruthSample& epoch_truth() const { return *epoch_truth_; }
+  /// The truth of the last IMU event (with a shared track: its time and increments only).
+  const TruthSample& truth() const { return gen_ ? gen_->current() : track_sample_; }
+  /// The last GNSS event's epoch with the satellite positions the receiver model used (what the
+  /// flight software computes from the raw epoch and the almanac).
+  const fsw::GnssEpoch& epoch() const { return epoch_; }
+
+  const std::vector<AlmanacEntry>& almanac() const { return gps_->almanac(); }
+  int samples_per_epoch() const { return samples_per_epoch_; }
+  /// IMU samples of the whole scenario (duration x IMU rate).
+  long long total_samples() const { return n_samples_; }
+  /// IMU samples delivered so far.
+  long long samples_delivered() const { return sample_; }
+
+  const ImuErrors& imu_errors() const { return imu_->errors(); }
+  const Scenario& scenario() const { return sc_; }
+
+ private:
+  const TruthSample& next_truth();
+
+  Scenario sc_;
+  std::unique_ptr<FlightMotion> motion_;  ///< live source only
+  std::unique_ptr<TruthGenerator> gen_;   ///< live source only
+  const TruthTrack* track_ = nullptr;     ///< shared source only
+  TruthSample track_sample_;              ///< shared source: the fields the IMU model reads
+  std::unique_ptr<ImuModel> imu_;
+  std::unique_ptr<GpsModel> gps_;
+  std::size_t almanac_sent_ = 0;
+  long long sample_ = 0;     ///< IMU samples emitted
+  long long n_samples_ = 0;  ///< in the scenario
+  int samples_per_epoch_ = 1;
+  bool epoch_due_ = false;   ///< the last IMU sample was at an epoch time
+  const TruthSample* epoch_truth_ = nullptr;
+  fsw::GnssEpoch epoch_{};
+};
+
+}  // namespace sim

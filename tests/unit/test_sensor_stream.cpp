@@ -1,0 +1,100 @@
+// The one simulated sensor stream (sim/sensor_stream.hpp): its event order, and the same events
+// from both truth sources (generated alongside, or a shared track).
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+#include "sim/almanac.hpp"
+#include "sim/sensor_stream.hpp"
+
+namespace {
+
+sim::Scenario short_flight() {
+  sim::Scenario sc;
+  sc.duration_s = 3.0;
+  return sc;
+}
+
+std::vector<fsw::InputEvent> all_events(sim::SensorStream& s, std::vector<sim::TruthSample>* epoch_truth = nullptr) {
+  std::vector<fsw::InputEvent> out;
+  fsw::InputEvent ev;
+  while (s.next(ev)) {
+    out.push_back(ev);
+    if (epoch_truth != nullptr && ev.kind == fsw::InputEvent::Kind::kGnssRaw) epoch_truth->push_back(s.epoch_truth());
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(SensorStream, AlmanacFirstThenEachEpochRightAfterTheImuSampleOfItsTime) {
+  const sim::Scenario sc = short_flight();
+  sim::SensorStream s(sc, 7);
+  const std::vector<fsw::InputEvent> ev = all_events(s);
+  const std::size_t n_alm = s.almanac().size();
+  ASSERT_GT(n_alm, 20u);
+  for (std::size_t i = 0; i < n_alm; ++i) EXPECT_EQ(ev[i].kind, fsw::InputEvent::Kind::kAlmanac) << i;
+  const int spe = s.samples_per_epoch();
+  EXPECT_EQ(spe, static_cast<int>(sc.imu.rate_hz / sc.gps.rate_hz));
+  long long imu = 0, epochs = 0;
+  for (std::size_t i = n_alm; i < ev.size(); ++i) {
+    if (ev[i].kind == fsw::InputEvent::Kind::kImu) {
+      ++imu;
+      continue;
+    }
+    ASSERT_EQ(ev[i].kind, fsw::InputEvent::Kind::kGnssRaw) << i;
+    ++epochs;
+    // Right after the IMU sample of its own time, the spe-th sample since the last epoch.
+    ASSERT_EQ(ev[i - 1].kind, fsw::InputEvent::Kind::kImu) << i;
+    EXPECT_EQ(imu, epochs * spe) << i;
+    EXPECT_NEAR(ev[i - 1].imu.t_s, static_cast<double>(epochs) / sc.gps.rate_hz, 1e-9) << i;
+    EXPECT_GT(ev[i].gnss.n_meas, 4) << i;
+  }
+  EXPECT_EQ(imu, s.total_samples());
+  EXPECT_EQ(imu, static_cast<long long>(sc.duration_s * sc.imu.rate_hz));
+  EXPECT_EQ(epochs, static_cast<long long>(sc.duration_s * sc.gps.rate_hz));
+}
+
+TEST(SensorStream, SharedTruthTrackGivesTheSameEventsAsTheLiveGenerator) {
+  const sim::Scenario sc = short_flight();
+  sim::SensorStream live(sc, 11);
+  std::vector<sim::TruthSample> live_truth, track_truth;
+  const std::vector<fsw::InputEvent> a = all_events(live, &live_truth);
+
+  const sim::TruthTrack track = sim::TruthTrack::generate(sc);
+  const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
+  ASSERT_TRUE(alm.ok()) << alm.error;
+  sim::SensorStream shared(sc, track, *alm.almanac, 11);
+  const std::vector<fsw::InputEvent> b = all_events(shared, &track_truth);
+
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].kind, b[i].kind) << i;
+    EXPECT_EQ(a[i].t_s, b[i].t_s) << i;
+    switch (a[i].kind) {
+      case fsw::InputEvent::Kind::kImu:
+        EXPECT_EQ(std::memcmp(&a[i].imu, &b[i].imu, sizeof a[i].imu), 0) << i;
+        break;
+      case fsw::InputEvent::Kind::kGnssRaw:
+        ASSERT_EQ(a[i].gnss.n_meas, b[i].gnss.n_meas) << i;
+        for (int k = 0; k < a[i].gnss.n_meas; ++k) {
+          EXPECT_EQ(a[i].gnss.meas[static_cast<std::size_t>(k)].prn, b[i].gnss.meas[static_cast<std::size_t>(k)].prn);
+          EXPECT_EQ(a[i].gnss.meas[static_cast<std::size_t>(k)].pseudorange_m, b[i].gnss.meas[static_cast<std::size_t>(k)].pseudorange_m);
+        }
+        break;
+      default:
+        break;
+    }
+  }
+  ASSERT_EQ(live_truth.size(), track_truth.size());
+  for (std::size_t k = 0; k < live_truth.size(); ++k) {
+    EXPECT_EQ(live_truth[k].t_s, track_truth[k].t_s);
+    EXPECT_EQ(live_truth[k].llh, track_truth[k].llh);
+    EXPECT_EQ(live_truth[k].C_b_n, track_truth[k].C_b_n);
+  }
+  // The track must fit the scenario it is read with.
+  sim::Scenario other = sc;
+  other.gps.rate_hz = 2.0;
+  EXPECT_THROW(sim::SensorStream(other, track, *alm.almanac, 11), std::runtime_error);
+}
