@@ -74,7 +74,8 @@ def run_one(args, cls, seed, workdir):
         fi = [p["filter_estimate"] - 1.959963984540054 * p["filter_sigma"], p["filter_estimate"] + 1.959963984540054 * p["filter_sigma"]]
         r.update(found=True, estimate=p["filter_estimate"], sigma=p["filter_sigma"], interval=[iv["lo"], iv["hi"]],
                  bounded=iv["bounded"], profile_estimate=iv["estimate"], filter_interval=fi, runs_profile=iv["runs"],
-                 covered_profile=iv["lo"] <= value <= iv["hi"], covered_filter=fi[0] <= value <= fi[1])
+                 covered_profile=iv["lo"] <= value <= iv["hi"], covered_filter=fi[0] <= value <= fi[1],
+                 deviance_at_filter=iv["deviance_at_filter_estimate"], model_agrees=iv["model_agrees"])
     r["others"] = [f["effect"] + ("." + f["component"] if f["component"] else "") for f in j["findings"]]
     return r
 
@@ -122,6 +123,8 @@ def main():
                    "unbounded": sum(1 for r in found if not r["bounded"]),
                    "median_width_ratio": sorted((r["interval"][1] - r["interval"][0]) / (r["filter_interval"][1] - r["filter_interval"][0]) for r in found)[len(found) // 2] if found else None,
                    "covered_profile": cp, "covered_filter": cf,
+                   # the profile disagreeing with the filter (NOT CALIBRATED) where the model is right: false alarms
+                   "not_calibrated": sum(1 for r in found if not r["model_agrees"]),
                    "coverage_profile": cp / n, "coverage_filter": cf / n,
                    "median_abs_error_over_sigma_filter": sorted(abs(r["estimate"] - r["value"]) / r["sigma"] for r in found)[len(found) // 2] if found else None}
             ok = ok and row["coverage_profile"] >= args.min_coverage
@@ -132,19 +135,19 @@ def main():
     if args.json:
         with open(args.json, "w") as f:
             json.dump(result, f, indent=1)
-    lines = ["| hidden effect (nominal, x U(0.5, 1.5), random sign) | seeds | profile interval covers | filter interval covers | width profile / filter (median) | profile not bounded |",
-             "|---|---|---|---|---|---|"]
+    lines = ["| hidden effect (nominal, x U(0.5, 1.5), random sign) | seeds | profile interval covers | filter interval covers | width profile / filter (median) | profile not bounded | flagged not calibrated |",
+             "|---|---|---|---|---|---|---|"]
     for row in table:
         if row["class"] == "null":
             continue
         nom = CLASSES[row["class"]][2]
         wr = row["median_width_ratio"]
         lines.append(f"| `{row['class']}` ({nom:g}) | {row['seeds']} | {row['covered_profile']} ({100 * row['coverage_profile']:.0f}%) "
-                     f"| {row['covered_filter']} ({100 * row['coverage_filter']:.0f}%) | {'' if wr is None else f'{wr:.2f}'} | {row['unbounded']} |")
+                     f"| {row['covered_filter']} ({100 * row['coverage_filter']:.0f}%) | {'' if wr is None else f'{wr:.2f}'} | {row['unbounded']} | {row['not_calibrated']} |")
     for row in table:
         if row["class"] == "null":
             lines.append(f"| none (null, whole search) | {row['seeds']} | false findings: {row['false_findings']} ({100 * row['false_rate']:.0f}%)"
-                         f"{': ' + ', '.join(row['which']) if row['which'] else ''} | | | |")
+                         f"{': ' + ', '.join(row['which']) if row['which'] else ''} | | | | |")
     md = "\n".join(lines) + "\n"
     if args.markdown:
         with open(args.markdown, "w") as f:

@@ -152,6 +152,24 @@ nlohmann::json separation_json(const tools::Separation& s, const std::vector<too
           {"tried", tried}};
 }
 
+/// The report's interval cell: [lo, hi] (method), not bounded / not calibrated when so.
+std::string interval_cell(const tools::Finding& f) {
+  char b[160];
+  std::snprintf(b, sizeof b, "[%.4g, %.4g] (%s%s%s)", f.interval_lo, f.interval_hi,
+                f.interval_method == "profile_likelihood" ? "profile" : "filter",
+                f.interval_bounded ? "" : ", not bounded", f.model_agrees ? "" : ", NOT CALIBRATED");
+  return b;
+}
+
+/// A profile interval whose filter estimate it disagrees with (tools::ProfileInterval::model_agrees).
+void print_disagreement(double deviance) {
+  std::printf("  NOT CALIBRATED: the filter's estimate lies at deviance %.1f of the profile likelihood (> %.2f, p < 0.001):\n"
+              "  the filter and the profile disagree, so the model does not describe this component's effect on these\n"
+              "  data (an unmodelled effect or a wrong noise model); the interval assumes it does "
+              "(docs/diagnosis-intervals.md)\n",
+              deviance, tools::kModelAgreementDeviance);
+}
+
 }  // namespace
 
 void register_diagnose(CLI::App& app) {
@@ -235,6 +253,7 @@ int run_diagnose() {
     std::printf("profile: %s = %.4g +- %.3g %s (filter); 95%% interval [%.4g, %.4g], maximum %.4g (profile likelihood, %d runs%s)\n",
                 name.c_str(), x, s, fsw::effect_info(e).unit, pi.lo, pi.hi, pi.estimate, pi.runs,
                 pi.lo_bounded && pi.hi_bounded ? "" : ", not bounded within the range searched");
+    if (!pi.model_agrees()) print_disagreement(pi.deviance_at_filter);
     profiles.push_back({{"candidate", name},
                         {"unit", fsw::effect_info(e).unit},
                         {"filter_estimate", x},
@@ -245,7 +264,9 @@ int run_diagnose() {
                           {"method", "profile_likelihood"},
                           {"estimate", pi.estimate},
                           {"bounded", pi.lo_bounded && pi.hi_bounded},
-                          {"runs", pi.runs}}},
+                          {"runs", pi.runs},
+                          {"deviance_at_filter_estimate", pi.deviance_at_filter},
+                          {"model_agrees", pi.model_agrees()}}},
                         {"curve", {{"value", pi.theta}, {"deviance", pi.deviance}}}});
   }
   // The manoeuvre that separates each confounded group (docs/diagnosis-separation.md).
@@ -325,7 +346,9 @@ int run_diagnose() {
                           {"method", f.interval_method},
                           {"estimate", f.profile_estimate},
                           {"bounded", f.interval_bounded},
-                          {"runs", f.profile_runs}}},
+                          {"runs", f.profile_runs},
+                          {"deviance_at_filter_estimate", f.deviance_at_filter},
+                          {"model_agrees", f.model_agrees}}},
                         {"filter_interval_95", {f.estimate - 1.959963984540054 * f.sigma, f.estimate + 1.959963984540054 * f.sigma}},
                         {"confounded_with", cw},
                         {"group", group}});
@@ -396,6 +419,7 @@ int run_diagnose() {
                   f.p_value);
       std::printf("  95%% interval [%.4g, %.4g] %s (%s%s)\n", f.interval_lo, f.interval_hi, f.unit.c_str(),
                   f.interval_method.c_str(), f.interval_bounded ? "" : ", not bounded within the range searched");
+      if (!f.model_agrees) print_disagreement(f.deviance_at_filter);
       continue;
     }
     std::printf("finding: a group this data cannot separate (z^2 %.1f, %d dof, p %.2g); the cause is one of (or a mix "
@@ -465,16 +489,27 @@ int run_diagnose() {
     md << "## Findings\n\n";
     if (r.findings.empty()) md << "None: the baseline model explains the data.\n\n";
     else {
-      md << "| effect | component | estimate | sigma | unit | z^2 | p | not separable from |\n|---|---|---|---|---|---|---|---|\n";
+      md << "| effect | component | estimate | sigma | unit | 95% interval | z^2 | p | not separable from |\n"
+            "|---|---|---|---|---|---|---|---|---|\n";
       for (const tools::Finding& f : r.findings) {
         std::string cw;
         for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
         md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | "
            << (f.separable() ? fmt(f.estimate) : "group, below") << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "")
-           << " | " << f.unit << " | " << fmt(f.z2, "%.1f") << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
+           << " | " << f.unit << " | " << (f.separable() ? interval_cell(f) : "") << " | " << fmt(f.z2, "%.1f")
+           << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
            << " | " << fmt(f.p_value, "%.2g") << " | " << cw << " |\n";
       }
       md << "\n";
+      bool disagree = false;
+      for (const tools::Finding& f : r.findings) disagree = disagree || (f.separable() && !f.model_agrees);
+      if (disagree)
+        md << "**Not calibrated** (marked above): the filter's estimate lies where the profile likelihood's deviance "
+              "is above "
+           << fmt(tools::kModelAgreementDeviance, "%.2f")
+           << " (p < 0.001). The filter and the profile then disagree about the component, so the model does not "
+              "describe its effect on these data (an unmodelled effect, a wrong noise model), and the interval, which "
+              "assumes it does, is not a calibrated 95% statement (docs/diagnosis-intervals.md).\n\n";
       for (const tools::Finding& f : r.findings) {
         if (f.separable()) continue;
         md << "**A group, not one cause.** The data fit each of these alone about equally well and cannot tell them "

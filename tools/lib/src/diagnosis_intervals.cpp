@@ -294,7 +294,10 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
   const std::size_t n = order.size();
   pi.theta.resize(n);
   pi.deviance = dev;
-  for (std::size_t i = 0; i < n; ++i) pi.theta[i] = theta[order[i]];
+  for (std::size_t i = 0; i < n; ++i) {
+    pi.theta[i] = theta[order[i]];
+    if (theta[order[i]] == x) pi.deviance_at_filter = dev[i];  // the first point run
+  }
   const std::size_t best = static_cast<std::size_t>(std::min_element(dev.begin(), dev.end()) - dev.begin());
   // The maximum: the parabola through the best point and its neighbours.
   pi.estimate = pi.theta[best];
@@ -304,7 +307,14 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
     const double den = (x0 - x1) * (x0 - x2) * (x1 - x2);
     const double A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den;
     const double B = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / den;
-    if (A > 0.0) pi.estimate = std::clamp(-B / (2.0 * A), x0, x2);
+    if (A > 0.0) {
+      pi.estimate = std::clamp(-B / (2.0 * A), x0, x2);
+      // The deviance is relative to the best point run; measured from the parabola's minimum at
+      // the estimate instead, the filter's estimate next to it gets its own distance, not 0.
+      const double C = y1 - A * x1 * x1 - B * x1;
+      const double y_min = A * pi.estimate * pi.estimate + B * pi.estimate + C;
+      if (y_min < 0.0) pi.deviance_at_filter -= y_min;
+    }
   }
   // The crossings: outward from the best point, interpolated linearly in sqrt(deviance) (the
   // signed root of the deviance is linear in theta for a Gaussian likelihood).
@@ -387,6 +397,8 @@ void add_finding_intervals(DiagnosisResult& res, const RecordedData& data, const
     f.profile_estimate = pi.estimate;
     f.interval_bounded = pi.lo_bounded && pi.hi_bounded;
     f.profile_runs = pi.runs;
+    f.deviance_at_filter = pi.deviance_at_filter;
+    f.model_agrees = pi.model_agrees();
   }
 }
 

@@ -274,6 +274,12 @@ struct Finding {
   double profile_estimate = 0.0;
   bool interval_bounded = true;
   int profile_runs = 0;
+  /// Profile intervals: the deviance at the filter's estimate, and whether it is at most
+  /// kModelAgreementDeviance (diagnosis_intervals.hpp). false: the filter and the profile disagree,
+  /// the model does not describe this component's effect on the data, and the interval is reported
+  /// as not calibrated (docs/diagnosis-intervals.md).
+  double deviance_at_filter = 0.0;
+  bool model_agrees = true;
 };
 
 struct DiagnosisResult {

@@ -28,7 +28,19 @@ struct ProfileInterval {
   int measurements = 0;     ///< scalar measurements common to every run (the likelihood's support)
   int gated = 0;            ///< observations the gate rejected at the estimate, left out of every run
   std::vector<double> theta, deviance;  ///< the curve: 2 (l_max - l(theta)), sorted by theta
+  /// The deviance at the filter's estimate x (a point of the curve). Where the model describes the
+  /// data, the forward filter and the profile estimate the same thing and x lies near the maximum
+  /// (a deviance of order 1). A deviance above kModelAgreementDeviance says they disagree: the
+  /// model does not describe this component's effect on these data (an unmodelled effect, a wrong
+  /// noise model), and the interval, which assumes it does, is not a calibrated statement.
+  double deviance_at_filter = 0.0;
+  bool model_agrees() const;
 };
+
+/// chi-square(1) at p = 0.001: the deviance at the filter's estimate above which the filter and the
+/// profile likelihood disagree about a component (ProfileInterval::deviance_at_filter).
+inline constexpr double kModelAgreementDeviance = 10.827566170662733;
+inline bool ProfileInterval::model_agrees() const { return deviance_at_filter <= kModelAgreementDeviance; }
 
 /// True when a component can be held fixed at a value (every effect except the delay scales).
 bool profile_supported(fsw::Effect e);
