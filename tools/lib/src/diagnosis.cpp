@@ -737,6 +737,9 @@ struct Group {
 
 double multiple_correlation(const Eigen::MatrixXd& R, int a, const std::vector<int>& b) {
   const Eigen::Index k = static_cast<Eigen::Index>(b.size());
+  const auto valid = [&R](int i) { return i >= 0 && i < R.rows() && i < R.cols(); };
+  if (!valid(a) || !std::all_of(b.begin(), b.end(), valid))
+    throw std::logic_error("multiple_correlation: a position outside the correlation matrix");
   if (k == 0) return 0.0;
   Eigen::MatrixXd Rbb(k, k);
   Eigen::VectorXd rab(k);
@@ -846,8 +849,12 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
       // Not separable from a finding's subspace: joins that group.
       for (std::size_t gi = 0; !confound && gi < groups.size(); ++gi) {
         Group& g = groups[gi];
+        // The members this run carries: one that joined earlier in this step is not in this
+        // step's models (m0 + c), and has no row in r.correlation (reading it overran the matrix;
+        // found by ASan on a whole diagnosis).
         std::vector<int> pos;
-        for (int mbr : g.members) pos.push_back(position(r, mbr));
+        for (int mbr : g.members)
+          if (const int p = position(r, mbr); p >= 0) pos.push_back(p);
         const double R = multiple_correlation(r.correlation, a, pos);
         if (R > cfg.max_correlation) {
           g.info.push_back(member(c, g, r.correlation(a, position(r, g.lead)), R));
