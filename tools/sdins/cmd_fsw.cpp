@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "tools/flight_config.hpp"
 #include "hal/can_bus.hpp"
 #include "tools/hil.hpp"
 #include "tools/interrupt.hpp"
@@ -48,9 +49,7 @@ int run_fsw() {
   tools::require_distinct({opt.run.log, opt.run.json}, {opt.run.filter_config});
   tools::FswRunConfig cfg;
   const sim::FilterConfig filter = opt.run.filter();  // the shipped config/default.toml, --filter-config on top
-  if (filter.gnss_source != sim::GnssSource::kRaw)
-    throw std::runtime_error("--filter-config: gnss.source = \"" + std::string(sim::to_string(filter.gnss_source)) +
-                             "\", but the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc); use \"raw\"");
+  tools::require_raw_gnss(filter, "--filter-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
   cfg.node = opt.run.node_config(filter);
   cfg.realtime = opt.realtime;
   cfg.fifo_priority = opt.fifo_priority;

@@ -54,12 +54,13 @@ struct Options {
   std::string filter_config;
 } opt;
 
-/// A case's Monte Carlo configuration: --runs, --threads, --filter-config.
+/// A case's Monte Carlo configuration: --runs, --threads, --filter-config (read once per process).
 tools::MonteCarloConfig case_config() {
+  static const std::optional<fsw::FlightAppConfig> flight = tools::monte_carlo_flight_config(opt.filter_config);
   tools::MonteCarloConfig mc;
   mc.runs = opt.runs;
   mc.threads = opt.threads;
-  mc.flight = tools::monte_carlo_flight_config(opt.filter_config);
+  mc.flight = flight;
   return mc;
 }
 
@@ -276,7 +277,7 @@ int run_paper_body() {
   bool root = true;
   double wall_total = 0.0;
   const tools::MonteCarloConfig defaults;
-  const double paper_arw = tools::executive_config(base, case_config()).ekf.arw_rad_per_rts;  // the flight configuration's
+  const double paper_arw = tools::shipped_filter_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
   std::vector<tools::paper::LevelSummary> levels;
   const std::vector<tools::paper::TurnKick> kicks = root_rank ? kicks_of(base) : std::vector<tools::paper::TurnKick>{};
   for (double level : opt.levels) {
@@ -463,7 +464,7 @@ int run_tune_body() {
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(base.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
   const sim::TruthTrack truth = sim::TruthTrack::generate(base);
-  const double paper_arw = tools::executive_config(base, case_config()).ekf.arw_rad_per_rts;  // the flight configuration's
+  const double paper_arw = tools::shipped_filter_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
   json levels = json::array();
   bool all_found = true;
   // Per misalignment level (the IMU's specification), grid: the paper's ARW times 2^(k/2) for

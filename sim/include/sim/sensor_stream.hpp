@@ -96,8 +96,6 @@ class SensorStream {
   int samples_per_epoch() const { return samples_per_epoch_; }
   /// IMU samples of the whole scenario (duration x IMU rate).
   long long total_samples() const { return n_samples_; }
-  /// IMU samples delivered so far.
-  long long samples_delivered() const { return sample_; }
 
   const ImuErrors& imu_errors() const { return imu_->errors(); }
   const Scenario& scenario() const { return sc_; }

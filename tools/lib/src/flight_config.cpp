@@ -17,4 +17,10 @@ sim::FilterConfig filter_config(const std::string& path) {
   return f;
 }
 
+void require_raw_gnss(const sim::FilterConfig& f, const std::string& what, const std::string& why) {
+  if (f.gnss_source != sim::GnssSource::kRaw)
+    throw std::runtime_error(what + ": gnss.source = \"" + std::string(sim::to_string(f.gnss_source)) + "\", but " +
+                             why + "; use \"raw\"");
+}
+
 }  // namespace tools

@@ -18,8 +18,6 @@
 #include "fsw/chi_square.hpp"
 #include "fsw/effect_catalogue.hpp"
 #include "fsw/flight_app.hpp"
-#include "sim/gps_model.hpp"
-#include "sim/imu_model.hpp"
 #include "sim/rng.hpp"
 #include "sim/sensor_stream.hpp"
 #include "sim/truth.hpp"
@@ -32,7 +30,6 @@ namespace {
 using fsw::Block;
 using fsw::Vec3;
 using Clock = std::chrono::steady_clock;
-
 
 constexpr std::uint64_t kStreamInitialErrors = 20;
 
@@ -177,9 +174,7 @@ const fsw::FlightAppConfig& base_flight_config(const MonteCarloConfig& mc) {
 std::optional<fsw::FlightAppConfig> monte_carlo_flight_config(const std::string& path) {
   if (path.empty()) return std::nullopt;
   const sim::FilterConfig f = filter_config(path);
-  if (f.gnss_source != sim::GnssSource::kRaw)
-    throw std::runtime_error(path + ": gnss.source = \"" + std::string(sim::to_string(f.gnss_source)) +
-                             "\", but the Monte Carlo simulates raw receiver epochs; use \"raw\"");
+  require_raw_gnss(f, path, "the Monte Carlo simulates raw receiver epochs");
   return f.app;
 }
 

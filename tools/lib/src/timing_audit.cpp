@@ -12,10 +12,8 @@
 
 #include "fsw/flight_app.hpp"
 #include "sim/almanac.hpp"
-#include "sim/gps_model.hpp"
-#include "sim/imu_model.hpp"
-#include "tools/montecarlo.hpp"
 #include "sim/sensor_stream.hpp"
+#include "tools/montecarlo.hpp"
 
 namespace tools {
 namespace {
@@ -98,8 +96,8 @@ std::string frame_work(const fsw::FrameOutput& out, bool had_epoch, int epoch_sa
 }
 
 /// Flies the scenario through the flight application (the one simulated sensor stream,
-/// sim/sensor_stream.hpp, on the shared truth: raw receiver epochs, IMU samples) with its two rate groups timed apart: every 200 Hz frame (its on_gnss and
-/// on_imu calls) and every run of the 1 Hz group (run_ekf_group, called after the frame that
+/// sim/sensor_stream.hpp, on the shared truth: raw receiver epochs, IMU samples) with its two rate
+/// groups timed apart: every 200 Hz frame (its on_gnss and on_imu calls) and every run of the 1 Hz group (run_ekf_group, called after the frame that
 /// released it, as a lower-priority task would run). Initialisation as cfg.init_mode: kTrack is what
 /// HIL flies (in-motion initialisation from the first good epoch; the frames before it are the
 /// levelling calls, grouped by the frame's IMU samples), kGiven the Monte Carlo's start.

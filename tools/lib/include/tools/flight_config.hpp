@@ -17,4 +17,8 @@ const sim::FilterConfig& shipped_filter_config();
 /// with the file's error.
 sim::FilterConfig filter_config(const std::string& path);
 
+/// Throws std::runtime_error "<what>: gnss.source = "...", but <why>; use "raw"" unless the
+/// configuration flies raw receiver epochs (the commands whose input carries no solutions).
+void require_raw_gnss(const sim::FilterConfig& f, const std::string& what, const std::string& why);
+
 }  // namespace tools
