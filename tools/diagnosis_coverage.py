@@ -29,14 +29,21 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
-# Effect classes: catalogue name, component, nominal magnitude (catalogue units). Chosen among the
-# components the default bank-to-turn flight separates (docs/diagnosis.md): a confounded group has
-# no single component to cover (docs/diagnosis-groups.md).
+# Effect classes: catalogue name, component, nominal magnitude (catalogue units). The first four
+# are components the default bank-to-turn flight separates (docs/diagnosis.md): a named finding's
+# interval. The next four are members of the groups that flight cannot separate (gyro scale
+# factors {x, y, z}; {g-sensitivity z, misalignment yz, zy}; {time offset, lever arm x}): the group
+# finding reports each member's "alone" estimate (docs/diagnosis-groups.md), and these classes
+# check that interval when that member is the hidden one. The null class runs the whole search.
 CLASSES = {
     "imu_clock_drift": ("imu_clock_drift", "", 100.0),
     "antenna_lever_arm.y": ("antenna_lever_arm", "y", 1.0),
     "antenna_lever_arm.z": ("antenna_lever_arm", "z", 1.0),
     "accel_scale_factor.z": ("accel_scale_factor", "z", 4000.0),
+    "gyro_scale_factor.z": ("gyro_scale_factor", "z", 1000.0),
+    "gyro_g_sensitivity.z": ("gyro_g_sensitivity", "z", 30.0),
+    "gyro_misalignment.zy": ("gyro_misalignment", "zy", 300.0),
+    "imu_gnss_time_offset": ("imu_gnss_time_offset", "", 0.01),
     "null": (None, None, 0.0),
 }
 

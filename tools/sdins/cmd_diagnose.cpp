@@ -249,9 +249,14 @@ int run_diagnose() {
     if (!tools::profile_supported(e)) throw std::runtime_error("--profile: " + name + " cannot be held fixed (delay scales)");
     double x = 0.0, s = 0.0;
     const tools::ProfileInterval pi = tools::profile_component(data, cfg, r.extended.active, c, x, s);
-    if (!pi.available) throw std::runtime_error("--profile " + name + ": the model did not initialise");
-    std::printf("profile: %s = %.4g +- %.3g %s (filter); 95%% interval [%.4g, %.4g], maximum %.4g (profile likelihood, %d runs%s)\n",
-                name.c_str(), x, s, fsw::effect_info(e).unit, pi.lo, pi.hi, pi.estimate, pi.runs,
+    if (pi.runs == 0) throw std::runtime_error("--profile " + name + ": the model did not initialise");
+    if (!pi.available)
+      throw std::runtime_error("--profile " + name + ": the runs at different values share only " +
+                               std::to_string(pi.measurements) +
+                               " measurements (an EKF schedule that moves with the value): no profile likelihood");
+    std::printf("profile: %s = %.4g +- %.3g %s (filter); 95%% interval [%.4g, %.4g], maximum %.4g (profile likelihood, %d runs, "
+                "%d common measurements%s)\n",
+                name.c_str(), x, s, fsw::effect_info(e).unit, pi.lo, pi.hi, pi.estimate, pi.runs, pi.measurements,
                 pi.lo_bounded && pi.hi_bounded ? "" : ", not bounded within the range searched");
     if (!pi.model_agrees()) print_disagreement(pi.deviance_at_filter);
     profiles.push_back({{"candidate", name},
@@ -265,6 +270,7 @@ int run_diagnose() {
                           {"estimate", pi.estimate},
                           {"bounded", pi.lo_bounded && pi.hi_bounded},
                           {"runs", pi.runs},
+                          {"measurements", pi.measurements},
                           {"deviance_at_filter_estimate", pi.deviance_at_filter},
                           {"model_agrees", pi.model_agrees()}}},
                         {"curve", {{"value", pi.theta}, {"deviance", pi.deviance}}}});

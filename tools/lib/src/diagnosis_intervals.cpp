@@ -142,11 +142,6 @@ RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, dou
     default: return d;
   }
   const bool retimed = offset_s != 0.0 || drift != 0.0;
-  std::vector<double> old_t;
-  if (retimed) {
-    old_t.reserve(d.imu.size());
-    for (const fsw::ImuSample& s : d.imu) old_t.push_back(s.t_s);
-  }
   for (fsw::ImuSample& s : d.imu) {
     const fsw::Vec3 dth = s.dtheta_rad, dv = s.dv_mps;
     s.dtheta_rad = dth - Eg * dth - gs.cwiseProduct(dv);
@@ -156,19 +151,25 @@ RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, dou
     s.dt_s = s.dt_s / (1.0 + drift);
   }
   if (retimed) {
-    // Arrival order on the corrected clock: a GNSS input keeps its lag behind its own time (the
-    // original tag of the IMU sample it arrived after, minus its time) on the corrected IMU tags.
+    // Arrival order on the corrected clock. A GNSS input arrived after a given IMU sample: that is
+    // a fact of the recording, and it stays after that sample (whose tag is now corrected), unless
+    // the corrected tag lies before the input's own time, when it arrives after the sample of its
+    // time instead (the flight software holds an input until its time anyway). Keeping instead the
+    // lag of the original tags behind the input's time carried the hidden offset itself into the
+    // corrected data (in a simulation the epoch follows the IMU sample of its true time, whose tag
+    // is late by the offset): measured on the coverage study's imu_gnss_time_offset, the profile's
+    // maximum then sat 2-4 ms above the truth in every seed and its interval covered 5 of 20.
     std::vector<double> key(d.order.size(), -1e300);
-    double prev_old = -1e300, prev_key = -1e300;
+    double prev_new = -1e300, prev_key = -1e300;
     for (std::size_t i = 0; i < d.order.size(); ++i) {
       const RecordedData::Event& ev = d.order[i];
       switch (ev.kind) {
         case RecordedData::Kind::kImu:
-          prev_old = old_t[ev.index];
-          key[i] = d.imu[ev.index].t_s;
+          prev_new = d.imu[ev.index].t_s;
+          key[i] = prev_new;
           break;
-        case RecordedData::Kind::kGnss: key[i] = d.gnss[ev.index].t_s + std::max(0.0, prev_old - d.gnss[ev.index].t_s); break;
-        case RecordedData::Kind::kPvt: key[i] = d.pvt[ev.index].t_s + std::max(0.0, prev_old - d.pvt[ev.index].t_s); break;
+        case RecordedData::Kind::kGnss: key[i] = std::max(d.gnss[ev.index].t_s, prev_new); break;
+        case RecordedData::Kind::kPvt: key[i] = std::max(d.pvt[ev.index].t_s, prev_new); break;
         case RecordedData::Kind::kAlmanac: key[i] = prev_key; break;
       }
       prev_key = key[i];
@@ -336,7 +337,11 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
       pi.hi_bounded = true;
       break;
     }
-  pi.available = true;
+  // The runs must compare the same measurements: a schedule that moves with theta (an EKF step
+  // slower than the GNSS epochs, phased by the initialisation time) leaves them few or none in
+  // common, and a likelihood over nothing is flat. Then there is no profile, and the filter's own
+  // interval is kept.
+  pi.available = 2 * static_cast<std::size_t>(pi.measurements) >= ref.scalars.size();
   return pi;
 }
 

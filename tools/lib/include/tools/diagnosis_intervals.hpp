@@ -20,7 +20,9 @@ namespace tools {
 
 /// The profile-likelihood interval of one component (catalogue units).
 struct ProfileInterval {
-  bool available = false;   ///< false: the component cannot be held fixed this way (delay scales)
+  /// false: the component cannot be held fixed this way (delay scales), or the runs at different
+  /// values share fewer than half the reference run's measurements (no likelihood to compare)
+  bool available = false;
   double estimate = 0.0;    ///< the maximum of the profile likelihood
   double lo = 0.0, hi = 0.0;
   bool lo_bounded = false, hi_bounded = false;  ///< the deviance crossed 3.84 inside the grid searched
