@@ -158,7 +158,8 @@ RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, dou
     // lag of the original tags behind the input's time carried the hidden offset itself into the
     // corrected data (in a simulation the epoch follows the IMU sample of its true time, whose tag
     // is late by the offset): measured on the coverage study's imu_gnss_time_offset, the profile's
-    // maximum then sat 2-4 ms above the truth in every seed and its interval covered 5 of 20.
+    // maximum then sat 2-4 ms above the truth for either sign, its interval covering 5 of 20; now
+    // 14 of 20, the bias left only for positive offsets (docs/diagnosis-intervals.md, open).
     std::vector<double> key(d.order.size(), -1e300);
     double prev_new = -1e300, prev_key = -1e300;
     for (std::size_t i = 0; i < d.order.size(); ++i) {
@@ -247,6 +248,11 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
     std::vector<const Contributions*> ptr;
     for (std::size_t i : order) ptr.push_back(&runs[i]);
     const std::vector<double> ll = common_log_likelihood(ptr, pi.measurements);
+    // The runs must compare the same measurements: a schedule that moves with theta (an EKF step
+    // slower than the GNSS epochs, phased by the initialisation time) leaves them few or none in
+    // common, and a likelihood over nothing is flat. Then there is no profile (the filter's own
+    // interval is kept), and no more runs are spent following a flat curve outward.
+    if (2 * static_cast<std::size_t>(pi.measurements) < ref.scalars.size()) return pi;
     const double ll_max = *std::max_element(ll.begin(), ll.end());
     dev.assign(ll.size(), 0.0);
     for (std::size_t i = 0; i < ll.size(); ++i) dev[i] = 2.0 * (ll_max - ll[i]);
@@ -337,11 +343,7 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
       pi.hi_bounded = true;
       break;
     }
-  // The runs must compare the same measurements: a schedule that moves with theta (an EKF step
-  // slower than the GNSS epochs, phased by the initialisation time) leaves them few or none in
-  // common, and a likelihood over nothing is flat. Then there is no profile, and the filter's own
-  // interval is kept.
-  pi.available = 2 * static_cast<std::size_t>(pi.measurements) >= ref.scalars.size();
+  pi.available = true;
   return pi;
 }
 
