@@ -153,12 +153,18 @@ nlohmann::json separation_json(const tools::Separation& s, const std::vector<too
 }
 
 /// The report's interval cell: [lo, hi] (method), not bounded / not calibrated when so.
-std::string interval_cell(const tools::Finding& f) {
+std::string interval_cell(double lo, double hi, const std::string& method, bool bounded, bool agrees) {
   char b[160];
-  std::snprintf(b, sizeof b, "[%.4g, %.4g] (%s%s%s)", f.interval_lo, f.interval_hi,
-                f.interval_method == "profile_likelihood" ? "profile" : "filter",
-                f.interval_bounded ? "" : ", not bounded", f.model_agrees ? "" : ", NOT CALIBRATED");
+  std::snprintf(b, sizeof b, "[%.4g, %.4g] (%s%s%s)", lo, hi, method == "profile_likelihood" ? "profile" : "filter",
+                bounded ? "" : ", not bounded", agrees ? "" : ", NOT CALIBRATED");
   return b;
+}
+std::string interval_cell(const tools::Finding& f) {
+  return interval_cell(f.interval_lo, f.interval_hi, f.interval_method, f.interval_bounded, f.model_agrees);
+}
+std::string interval_cell(const tools::GroupMember& m) {
+  return interval_cell(m.alone_interval_lo, m.alone_interval_hi, m.alone_interval_method, m.alone_interval_bounded,
+                       m.alone_model_agrees);
 }
 
 /// A profile interval whose filter estimate it disagrees with (tools::ProfileInterval::model_agrees).
@@ -195,7 +201,7 @@ void register_diagnose(CLI::App& app) {
       ->check(CLI::Range(1e-9, 0.5))
       ->capture_default_str();
   sub->add_option("--intervals", opt.intervals,
-                  "95% interval of each separable finding: profile (the profile likelihood over the whole recording, "
+                  "95% interval of each finding and group member alone: profile (the profile likelihood over the whole recording, "
                   "docs/diagnosis-intervals.md) or filter (the filter's estimate +- 1.96 sigma, faster)")
       ->check(CLI::IsMember({"profile", "filter"}))
       ->capture_default_str();
@@ -332,6 +338,15 @@ int run_diagnose() {
                        {"alone_estimate", m.alone_estimate},
                        {"alone_sigma", m.alone_sigma},
                        {"alone_statistic", m.alone_z2},
+                       {"alone_interval_95",
+                        {{"lo", m.alone_interval_lo},
+                         {"hi", m.alone_interval_hi},
+                         {"method", m.alone_interval_method},
+                         {"estimate", m.alone_profile_estimate},
+                         {"bounded", m.alone_interval_bounded},
+                         {"runs", m.alone_profile_runs},
+                         {"deviance_at_filter_estimate", m.alone_deviance_at_filter},
+                         {"model_agrees", m.alone_model_agrees}}},
                        {"unit", m.unit},
                        {"prior_sigma", m.prior_sigma},
                        {"prior_z", m.prior_z},
@@ -431,8 +446,9 @@ int run_diagnose() {
     std::printf("finding: a group this data cannot separate (z^2 %.1f, %d dof, p %.2g); the cause is one of (or a mix "
                 "of):\n", f.z2, f.dof, f.p_value);
     for (const tools::GroupMember& m : f.group)
-      std::printf("  %-26s alone %.4g +- %.3g %s = %+.1f prior sigma, plausibility %.2f, rho %+.4f\n", m.name.c_str(),
-                  m.alone_estimate, m.alone_sigma, m.unit.c_str(), m.prior_z, m.plausibility, m.correlation);
+      std::printf("  %-26s alone %.4g +- %.3g %s, 95%% %s = %+.1f prior sigma, plausibility %.2f, rho %+.4f\n",
+                  m.name.c_str(), m.alone_estimate, m.alone_sigma, m.unit.c_str(), interval_cell(m).c_str(), m.prior_z,
+                  m.plausibility, m.correlation);
     const tools::Separation& sp = seps[fi];
     if (sp.predicted)
       std::printf("  separated by: %s (%.0f s more flight): members' correlation %.4f -> %.3f predicted (%s %.2f)%s\n",
@@ -502,13 +518,16 @@ int run_diagnose() {
         for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
         md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | "
            << (f.separable() ? fmt(f.estimate) : "group, below") << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "")
-           << " | " << f.unit << " | " << (f.separable() ? interval_cell(f) : "") << " | " << fmt(f.z2, "%.1f")
+           << " | " << f.unit << " | " << interval_cell(f) << " | " << fmt(f.z2, "%.1f")
            << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
            << " | " << fmt(f.p_value, "%.2g") << " | " << cw << " |\n";
       }
       md << "\n";
       bool disagree = false;
-      for (const tools::Finding& f : r.findings) disagree = disagree || (f.separable() && !f.model_agrees);
+      for (const tools::Finding& f : r.findings) {
+        disagree = disagree || !f.model_agrees;
+        for (const tools::GroupMember& m : f.group) disagree = disagree || !m.alone_model_agrees;
+      }
       if (disagree)
         md << "**Not calibrated** (marked above): the filter's estimate lies where the profile likelihood's deviance "
               "is above "
@@ -521,11 +540,11 @@ int run_diagnose() {
         md << "**A group, not one cause.** The data fit each of these alone about equally well and cannot tell them "
               "apart; the finding is the group. Each member's estimate is what it alone would need; plausibility is "
               "relative, under the members' priors only.\n\n"
-              "| member | alone estimate | sigma | unit | prior sigmas | plausibility | correlation with the lead |\n"
-              "|---|---|---|---|---|---|---|\n";
+              "| member | alone estimate | sigma | unit | alone 95% interval | prior sigmas | plausibility | correlation with the lead |\n"
+              "|---|---|---|---|---|---|---|---|\n";
         for (const tools::GroupMember& m : f.group)
           md << "| " << m.name << " | " << fmt(m.alone_estimate) << " | " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
-             << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
+             << " | " << interval_cell(m) << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
              << fmt(m.correlation, "%+.4f") << " |\n";
         md << "\n";
         const std::size_t fi = static_cast<std::size_t>(&f - r.findings.data());

@@ -729,11 +729,23 @@ struct Group {
   std::vector<GroupMember> info;  ///< parallel to members
   /// Per candidate: that candidate alone on top of the model as it was when the lead was selected.
   std::vector<double> alone_est, alone_sig, alone_z2;
+  std::vector<int> selection_model;  ///< the model the lead was selected on (without the lead)
   double z2 = 0.0;
   int dof = 1;
 };
 
 }  // namespace
+
+void set_group_plausibility(std::vector<GroupMember>& group) {
+  double sum = 0.0;
+  for (GroupMember& m : group) {
+    const bool profile = m.alone_interval_method == "profile_likelihood" && m.alone_model_agrees;
+    const double x = profile ? m.alone_profile_estimate : m.alone_estimate;
+    m.prior_z = m.prior_sigma > 0.0 ? x / m.prior_sigma : 0.0;
+    sum += std::exp(-0.5 * m.prior_z * m.prior_z);
+  }
+  for (GroupMember& m : group) m.plausibility = sum > 0.0 ? std::exp(-0.5 * m.prior_z * m.prior_z) / sum : 0.0;
+}
 
 double multiple_correlation(const Eigen::MatrixXd& R, int a, const std::vector<int>& b) {
   const Eigen::Index k = static_cast<Eigen::Index>(b.size());
@@ -787,7 +799,6 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     gm.alone_sigma = g.alone_sig[at(c)];
     gm.alone_z2 = g.alone_z2[at(c)];
     gm.prior_sigma = cfg.prior[static_cast<std::size_t>(cand.effect)];
-    gm.prior_z = gm.prior_sigma > 0.0 ? gm.alone_estimate / gm.prior_sigma : 0.0;
     return gm;
   };
   std::vector<bool> excluded(at(nc), false);  // unobservable, explained by the baseline, or in a group
@@ -897,6 +908,7 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     g.alone_est = est;
     g.alone_sig = sig;
     g.alone_z2 = z2v;
+    g.selection_model = m0;
     g.info = {member(best, g, 1.0, 1.0)};
     groups.push_back(g);
   }
@@ -958,13 +970,12 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     f.dof = std::max(g.dof, 1);
     f.threshold_z2 = chi2_upper_quantile(alpha_each, f.dof);
     f.p_value = chi2_survival(f.z2, f.dof);
+    f.selection_model = g.selection_model;
     if (g.members.size() == 1) {
       f.estimate = res.extended.estimate[ua];
       f.sigma = res.extended.sigma[ua];
     } else {
-      double sum = 0.0;
-      for (const GroupMember& m : g.info) sum += std::exp(-0.5 * m.prior_z * m.prior_z);
-      for (GroupMember& m : g.info) m.plausibility = sum > 0.0 ? std::exp(-0.5 * m.prior_z * m.prior_z) / sum : 0.0;
+      set_group_plausibility(g.info);
       f.estimate = g.info.front().alone_estimate;
       f.sigma = g.info.front().alone_sigma;
       f.group = g.info;

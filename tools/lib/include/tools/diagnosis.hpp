@@ -242,6 +242,18 @@ struct GroupMember {
   /// priors, given that the data fit each alone equally well (prior only: not a probability that
   /// the data establish).
   double plausibility = 0.0;
+  /// The 95% interval of the value this member alone would need (catalogue units), as a separable
+  /// finding's (Finding::interval_*): the profile likelihood of the member alone on top of the
+  /// model at the lead's selection ("profile_likelihood"), or alone_estimate +- 1.96 alone_sigma
+  /// ("filter") where there is no profile. prior_z and plausibility use the profile's maximum when
+  /// there is one and the filter agrees with it.
+  double alone_interval_lo = 0.0, alone_interval_hi = 0.0;
+  std::string alone_interval_method = "filter";
+  double alone_profile_estimate = 0.0;
+  bool alone_interval_bounded = true;
+  int alone_profile_runs = 0;
+  double alone_deviance_at_filter = 0.0;
+  bool alone_model_agrees = true;
 };
 
 struct Finding {
@@ -265,9 +277,12 @@ struct Finding {
   /// group, not its lead.
   std::vector<GroupMember> group;
   bool separable() const { return group.empty(); }
+  /// The model the lead was selected on (indices into diagnosis_candidates(), the baseline's
+  /// included, the lead not): where each group member's "alone" value is measured.
+  std::vector<int> selection_model;
   /// The 95% interval (catalogue units, docs/diagnosis-intervals.md): interval_method
-  /// "profile_likelihood" (separable findings: 2 (l_max - l) <= 3.84 over the whole recording, its
-  /// maximum profile_estimate) or "filter" (estimate +- 1.96 sigma). interval_bounded: false when the
+  /// "profile_likelihood" (2 (l_max - l) <= 3.84 over the whole recording, its maximum
+  /// profile_estimate; a group: its lead's alone interval) or "filter" (estimate +- 1.96 sigma). interval_bounded: false when the
   /// likelihood did not fall by 3.84 within the range searched (the interval is then that range).
   double interval_lo = 0.0, interval_hi = 0.0;
   std::string interval_method = "filter";
@@ -281,6 +296,10 @@ struct Finding {
   double deviance_at_filter = 0.0;
   bool model_agrees = true;
 };
+
+/// Sets each member's prior_z (from its profile maximum where the member's interval is a profile
+/// the filter agrees with, else from alone_estimate) and the group's plausibilities.
+void set_group_plausibility(std::vector<GroupMember>& group);
 
 struct DiagnosisResult {
   std::string baseline = "15";
