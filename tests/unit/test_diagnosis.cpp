@@ -178,7 +178,7 @@ TEST(Diagnosis, OneHiddenEffectGivesOneFindingAndConfoundedOnesAGroup) {
                   fsw::effect_info(f.effect).name, f.component.c_str(), f.z2, f.dof, f.group.size());
       for (const tools::GroupMember& m : f.group)
         std::printf(" %s %.4g+-%.3g [%.4g, %.4g] %s (p %.2f, rho %+.3f)", m.name.c_str(), m.alone_estimate,
-                    m.alone_sigma, m.alone_interval_lo, m.alone_interval_hi, m.alone_interval_method.c_str(),
+                    m.alone_sigma, m.alone_interval.lo, m.alone_interval.hi, m.alone_interval.method.c_str(),
                     m.plausibility, m.correlation);
       std::printf("\n");
     }
@@ -193,24 +193,24 @@ TEST(Diagnosis, OneHiddenEffectGivesOneFindingAndConfoundedOnesAGroup) {
         << m->alone_estimate << " +- " << m->alone_sigma << " vs " << c.value;
     // The hidden member's own value: inside its alone interval (the profile likelihood, as a
     // separable finding's; the filter's alone sigma was measured optimistic for group members).
-    EXPECT_EQ(m->alone_interval_method, "profile_likelihood");
-    EXPECT_TRUE(m->alone_interval_lo <= c.value && c.value <= m->alone_interval_hi)
-        << "[" << m->alone_interval_lo << ", " << m->alone_interval_hi << "] vs " << c.value;
+    EXPECT_EQ(m->alone_interval.method, "profile_likelihood");
+    EXPECT_TRUE(m->alone_interval.lo <= c.value && c.value <= m->alone_interval.hi)
+        << "[" << m->alone_interval.lo << ", " << m->alone_interval.hi << "] vs " << c.value;
     double sum = 0.0;
     for (const tools::GroupMember& g : f.group) {
       EXPECT_TRUE(std::isfinite(g.alone_estimate) && g.alone_sigma > 0.0) << g.name;
-      EXPECT_EQ(g.alone_interval_method, "profile_likelihood") << g.name;
-      EXPECT_TRUE(g.alone_interval_lo <= g.alone_profile_estimate && g.alone_profile_estimate <= g.alone_interval_hi)
-          << g.name << ": maximum " << g.alone_profile_estimate << " outside [" << g.alone_interval_lo << ", "
-          << g.alone_interval_hi << "]";
+      EXPECT_EQ(g.alone_interval.method, "profile_likelihood") << g.name;
+      EXPECT_TRUE(g.alone_interval.lo <= g.alone_interval.estimate && g.alone_interval.estimate <= g.alone_interval.hi)
+          << g.name << ": maximum " << g.alone_interval.estimate << " outside [" << g.alone_interval.lo << ", "
+          << g.alone_interval.hi << "]";
       EXPECT_GT(std::abs(g.multiple_correlation), 0.9) << g.name;
       sum += g.plausibility;
     }
     EXPECT_NEAR(sum, 1.0, 1e-9);
     EXPECT_EQ(f.group.front().name, std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component));
     // The group's own interval is its lead's alone interval.
-    EXPECT_EQ(f.interval_lo, f.group.front().alone_interval_lo);
-    EXPECT_EQ(f.interval_hi, f.group.front().alone_interval_hi);
+    EXPECT_EQ(f.interval.lo, f.group.front().alone_interval.lo);
+    EXPECT_EQ(f.interval.hi, f.group.front().alone_interval.hi);
     expect_gain(r);
   }
 }
@@ -245,9 +245,9 @@ TEST(Diagnosis, FindsAnImuClockDrift) {
   if (kSanitized) {
     ASSERT_TRUE(r.base.initialised);
     for (const tools::Finding& f : r.findings) {
-      EXPECT_TRUE(std::isfinite(f.estimate) && std::isfinite(f.interval_lo) && std::isfinite(f.interval_hi));
-      EXPECT_LE(f.interval_lo, f.interval_hi);
-      EXPECT_GE(f.deviance_at_filter, 0.0);
+      EXPECT_TRUE(std::isfinite(f.estimate) && std::isfinite(f.interval.lo) && std::isfinite(f.interval.hi));
+      EXPECT_LE(f.interval.lo, f.interval.hi);
+      EXPECT_GE(f.interval.deviance_at_filter, 0.0);
     }
     return;
   }
@@ -255,7 +255,7 @@ TEST(Diagnosis, FindsAnImuClockDrift) {
   expect_gain(r);
   // The model is right here: the filter and the profile agree (docs/diagnosis-intervals.md).
   for (const tools::Finding& f : r.findings)
-    if (f.interval_method == "profile_likelihood") EXPECT_TRUE(f.model_agrees) << f.deviance_at_filter;
+    if (f.interval.method == "profile_likelihood") EXPECT_TRUE(f.interval.model_agrees) << f.interval.deviance_at_filter;
 }
 
 // Coasting consistency, with and without a reference. A model that contains every error of the

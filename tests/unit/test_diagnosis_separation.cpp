@@ -358,7 +358,7 @@ TEST(DiagnosisSeparation, TheSuggestedCrabSeparatesATimeOffsetFromTheLeverArmAnd
   for (const tools::Finding& g : r2.findings)
     std::printf("separating flight: finding %s.%s %.5g +- %.3g %s, 95%% [%.5g, %.5g] (%s), z^2 %.1f, %s\n",
                 fsw::effect_info(g.effect).name, g.component.c_str(), g.estimate, g.sigma, g.unit.c_str(),
-                g.interval_lo, g.interval_hi, g.interval_method.c_str(), g.z2,
+                g.interval.lo, g.interval.hi, g.interval.method.c_str(), g.z2,
                 g.separable() ? "separable" : "a group");
   std::printf("times: flying the separating scenario %.1f s, diagnosing it %.1f s\n", t_fly - t_diagnose - t_separation,
               t_diagnose2);
@@ -366,10 +366,10 @@ TEST(DiagnosisSeparation, TheSuggestedCrabSeparatesATimeOffsetFromTheLeverArmAnd
   const tools::Finding& g = r2.findings.front();
   EXPECT_TRUE(g.separable());
   EXPECT_EQ(g.effect, fsw::Effect::kImuGnssTimeOffset);
-  EXPECT_EQ(g.interval_method, "profile_likelihood");
-  EXPECT_TRUE(g.interval_bounded);
-  EXPECT_LE(g.interval_lo, 0.01);
-  EXPECT_GE(g.interval_hi, 0.01);
+  EXPECT_EQ(g.interval.method, "profile_likelihood");
+  EXPECT_TRUE(g.interval.bounded);
+  EXPECT_LE(g.interval.lo, 0.01);
+  EXPECT_GE(g.interval.hi, 0.01);
 }
 
 }  // namespace

@@ -153,18 +153,23 @@ nlohmann::json separation_json(const tools::Separation& s, const std::vector<too
 }
 
 /// The report's interval cell: [lo, hi] (method), not bounded / not calibrated when so.
-std::string interval_cell(double lo, double hi, const std::string& method, bool bounded, bool agrees) {
+std::string interval_cell(const tools::ReportedInterval& iv) {
   char b[160];
-  std::snprintf(b, sizeof b, "[%.4g, %.4g] (%s%s%s)", lo, hi, method == "profile_likelihood" ? "profile" : "filter",
-                bounded ? "" : ", not bounded", agrees ? "" : ", NOT CALIBRATED");
+  std::snprintf(b, sizeof b, "[%.4g, %.4g] (%s%s%s)", iv.lo, iv.hi, iv.is_profile() ? "profile" : "filter",
+                iv.bounded ? "" : ", not bounded", iv.model_agrees ? "" : ", NOT CALIBRATED");
   return b;
 }
-std::string interval_cell(const tools::Finding& f) {
-  return interval_cell(f.interval_lo, f.interval_hi, f.interval_method, f.interval_bounded, f.model_agrees);
-}
-std::string interval_cell(const tools::GroupMember& m) {
-  return interval_cell(m.alone_interval_lo, m.alone_interval_hi, m.alone_interval_method, m.alone_interval_bounded,
-                       m.alone_model_agrees);
+
+/// The JSON interval_95 object (docs/diagnosis-intervals.md).
+nlohmann::json interval_json(const tools::ReportedInterval& iv) {
+  return {{"lo", iv.lo},
+          {"hi", iv.hi},
+          {"method", iv.method},
+          {"estimate", iv.estimate},
+          {"bounded", iv.bounded},
+          {"runs", iv.runs},
+          {"deviance_at_filter_estimate", iv.deviance_at_filter},
+          {"model_agrees", iv.model_agrees}};
 }
 
 /// A profile interval whose filter estimate it disagrees with (tools::ProfileInterval::model_agrees).
@@ -269,17 +274,9 @@ int run_diagnose() {
                         {"unit", fsw::effect_info(e).unit},
                         {"filter_estimate", x},
                         {"filter_sigma", s},
-                        {"interval_95",
-                         {{"lo", pi.lo},
-                          {"hi", pi.hi},
-                          {"method", "profile_likelihood"},
-                          {"estimate", pi.estimate},
-                          {"bounded", pi.lo_bounded && pi.hi_bounded},
-                          {"runs", pi.runs},
-                          {"measurements", pi.measurements},
-                          {"deviance_at_filter_estimate", pi.deviance_at_filter},
-                          {"model_agrees", pi.model_agrees()}}},
+                        {"interval_95", interval_json(tools::reported_interval(pi))},
                         {"curve", {{"value", pi.theta}, {"deviance", pi.deviance}}}});
+    profiles.back()["interval_95"]["measurements"] = pi.measurements;
   }
   // The manoeuvre that separates each confounded group (docs/diagnosis-separation.md).
   const tools::FlownScenario flown = tools::scenario_from_sidecar(opt.log);
@@ -338,15 +335,7 @@ int run_diagnose() {
                        {"alone_estimate", m.alone_estimate},
                        {"alone_sigma", m.alone_sigma},
                        {"alone_statistic", m.alone_z2},
-                       {"alone_interval_95",
-                        {{"lo", m.alone_interval_lo},
-                         {"hi", m.alone_interval_hi},
-                         {"method", m.alone_interval_method},
-                         {"estimate", m.alone_profile_estimate},
-                         {"bounded", m.alone_interval_bounded},
-                         {"runs", m.alone_profile_runs},
-                         {"deviance_at_filter_estimate", m.alone_deviance_at_filter},
-                         {"model_agrees", m.alone_model_agrees}}},
+                       {"alone_interval_95", interval_json(m.alone_interval)},
                        {"unit", m.unit},
                        {"prior_sigma", m.prior_sigma},
                        {"prior_z", m.prior_z},
@@ -361,15 +350,7 @@ int run_diagnose() {
                         {"p_value", f.p_value},
                         {"threshold", f.threshold_z2},
                         {"separable", f.separable()},
-                        {"interval_95",
-                         {{"lo", f.interval_lo},
-                          {"hi", f.interval_hi},
-                          {"method", f.interval_method},
-                          {"estimate", f.profile_estimate},
-                          {"bounded", f.interval_bounded},
-                          {"runs", f.profile_runs},
-                          {"deviance_at_filter_estimate", f.deviance_at_filter},
-                          {"model_agrees", f.model_agrees}}},
+                        {"interval_95", interval_json(f.interval)},
                         {"filter_interval_95", {f.estimate - 1.959963984540054 * f.sigma, f.estimate + 1.959963984540054 * f.sigma}},
                         {"confounded_with", cw},
                         {"group", group}});
@@ -438,16 +419,16 @@ int run_diagnose() {
       std::printf("finding: %s%s%s = %.4g +- %.3g %s (z^2 %.1f, p %.2g)\n", fsw::effect_info(f.effect).name,
                   f.component.empty() ? "" : ".", f.component.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.z2,
                   f.p_value);
-      std::printf("  95%% interval [%.4g, %.4g] %s (%s%s)\n", f.interval_lo, f.interval_hi, f.unit.c_str(),
-                  f.interval_method.c_str(), f.interval_bounded ? "" : ", not bounded within the range searched");
-      if (!f.model_agrees) print_disagreement(f.deviance_at_filter);
+      std::printf("  95%% interval [%.4g, %.4g] %s (%s%s)\n", f.interval.lo, f.interval.hi, f.unit.c_str(),
+                  f.interval.method.c_str(), f.interval.bounded ? "" : ", not bounded within the range searched");
+      if (!f.interval.model_agrees) print_disagreement(f.interval.deviance_at_filter);
       continue;
     }
     std::printf("finding: a group this data cannot separate (z^2 %.1f, %d dof, p %.2g); the cause is one of (or a mix "
                 "of):\n", f.z2, f.dof, f.p_value);
     for (const tools::GroupMember& m : f.group)
       std::printf("  %-26s alone %.4g +- %.3g %s, 95%% %s = %+.1f prior sigma, plausibility %.2f, rho %+.4f\n",
-                  m.name.c_str(), m.alone_estimate, m.alone_sigma, m.unit.c_str(), interval_cell(m).c_str(), m.prior_z,
+                  m.name.c_str(), m.alone_estimate, m.alone_sigma, m.unit.c_str(), interval_cell(m.alone_interval).c_str(), m.prior_z,
                   m.plausibility, m.correlation);
     const tools::Separation& sp = seps[fi];
     if (sp.predicted)
@@ -518,15 +499,15 @@ int run_diagnose() {
         for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
         md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | "
            << (f.separable() ? fmt(f.estimate) : "group, below") << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "")
-           << " | " << f.unit << " | " << interval_cell(f) << " | " << fmt(f.z2, "%.1f")
+           << " | " << f.unit << " | " << interval_cell(f.interval) << " | " << fmt(f.z2, "%.1f")
            << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
            << " | " << fmt(f.p_value, "%.2g") << " | " << cw << " |\n";
       }
       md << "\n";
       bool disagree = false;
       for (const tools::Finding& f : r.findings) {
-        disagree = disagree || !f.model_agrees;
-        for (const tools::GroupMember& m : f.group) disagree = disagree || !m.alone_model_agrees;
+        disagree = disagree || !f.interval.model_agrees;
+        for (const tools::GroupMember& m : f.group) disagree = disagree || !m.alone_interval.model_agrees;
       }
       if (disagree)
         md << "**Not calibrated** (marked above): the filter's estimate lies where the profile likelihood's deviance "
@@ -544,7 +525,7 @@ int run_diagnose() {
               "|---|---|---|---|---|---|---|---|\n";
         for (const tools::GroupMember& m : f.group)
           md << "| " << m.name << " | " << fmt(m.alone_estimate) << " | " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
-             << " | " << interval_cell(m) << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
+             << " | " << interval_cell(m.alone_interval) << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
              << fmt(m.correlation, "%+.4f") << " |\n";
         md << "\n";
         const std::size_t fi = static_cast<std::size_t>(&f - r.findings.data());

@@ -739,8 +739,8 @@ struct Group {
 void set_group_plausibility(std::vector<GroupMember>& group) {
   double sum = 0.0;
   for (GroupMember& m : group) {
-    const bool profile = m.alone_interval_method == "profile_likelihood" && m.alone_model_agrees;
-    const double x = profile ? m.alone_profile_estimate : m.alone_estimate;
+    const bool profile = m.alone_interval.is_profile() && m.alone_interval.model_agrees;
+    const double x = profile ? m.alone_interval.estimate : m.alone_estimate;
     m.prior_z = m.prior_sigma > 0.0 ? x / m.prior_sigma : 0.0;
     sum += std::exp(-0.5 * m.prior_z * m.prior_z);
   }

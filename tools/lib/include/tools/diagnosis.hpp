@@ -223,6 +223,26 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
 /// b.innovations' log_likelihood and common.
 void compare_likelihood(DiagnosisRun& a, DiagnosisRun& b);
 
+/// A reported 95% interval (catalogue units, docs/diagnosis-intervals.md).
+struct ReportedInterval {
+  double lo = 0.0, hi = 0.0;
+  /// "profile_likelihood" (2 (l_max - l) <= 3.84 over the whole recording) or "filter" (the
+  /// filter's estimate +- 1.96 sigma).
+  std::string method = "filter";
+  double estimate = 0.0;  ///< the profile's maximum (method "filter": the filter's estimate)
+  /// false: the likelihood did not fall by 3.84 within the range searched on one side (the
+  /// interval is then that range).
+  bool bounded = true;
+  int runs = 0;  ///< model runs of the profile
+  /// Profile intervals: the deviance at the filter's estimate, and whether it is at most
+  /// kModelAgreementDeviance (diagnosis_intervals.hpp). false: the filter and the profile disagree,
+  /// the model does not describe the component's effect on the data, and the interval is reported
+  /// as not calibrated.
+  double deviance_at_filter = 0.0;
+  bool model_agrees = true;
+  bool is_profile() const { return method == "profile_likelihood"; }
+};
+
 /// One member of a confounded group (Finding::group).
 struct GroupMember {
   std::string name;  ///< "effect.component"
@@ -242,18 +262,11 @@ struct GroupMember {
   /// priors, given that the data fit each alone equally well (prior only: not a probability that
   /// the data establish).
   double plausibility = 0.0;
-  /// The 95% interval of the value this member alone would need (catalogue units), as a separable
-  /// finding's (Finding::interval_*): the profile likelihood of the member alone on top of the
-  /// model at the lead's selection ("profile_likelihood"), or alone_estimate +- 1.96 alone_sigma
-  /// ("filter") where there is no profile. prior_z and plausibility use the profile's maximum when
+  /// The 95% interval of the value this member alone would need: the profile likelihood of the
+  /// member alone on top of the model at the lead's selection, or alone_estimate +- 1.96
+  /// alone_sigma where there is no profile. prior_z and plausibility use the profile's maximum when
   /// there is one and the filter agrees with it.
-  double alone_interval_lo = 0.0, alone_interval_hi = 0.0;
-  std::string alone_interval_method = "filter";
-  double alone_profile_estimate = 0.0;
-  bool alone_interval_bounded = true;
-  int alone_profile_runs = 0;
-  double alone_deviance_at_filter = 0.0;
-  bool alone_model_agrees = true;
+  ReportedInterval alone_interval;
 };
 
 struct Finding {
@@ -280,21 +293,8 @@ struct Finding {
   /// The model the lead was selected on (indices into diagnosis_candidates(), the baseline's
   /// included, the lead not): where each group member's "alone" value is measured.
   std::vector<int> selection_model;
-  /// The 95% interval (catalogue units, docs/diagnosis-intervals.md): interval_method
-  /// "profile_likelihood" (2 (l_max - l) <= 3.84 over the whole recording, its maximum
-  /// profile_estimate; a group: its lead's alone interval) or "filter" (estimate +- 1.96 sigma). interval_bounded: false when the
-  /// likelihood did not fall by 3.84 within the range searched (the interval is then that range).
-  double interval_lo = 0.0, interval_hi = 0.0;
-  std::string interval_method = "filter";
-  double profile_estimate = 0.0;
-  bool interval_bounded = true;
-  int profile_runs = 0;
-  /// Profile intervals: the deviance at the filter's estimate, and whether it is at most
-  /// kModelAgreementDeviance (diagnosis_intervals.hpp). false: the filter and the profile disagree,
-  /// the model does not describe this component's effect on the data, and the interval is reported
-  /// as not calibrated (docs/diagnosis-intervals.md).
-  double deviance_at_filter = 0.0;
-  bool model_agrees = true;
+  /// The 95% interval (a group: its lead's alone interval).
+  ReportedInterval interval;
 };
 
 /// Sets each member's prior_z (from its profile maximum where the member's interval is a profile

@@ -29,6 +29,9 @@ struct ProfileInterval {
   int runs = 0;             ///< model runs spent
   int measurements = 0;     ///< scalar measurements common to every run (the likelihood's support)
   int gated = 0;            ///< observations the gate rejected at the estimate, left out of every run
+  /// Runs left out: their flight software used fewer than kProfileMinShare of the measurements of
+  /// the run at the filter's estimate (no likelihood of the same data); the search stops there.
+  int incomparable = 0;
   std::vector<double> theta, deviance;  ///< the curve: 2 (l_max - l(theta)), sorted by theta
   /// The deviance at the filter's estimate x (a point of the curve). Where the model describes the
   /// data, the forward filter and the profile estimate the same thing and x lies near the maximum
@@ -52,6 +55,15 @@ inline bool ProfileInterval::model_agrees() const { return deviance_at_filter <=
 /// of deviance, a step in l(theta) at the truth that pushed the time-offset profile 2-4 ms off for
 /// positive offsets); 10 s later the difference was below 0.5.
 inline constexpr double kProfileBurnIn_s = 10.0;
+
+/// A profile run counts only if its flight software used at least this share of the measurements
+/// the run at the filter's estimate used (ProfileInterval::incomparable).
+inline constexpr double kProfileMinShare = 0.9;
+
+/// The filter's interval, x +- 1.96 s.
+ReportedInterval filter_interval(double x, double s);
+/// A profile interval as reported.
+ReportedInterval reported_interval(const ProfileInterval& pi);
 
 /// True when a component can be held fixed at a value (every effect except the delay scales).
 bool profile_supported(fsw::Effect e);
