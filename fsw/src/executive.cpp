@@ -95,6 +95,12 @@ Status Executive<Layout>::tick(const FrameInput& in, FrameOutput& out) {
     if (add != Status::kOk) continue;  // frame not complete yet
 
     const FrameIncrement& inc = builder_.frame();
+    // A frame is 1 / nav_rate_hz of IMU time (imu_samples_per_frame samples at the IMU's rate). Far
+    // from it, the configuration does not match the IMU, and every rate derived from nav_rate_hz
+    // (the 1 Hz group's schedule, the noise per frame) is wrong: counted, not corrected. Seen: a
+    // 200 Hz IMU with the 1 kHz default of 5 samples per frame gave 25 ms frames and an "1 Hz"
+    // EKF step every 5 s, without a word.
+    if (std::abs(inc.dt_s * cfg_.nav_rate_hz - 1.0) > 0.1) ++health_.frame_rate_mismatch;
     const Vec3 v_before = ins_.state().vel_enu_mps;
     if (ins_.step(inc) != Status::kOk || transition_[acc_].accumulate(inc, ins_.state()) != Status::kOk) {
       ++health_.fsw_errors;

@@ -30,7 +30,7 @@ using Policy = std::function<bool(const fsw::FlightApp<fsw::Layout24Full>&, long
 
 /// Flies 12 s of the default scenario (the sensor stream of Monte Carlo run 0, given start) through the flight
 /// application; inline = true runs the 1 Hz group inside on_imu, else as the policy says.
-Flight fly(bool inline_group, const Policy& policy, int latency_frames = 10) {
+Flight fly(bool inline_group, const Policy& policy, int latency_frames = 10, int imu_samples_per_frame = 0) {
   sim::Scenario sc;
   sc.duration_s = 12.0;
   const sim::TruthTrack truth = sim::TruthTrack::generate(sc);
@@ -43,6 +43,7 @@ Flight fly(bool inline_group, const Policy& policy, int latency_frames = 10) {
   fsw::FlightAppConfig cfg = tools::flight_app_config(sc, mc);
   cfg.exec.ekf_group_inline = inline_group;
   cfg.exec.ekf_latency_frames = latency_frames;
+  if (imu_samples_per_frame > 0) cfg.exec.imu_samples_per_frame = imu_samples_per_frame;
   auto app = std::make_unique<fsw::FlightApp<fsw::Layout24Full>>();
   EXPECT_EQ(app->init(cfg), fsw::Status::kOk);
   fsw::InputEvent ev;
@@ -153,4 +154,18 @@ TEST(RateGroups, LatencyMustFitTheEkfPeriod) {
   }
   cfg.exec.ekf_latency_frames = cfg.exec.frames_per_ekf - 1;
   EXPECT_EQ(app->init(cfg), fsw::Status::kOk);
+}
+
+// The configuration must match the IMU: imu_samples_per_frame samples make one navigation frame of
+// 1 / nav_rate_hz. A mismatch (the coverage study once flew a 200 Hz IMU with the 1 kHz default of
+// 5 samples per frame: 25 ms frames and an "1 Hz" EKF every 5 s) is counted on every frame, not
+// taken silently; the matching configuration counts none.
+TEST(RateGroups, AFrameRateThatDoesNotMatchTheImuIsCounted) {
+  const auto inline_policy = [](const auto&, long, long) { return true; };
+  const Flight ok = fly(true, inline_policy);
+  EXPECT_GT(ok.health.nav_frames, 2000u);
+  EXPECT_EQ(ok.health.frame_rate_mismatch, 0u);
+  const Flight wrong = fly(true, inline_policy, 10, 2);  // the default scenario's IMU is 1 kHz: 2 ms frames
+  EXPECT_GT(wrong.health.nav_frames, 5000u);
+  EXPECT_EQ(wrong.health.frame_rate_mismatch, wrong.health.nav_frames);
 }

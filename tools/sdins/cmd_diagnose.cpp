@@ -12,6 +12,7 @@
 #include "tools/interrupt.hpp"
 #include "tools/output_file.hpp"
 #include "tools/diagnosis.hpp"
+#include "tools/fsw_report.hpp"
 #include "tools/flight_config.hpp"
 #include "tools/diagnosis_intervals.hpp"
 #include "tools/diagnosis_separation.hpp"
@@ -412,6 +413,7 @@ int run_diagnose() {
     std::printf("; position %.2f m, velocity %.3f m/s%s RMS", r.base.nav.pos_rms_m, r.base.nav.vel_rms_mps,
                 heading_text(r.base.nav).c_str());
   std::printf("\n");
+  tools::print_configuration_warnings(r.base.exec_health);
   if (r.findings.empty()) std::printf("no finding (threshold z^2 %.2f over %d components)\n", r.threshold_z2, r.tested);
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
     const tools::Finding& f = r.findings[fi];

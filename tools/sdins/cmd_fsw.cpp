@@ -10,6 +10,7 @@
 #include "tools/flight_config.hpp"
 #include "hal/can_bus.hpp"
 #include "tools/hil.hpp"
+#include "tools/fsw_report.hpp"
 #include "tools/interrupt.hpp"
 #include "tools/output_file.hpp"
 
@@ -84,6 +85,7 @@ int run_fsw() {
               "imu_time_gaps=%u gnss_stale=%u pr_used=%u pr_rejected=%u overruns=%u worst_tick_s=%.6f fsw_errors=%u\n",
               e.ticks, e.nav_frames, e.ekf_runs, e.ekf_updates, e.ekf_without_gnss, e.imu_rejected, e.imu_time_gaps,
               e.gnss_stale, e.pr_used, e.pr_rejected, e.overruns, e.worst_tick_s, e.fsw_errors);
+  tools::print_configuration_warnings(e);
   std::printf("frames: received=%llu data=%llu imu=%llu imu_delivered=%llu control=%llu control_rejected=%llu "
               "foreign_acks=%llu acks_sent=%llu\n",
               static_cast<unsigned long long>(r.frames_received), static_cast<unsigned long long>(r.data_frames),

@@ -93,6 +93,7 @@ struct ExecutiveConfig {
   X(std::uint32_t, imu_rejected, "non-finite or non-positive dt samples, not used")                 \
   X(std::uint32_t, imu_short_ticks, "ticks with fewer samples than imu_samples_per_frame")          \
   X(std::uint32_t, imu_time_gaps, "consecutive samples further apart than 1.5 dt")                  \
+  X(std::uint32_t, frame_rate_mismatch, "frames whose IMU time differs from 1/nav_rate_hz by > 10%")  \
   X(std::uint32_t, gnss_epochs, "raw-converted GNSS epochs received")                               \
   X(std::uint32_t, gnss_stale, "epochs too old when the EKF could use them")                        \
   X(std::uint32_t, gnss_replaced, "epochs overwritten by a newer one before use")                   \

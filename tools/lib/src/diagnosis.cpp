@@ -661,6 +661,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
       if (a != b) run.correlation(a, b) = d > 0.0 ? P(c.state, sb) / d : 0.0;
     }
   }
+  run.exec_health = app->executive().health();
   return run;
 }
 

@@ -95,6 +95,13 @@ json fsw_summary_json(const hal::FswNode& node) {
   return j;
 }
 
+void print_configuration_warnings(const fsw::ExecutiveHealth& e) {
+  if (e.frame_rate_mismatch > 0)
+    std::printf("WARNING: %u of %u navigation frames were not 1/nav_rate_hz of IMU time: imu_samples_per_frame does "
+                "not match the IMU's rate, and the rates derived from nav_rate_hz are wrong (docs/faults.md)\n",
+                e.frame_rate_mismatch, e.nav_frames);
+}
+
 void print_fsw_summary(const hal::FswNode& node) {
   const hal::FswNodeSummary& s = node.summary();
   const fsw::FlightAppHealth& a = node.app_health();
@@ -123,6 +130,7 @@ void print_fsw_summary(const hal::FswNode& node) {
               "overruns %u; fsw errors %u; covariance repairs %u; resets %u\n",
               e.ekf_runs, e.ekf_updates, e.ekf_without_gnss, e.pr_used, e.pr_rejected, e.prr_used, e.prr_rejected,
               e.overruns, e.fsw_errors, e.ekf.cov_repairs, e.ekf.resets);
+  print_configuration_warnings(e);
   if (e.pvt_received > 0)
     std::printf("GNSS solutions: %u received, %u stale, %u replaced, %u unused; position used/gated %u/%u, velocity "
                 "used/gated %u/%u\n",

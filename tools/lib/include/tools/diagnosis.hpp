@@ -212,6 +212,7 @@ struct DiagnosisRun {
   /// The observations the innovation gate rejected: (GNSS epoch frame, PRN; 0 for a GNSS solution),
   /// the data selection a profile likelihood holds fixed (diagnosis_intervals.cpp).
   std::vector<std::pair<std::uint64_t, std::uint8_t>> gated;
+  fsw::ExecutiveHealth exec_health{};  ///< the flight software's counters at the end of the run
 };
 
 /// Runs the diagnosis model on the data with the given candidates active. with_outages: GNSS is

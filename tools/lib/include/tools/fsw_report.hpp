@@ -24,5 +24,7 @@ nlohmann::json can_rx_json(const hal::CanRxHealth& h);
 std::string digest_hex(std::uint64_t d);
 /// Prints the summary's key lines to stdout.
 void print_fsw_summary(const hal::FswNode& node);
+/// A WARNING line per configuration mismatch the counters show (frame_rate_mismatch), none when clean.
+void print_configuration_warnings(const fsw::ExecutiveHealth& e);
 
 }  // namespace tools
