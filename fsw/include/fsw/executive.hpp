@@ -93,7 +93,7 @@ struct ExecutiveConfig {
   X(std::uint32_t, imu_rejected, "non-finite or non-positive dt samples, not used")                 \
   X(std::uint32_t, imu_short_ticks, "ticks with fewer samples than imu_samples_per_frame")          \
   X(std::uint32_t, imu_time_gaps, "consecutive samples further apart than 1.5 dt")                  \
-  X(std::uint32_t, frame_rate_mismatch, "frames whose IMU time differs from 1/nav_rate_hz by > 10%")  \
+  X(std::uint32_t, frame_rate_mismatch, "1 s windows of frames whose IMU time is off by > 10%")       \
   X(std::uint32_t, gnss_epochs, "raw-converted GNSS epochs received")                               \
   X(std::uint32_t, gnss_stale, "epochs too old when the EKF could use them")                        \
   X(std::uint32_t, gnss_replaced, "epochs overwritten by a newer one before use")                   \
@@ -256,6 +256,8 @@ class Executive {
   std::uint32_t apply_frame_ = 0;
   bool late_counted_ = false;
   bool have_last_sample_ = false;
+  int window_frames_ = 0;      ///< frames in the current rate-check window (frame_rate_mismatch)
+  double window_imu_s_ = 0.0;  ///< their IMU time (the samples' own dt)
   double last_sample_t_s_ = 0.0;
   Vec3 last_accel_enu_mps2_ = Vec3::Zero();
   EkfOutput<Layout> ekf_output_{};

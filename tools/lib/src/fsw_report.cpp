@@ -97,9 +97,10 @@ json fsw_summary_json(const hal::FswNode& node) {
 
 void print_configuration_warnings(const fsw::ExecutiveHealth& e) {
   if (e.frame_rate_mismatch > 0)
-    std::printf("WARNING: %u of %u navigation frames were not 1/nav_rate_hz of IMU time: imu_samples_per_frame does "
-                "not match the IMU's rate, and the rates derived from nav_rate_hz are wrong (docs/faults.md)\n",
-                e.frame_rate_mismatch, e.nav_frames);
+    std::printf("WARNING: %u one-second windows of navigation frames (nav_rate_hz frames each) were more than 10%% "
+                "off 1 s of IMU time: imu_samples_per_frame does not match the IMU's rate, and the rates derived "
+                "from nav_rate_hz are wrong (docs/faults.md)\n",
+                e.frame_rate_mismatch);
 }
 
 void print_fsw_summary(const hal::FswNode& node) {
