@@ -1,5 +1,6 @@
 #include "fsw/executive.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace fsw {
@@ -30,6 +31,8 @@ Status Executive<Layout>::init(const ExecutiveConfig& cfg, const NavState& initi
   late_counted_ = false;
   apply_frame_ = 0;
   have_last_sample_ = false;
+  rate_window_frames_ = std::max(1, static_cast<int>(std::lround(cfg.nav_rate_hz)));
+  rate_window_s_ = rate_window_frames_ / cfg.nav_rate_hz;
   window_frames_ = 0;
   window_imu_s_ = 0.0;
   last_accel_enu_mps2_.setZero();
@@ -105,8 +108,8 @@ Status Executive<Layout>::tick(const FrameInput& in, FrameOutput& out) {
     // sample intervals jitter (the walk's millisecond ticks: 4-6 ms samples at 200 Hz, a fifth of
     // its single-sample frames more than 10% off).
     window_imu_s_ += inc.dt_s;
-    if (++window_frames_ >= static_cast<int>(std::lround(cfg_.nav_rate_hz))) {
-      if (std::abs(window_imu_s_ * cfg_.nav_rate_hz / window_frames_ - 1.0) > 0.1) ++health_.frame_rate_mismatch;
+    if (++window_frames_ == rate_window_frames_) {
+      if (std::abs(window_imu_s_ - rate_window_s_) > 0.1 * rate_window_s_) ++health_.frame_rate_mismatch;
       window_frames_ = 0;
       window_imu_s_ = 0.0;
     }

@@ -326,6 +326,7 @@ int run_diagnose() {
   nlohmann::json findings = nlohmann::json::array();
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
     const tools::Finding& f = r.findings[fi];
+    const tools::ReportedInterval filter_iv = tools::filter_interval(f.estimate, f.sigma);
     nlohmann::json cw = nlohmann::json::array();
     for (const auto& c : f.confounded_with) cw.push_back({{"candidate", c.first}, {"correlation", c.second}});
     nlohmann::json group = nlohmann::json::array();
@@ -352,7 +353,7 @@ int run_diagnose() {
                         {"threshold", f.threshold_z2},
                         {"separable", f.separable()},
                         {"interval_95", interval_json(f.interval)},
-                        {"filter_interval_95", {f.estimate - 1.959963984540054 * f.sigma, f.estimate + 1.959963984540054 * f.sigma}},
+                        {"filter_interval_95", {filter_iv.lo, filter_iv.hi}},
                         {"confounded_with", cw},
                         {"group", group}});
     if (!f.separable()) findings.back()["separation"] = separation_json(seps[fi], trials, fi);

@@ -256,8 +256,12 @@ class Executive {
   std::uint32_t apply_frame_ = 0;
   bool late_counted_ = false;
   bool have_last_sample_ = false;
-  int window_frames_ = 0;      ///< frames in the current rate-check window (frame_rate_mismatch)
-  double window_imu_s_ = 0.0;  ///< their IMU time (the samples' own dt)
+  // The rate check (frame_rate_mismatch): a window of nav_rate_hz frames, 1 s of IMU time when the
+  // configuration matches the IMU (both set at init), and the current window's frames and IMU time.
+  int rate_window_frames_ = 1;
+  double rate_window_s_ = 1.0;
+  int window_frames_ = 0;
+  double window_imu_s_ = 0.0;
   double last_sample_t_s_ = 0.0;
   Vec3 last_accel_enu_mps2_ = Vec3::Zero();
   EkfOutput<Layout> ekf_output_{};

@@ -553,7 +553,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
         }
         if (o.outcome != fsw::InnovationOutcome::kUsed) continue;
         // Keys above the raw observations' (k < kMaxGnssChannels = 16).
-        run.scalars.push_back({(frame << 6) | (static_cast<std::uint64_t>(16 + i) << 1), o.innovation, o.variance});
+        run.scalars.push_back({DiagnosisRun::frame_key(frame) | (static_cast<std::uint64_t>(16 + i) << 1), o.innovation, o.variance});
         nis += o.innovation * o.innovation / o.variance;
         (i < 3 ? epos : evel) += o.innovation * o.innovation;
         ++(i < 3 ? npos : nvel);
@@ -561,7 +561,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     }
     for (int k = 0; k < rep.n_obs; ++k) {
       const fsw::ObservationInnovation& o = rep.obs[static_cast<std::size_t>(k)];
-      const std::uint64_t key = (frame << 6) | (static_cast<std::uint64_t>(k) << 1);
+      const std::uint64_t key = DiagnosisRun::frame_key(frame) | (static_cast<std::uint64_t>(k) << 1);
       if (o.pr_outcome == fsw::InnovationOutcome::kUsed) {
         run.scalars.push_back({key, o.pr_innovation_m, o.pr_variance_m2});
         epr += o.pr_innovation_m * o.pr_innovation_m;
@@ -976,7 +976,6 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
       f.estimate = res.extended.estimate[ua];
       f.sigma = res.extended.sigma[ua];
     } else {
-      set_group_plausibility(g.info);
       f.estimate = g.info.front().alone_estimate;
       f.sigma = g.info.front().alone_sigma;
       f.group = g.info;

@@ -16,7 +16,6 @@ using fsw::Effect;
 /// A run's log-likelihood contributions, sorted by measurement key, and when it initialised.
 struct Contributions {
   std::vector<std::pair<std::uint64_t, double>> terms;
-  bool initialised = false;
   double init_t_s = 0.0;  ///< GNSS time of the initialising fix
   std::size_t size() const { return terms.size(); }
   const std::pair<std::uint64_t, double>& operator[](std::size_t i) const { return terms[i]; }
@@ -28,7 +27,6 @@ Contributions contributions(const DiagnosisRun& run) {
   for (const DiagnosisRun::Scalar& s : run.scalars)
     c.terms.emplace_back(s.key, -0.5 * (std::log(2.0 * fsw::kPi * s.S) + s.nu * s.nu / s.S));
   std::sort(c.terms.begin(), c.terms.end());
-  c.initialised = run.initialised;
   c.init_t_s = run.init_t_s;
   return c;
 }
@@ -71,10 +69,10 @@ std::vector<double> common_log_likelihood(const std::vector<const Contributions*
   if (runs.empty()) return ll;
   double init_t_s = -1e300;
   for (const Contributions* r : runs) init_t_s = std::max(init_t_s, r->init_t_s);
-  // Keys are (GNSS frame << 6 | observation): the first key after the burn-in.
+  // The first key after the burn-in.
   const double first_t_s = init_t_s + kProfileBurnIn_s;
   const std::uint64_t first_key =
-      first_t_s <= 0.0 ? 0 : static_cast<std::uint64_t>(std::ceil(first_t_s * nav_rate_hz)) << 6;
+      first_t_s <= 0.0 ? 0 : DiagnosisRun::frame_key(static_cast<std::uint64_t>(std::ceil(first_t_s * nav_rate_hz)));
   std::vector<std::size_t> pos(runs.size(), 0);
   for (std::size_t r = 0; r < runs.size(); ++r)
     while (pos[r] < runs[r]->size() && (*runs[r])[pos[r]].first < first_key) ++pos[r];

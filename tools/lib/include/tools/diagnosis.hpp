@@ -205,9 +205,12 @@ struct DiagnosisRun {
   std::vector<std::vector<double>> est_trace, sigma_trace;  ///< [epoch][active]
   // Scalar innovations (key: epoch, observation, type) for the likelihood comparison.
   struct Scalar {
-    std::uint64_t key;
+    std::uint64_t key;  ///< frame_key(GNSS frame) | observation << 1 | (1 for a rate)
     double nu, S;
   };
+  /// The lowest key of a GNSS epoch's frame (round(t * nav_rate_hz)): the bits below hold the
+  /// observation (raw: its index < 16; solution axes 16-21) and the type.
+  static constexpr std::uint64_t frame_key(std::uint64_t frame) { return frame << 6; }
   std::vector<Scalar> scalars;
   /// The observations the innovation gate rejected: (GNSS epoch frame, PRN; 0 for a GNSS solution),
   /// the data selection a profile likelihood holds fixed (diagnosis_intervals.cpp).
