@@ -14,9 +14,13 @@ can::CodecStatus CanFswInput::push(const CanFrame& f, double rx_time_s) {
     ++foreign_acks_;
     return can::CodecStatus::kOk;
   }
-  ++data_frames_;
-  if (!f.extended && f.id == can::kIdImuSample) ++imu_frames_;
   const can::CodecStatus st = rx_.push(f, rx_time_s);
+  // Counted for the acknowledgement only when the identifier, length and CRC are right: another
+  // node's frames and damaged ones are the assembler's counted rejections, not the simulator's.
+  if (st == can::CodecStatus::kOk) {
+    ++data_frames_;
+    if (!f.extended && f.id == can::kIdImuSample) ++imu_frames_;
+  }
   drain();
   return st;
 }

@@ -12,6 +12,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 
 #include "hal/can_transports.hpp"
@@ -75,6 +76,14 @@ CanBusStatus SocketCanTransport::open(const std::string& iface) {
     return fail(CanBusStatus::kNoSupport, "setsockopt(CAN_RAW_FD_FRAMES): no CAN FD support");
   if (::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof on) < 0)
     return fail(CanBusStatus::kIoError, "setsockopt(SO_TIMESTAMP)");
+  // The kernel's count of frames dropped on this socket (receive buffer full): stats.queue_dropped.
+  if (::setsockopt(fd_, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on) < 0)
+    return fail(CanBusStatus::kIoError, "setsockopt(SO_RXQ_OVFL)");
+  // Room for a lockstep window plus other nodes' bursts: the default (net.core.rmem_default, about
+  // 200 frames) overflows. SO_RCVBUFFORCE needs CAP_NET_ADMIN; else SO_RCVBUF, capped at
+  // net.core.rmem_max. Not fatal: an overflow is counted all the same.
+  if (::setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &kSocketCanRxBufferBytes, sizeof kSocketCanRxBufferBytes) < 0)
+    (void)::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &kSocketCanRxBufferBytes, sizeof kSocketCanRxBufferBytes);
   ifreq ifr{};
   std::strncpy(ifr.ifr_name, iface.c_str(), IFNAMSIZ - 1);
   if (::ioctl(fd_, SIOCGIFINDEX, &ifr) < 0) return fail(CanBusStatus::kNoDevice, "interface " + iface);
@@ -137,7 +146,7 @@ CanBusStatus SocketCanTransport::receive(CanFrame& f, double timeout_s) {
   for (;;) {
     canfd_frame lf{};
     iovec iov{&lf, sizeof lf};
-    alignas(cmsghdr) char ctrl[CMSG_SPACE(sizeof(timeval))];
+    alignas(cmsghdr) char ctrl[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(std::uint32_t))];
     msghdr msg{};
     msg.msg_iov = &iov;
     msg.msg_iovlen = 1;
@@ -145,6 +154,12 @@ CanBusStatus SocketCanTransport::receive(CanFrame& f, double timeout_s) {
     msg.msg_controllen = sizeof ctrl;
     const ssize_t n = ::recvmsg(fd_, &msg, MSG_DONTWAIT);
     if (n >= 0) {
+      for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c))
+        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+          std::uint32_t dropped = 0;  // cumulative for the socket
+          std::memcpy(&dropped, CMSG_DATA(c), sizeof dropped);
+          stats.queue_dropped = dropped;
+        }
       bool unsupported = false;
       CanFrame g;
       if (!from_linux_frame(lf, static_cast<int>(n), g, unsupported)) {

@@ -45,7 +45,8 @@ struct CanBusStats {
   std::uint64_t own_dropped = 0;       ///< our own frames seen again (UDP multicast loop), dropped
   std::uint64_t malformed = 0;         ///< datagrams / kernel frames that are not a valid frame
   std::uint64_t unsupported = 0;       ///< remote and error frames (the protocol uses neither)
-  std::uint64_t queue_dropped = 0;     ///< loop: frames lost because a receiver's queue was full
+  std::uint64_t queue_dropped = 0;     ///< loop: frames lost because a receiver's queue was full; socketcan:
+                                       ///< frames the kernel dropped, this socket's buffer full (SO_RXQ_OVFL)
 };
 
 /// One transport backend (see the table above). CanBus owns one.
@@ -99,5 +100,7 @@ class CanBus {
 
 /// Send timeout of the socket transports [s].
 inline constexpr double kCanSendTimeout_s = 0.1;
+/// Receive buffer socketcan: asks for [bytes] (a CAN FD frame takes about 1 KiB of it in the kernel).
+inline constexpr int kSocketCanRxBufferBytes = 4 << 20;
 
 }  // namespace hal

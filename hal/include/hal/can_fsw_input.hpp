@@ -42,8 +42,8 @@ class CanFswInput {
   std::uint64_t control_frames() const { return control_frames_; }      ///< SIM_CONTROL frames obeyed (starts, repeats included; this run's end)
   std::uint64_t control_rejected() const { return control_rejected_; }  ///< SIM_CONTROL with bad length/CRC/content, or an end of another run
   std::uint64_t foreign_acks() const { return foreign_acks_; }          ///< FSW_ACK frames seen (ignored)
-  std::uint64_t data_frames() const { return data_frames_; }            ///< frames passed to the assembler
-  std::uint64_t imu_frames() const { return imu_frames_; }              ///< ... with the IMU_SAMPLE identifier
+  std::uint64_t data_frames() const { return data_frames_; }            ///< frames the assembler accepted (ID, length, CRC right)
+  std::uint64_t imu_frames() const { return imu_frames_; }              ///< ... IMU_SAMPLE frames among them
 
  private:
   void drain();

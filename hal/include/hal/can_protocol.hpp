@@ -185,8 +185,8 @@ enum FswAckFlag : std::uint8_t {
 /// FSW_ACK, flight software -> bus simulator: counts since the SIM_CONTROL start of run_id.
 struct FswAckFrame {
   std::uint32_t run_id = 0;        ///< 0: no run started yet
-  std::uint32_t imu_frames = 0;    ///< IMU_SAMPLE frames taken from the bus (delivered or rejected)
-  std::uint32_t frames = 0;        ///< data frames taken from the bus (all IDs, control frames excluded)
+  std::uint32_t imu_frames = 0;    ///< IMU_SAMPLE frames taken from the bus, length and CRC right (delivered or rejected on content)
+  std::uint32_t frames = 0;        ///< data frames with a known ID, right length and CRC (control frames excluded)
   std::uint32_t imu_delivered = 0; ///< IMU samples handed to the flight software
   std::uint32_t nav_frames = 0;    ///< navigation frames computed
   std::uint8_t flags = 0;          ///< FswAckFlag
