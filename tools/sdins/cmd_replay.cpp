@@ -2,6 +2,8 @@
 // a filter configuration that takes GNSS solutions (gnss.source = "pvt") on IMU and GNSS_PVT (in
 // time order, bad events counted and skipped) and writes a new log of the outputs. The same log
 // replayed twice gives the same digest; a log written by sil/fsw replays to that run's digest.
+// With --candump the input is a candump -L log of the CAN bus instead: its frames go through the
+// receive path of `sdins fsw` (hal::CanFswInput), so a recording of a HIL run replays to its digest.
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -9,8 +11,11 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "hal/can_fsw_input.hpp"
+#include "hal/can_log.hpp"
 #include "hal/fsw_node.hpp"
 #include "hal/lcm_log_sink.hpp"
+#include "tools/flight_config.hpp"
 #include "tools/fsw_report.hpp"
 #include "tools/interrupt.hpp"
 #include "tools/output_file.hpp"
@@ -21,6 +26,7 @@ struct Options {
   std::string in;
   FswRunOptions run;
   std::vector<double> outages;  ///< length, period, first (s after initialisation)
+  bool candump = false;
 } opt;
 }  // namespace
 
@@ -28,7 +34,11 @@ void register_replay(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "replay", "Re-run the flight software on a log's IMU, GNSS_RAW and GPS_ALMANAC channels; prints the summary and "
                 "the navigation digest, optionally writes a new log (inputs and outputs).");
-  sub->add_option("LOG", opt.in, "LCM log with the input channels")->required();
+  sub->add_option("LOG", opt.in, "LCM log with the input channels (with --candump: a candump -L log)")->required();
+  sub->add_flag("--candump", opt.candump,
+                "LOG is a candump -L log of the CAN bus (hal/can/sdins.dbc frames, e.g. `candump -L vcan0` beside "
+                "`sdins fsw`): the frames go through the receive path of `sdins fsw`, rejections counted as there, "
+                "receive times from the log's timestamps");
   add_fsw_run_options(sub, opt.run, "none");
   sub->add_option("--outages", opt.outages,
                   "withhold GNSS (raw epochs and solutions) for LENGTH s every PERIOD s from FIRST s after the "
@@ -37,9 +47,67 @@ void register_replay(CLI::App& app) {
       ->expected(3);
 }
 
+namespace {
+/// --candump: the bus recording's frames into hal::CanFswInput as `sdins fsw` receives them.
+int replay_candump(const sim::FilterConfig& filter) {
+  if (!opt.outages.empty()) throw std::runtime_error("--outages: not with --candump (it withholds LCM-log inputs)");
+  tools::require_raw_gnss(filter, "--filter-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
+  hal::CandumpReader reader;
+  if (!reader.open(opt.in)) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
+  hal::FswNode node;
+  std::string err;
+  if (!node.open(opt.run.node_config(filter), err)) throw std::runtime_error(err);
+  hal::CanFswInput in(node);
+  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
+  hal::CanFrame f;
+  std::string iface;
+  while (!tools::interrupted() && reader.next(f, iface)) in.push(f, f.timestamp_s);
+  if (!reader.error().empty()) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
+  if (reader.frames() == 0)  // docs/faults.md: nothing valid in the input is an error, not an empty success
+    throw std::runtime_error(opt.in + ": no valid candump frame in " + std::to_string(reader.lines()) + " lines");
+  const bool stopped = tools::interrupted();
+  if (stopped) {
+    node.abort();
+  } else {
+    in.finish();
+    if (!node.close(err)) throw std::runtime_error(err);
+  }
+  std::printf("replay: %s (candump), %d lines, %d frames, %d malformed lines; %llu data frames (%u rejected), %llu "
+              "SIM_CONTROL (%llu rejected), %llu FSW_ACK\n",
+              opt.in.c_str(), reader.lines(), reader.frames(), reader.bad_lines(),
+              static_cast<unsigned long long>(in.data_frames()), in.health().rejections(),
+              static_cast<unsigned long long>(in.control_frames()), static_cast<unsigned long long>(in.control_rejected()),
+              static_cast<unsigned long long>(in.foreign_acks()));
+  for (const std::string& p : reader.problems()) std::printf("  %s\n", p.c_str());
+  tools::print_fsw_summary(node);
+  if (stopped)
+    throw tools::Interrupted("replay stopped after " + std::to_string(reader.frames()) + " frames (the summary so far "
+                             "is above); no log or JSON written");
+  if (!opt.run.json.empty()) {
+    nlohmann::json j = tools::fsw_summary_json(node);
+    j["mode"] = "replay";
+    j["model"] = opt.run.model;
+    j["input_log"] = opt.in;
+    j["input_format"] = "candump";
+    j["filter_config"] = opt.run.filter_config;
+    j["candump"] = {{"lines", reader.lines()}, {"frames", reader.frames()}, {"malformed_lines", reader.bad_lines()}};
+    j["frames"] = {{"data", in.data_frames()},
+                   {"imu", in.imu_frames()},
+                   {"imu_delivered", in.imu_delivered()},
+                   {"control", in.control_frames()},
+                   {"control_rejected", in.control_rejected()},
+                   {"foreign_acks", in.foreign_acks()}};
+    j["assembler"] = tools::can_rx_json(in.health());
+    tools::write_json_file(opt.run.json, j);
+  }
+  return node.summary().initialised ? 0 : 2;
+}
+}  // namespace
+
 int run_replay() {
   tools::require_distinct({opt.run.log, opt.run.json}, {opt.in, opt.run.filter_config});
   const sim::FilterConfig filter = opt.run.filter();
+  if (opt.candump) return replay_candump(filter);
   const bool pvt = filter.gnss_source == sim::GnssSource::kPvt;
   hal::LcmReplayConfig rc;
   if (pvt) rc.gnss_pvt_channel = hal::kLcmChannelGnssPvt;
