@@ -541,4 +541,24 @@ TEST(CanBusSocketCan, TwoSocketsOnVcan0ExchangeFdFrames) {
   EXPECT_EQ(a.receive(g, 0.1), CanBusStatus::kTimeout);  // no own frames on SocketCAN
 }
 
+TEST(CanBusSocketCan, KernelDropsOfAFullReceiveBufferAreCounted) {
+  // More frames than the receiver's buffer holds: each one is either received or counted as dropped.
+  CanBus a, b;
+  const CanBusStatus st = a.open("socketcan:vcan0");
+  if (st == CanBusStatus::kNoSupport || st == CanBusStatus::kNoDevice)
+    GTEST_SKIP() << "SocketCAN unavailable (" << hal::to_string(st) << "): " << a.last_error();
+  ASSERT_EQ(st, CanBusStatus::kOk) << a.last_error();
+  ASSERT_EQ(b.open("socketcan:vcan0"), CanBusStatus::kOk) << b.last_error();
+  constexpr int kSent = 20000;  // about 5x what a 4 MiB buffer holds
+  const CanFrame f = fd_frame(0x030, 64, 3);
+  for (int i = 0; i < kSent; ++i) ASSERT_EQ(a.send(f), CanBusStatus::kOk) << i << ": " << a.last_error();
+  CanFrame g;
+  std::uint64_t received = 0;
+  while (b.receive(g, 0.2) == CanBusStatus::kOk) ++received;
+  ASSERT_EQ(a.send(f), CanBusStatus::kOk);  // the kernel reports the drop count with the next frame
+  ASSERT_EQ(b.receive(g, 2.0), CanBusStatus::kOk) << b.last_error();
+  EXPECT_GT(b.stats().queue_dropped, 0u);
+  EXPECT_EQ(received + b.stats().queue_dropped, static_cast<std::uint64_t>(kSent));
+}
+
 }  // namespace
