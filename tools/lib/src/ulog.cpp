@@ -197,7 +197,10 @@ class Parser {
       const std::uint16_t size = u16(at(pos));
       const std::uint64_t next = pos + kMessageHeaderBytes + size;
       const bool fits = next <= end;
-      if (!plausible_header(at(pos)) || !fits || !chain_ok(next, end, 1)) {
+      // The next message must at least start like one (a cut header or a message running past
+      // the end is the next one's damage, not this one's).
+      const bool followed = next >= end || next + kMessageHeaderBytes > end || plausible_header(at(next));
+      if (!plausible_header(at(pos)) || !fits || !followed) {
         const std::uint64_t r = resync(pos + 1, end);
         // A plausible last message that runs past the end of the file: the log was cut off.
         const bool cut = r == end && plausible_header(at(pos)) && !fits;
@@ -259,7 +262,7 @@ class Parser {
       case 'M': {
         InfoValue v;
         if (!key_value(b, size, 1, v)) return bad_info(msg_pos);
-        auto& parts = f_.multi_info[v.type + " " + v.key];
+        auto& parts = f_.multi_info[v.key];  // the parts' types differ (char[n] of each part's length)
         if (b[0] != 0 && !parts.empty()) {
           if (parts.back().size() + v.value.size() > (std::size_t{1} << 24)) return f_.damage.add(Damage::kLimit, msg_pos);
           parts.back().insert(parts.back().end(), v.value.begin(), v.value.end());

@@ -208,8 +208,9 @@ std::vector<GpsRow> read_gnss(const Topic& t, LineStats& st) {
 
 }  // namespace
 
-double UlogClockFit::gps_s(std::int64_t boot_us) const {
-  return static_cast<double>(gps0_us) * 1e-6 + offset_s + (1.0 + drift) * static_cast<double>(boot_us - boot0_us) * 1e-6;
+double UlogClockFit::nav_s(std::int64_t boot_us, std::int64_t origin_us) const {
+  return static_cast<double>(gps0_us - origin_us) * 1e-6 + offset_s +
+         (1.0 + drift) * static_cast<double>(boot_us - boot0_us) * 1e-6;
 }
 
 UlogClockFit fit_boot_to_gps(const std::vector<std::pair<std::int64_t, std::int64_t>>& pairs) {
@@ -643,6 +644,67 @@ double param(const ulog::File& f, const char* name) {
   return it == f.parameters.end() ? kNaN : it->second;
 }
 
+nlohmann::json time_fit_json(const UlogClockFit& clock, const UlogImportOptions& opt, double ekf2_delay_ms,
+                             std::int64_t last_utc_us) {
+  const double boot0_gps = clock.gps_s(clock.boot0_us);
+  return {
+      {"pairs", clock.pairs},
+      {"outliers", clock.outliers},
+      {"first_fix_boot_s", static_cast<double>(clock.boot0_us) * 1e-6},
+      {"first_fix_gps_week", static_cast<int>(std::floor(boot0_gps / 604800.0))},
+      {"first_fix_gps_tow_s", boot0_gps - 604800.0 * std::floor(boot0_gps / 604800.0)},
+      {"offset_s", clock.offset_s},
+      {"drift_ppm", clock.drift * 1e6},
+      {"fitted_drift_ppm", clock.fitted_drift * 1e6},
+      {"fitted_drift_sigma_ppm", std::isfinite(clock.drift_sigma) ? nlohmann::json(clock.drift_sigma * 1e6) : nlohmann::json(nullptr)},
+      {"drift_applied", clock.drift_significant},
+      {"residual_rms_ms", clock.residual_rms_s * 1e3},
+      {"residual_max_ms", clock.residual_max_s * 1e3},
+      {"gps_minus_utc_s", clock.gps_minus_utc_first_s},
+      {"leap_second_in_log", clock.gps_minus_utc_first_s != clock.gps_minus_utc_last_s},
+      {"leap_table_valid", last_utc_us / 1000000 < kLeapTableValidUntilUnix_s},
+      {"gnss_latency_applied_s", opt.gnss_latency_s},
+      {"px4_ekf2_gps_delay_ms", std::isfinite(ekf2_delay_ms) ? nlohmann::json(ekf2_delay_ms) : nlohmann::json(nullptr)},
+      {"definition", "GPS time = GPS(first pair) + offset + (1 + drift) (boot - boot of the first pair); pairs: "
+                     "(timestamp + timestamp_time_relative - latency, time_utc_usec + GPS-UTC) of the GNSS fixes"}};
+}
+
+RecordingStreams recording_streams(const Converted& c, const std::string& imu_source, const std::string& gnss_source,
+                                   const std::string& ref_source, const LineStats& gnss_lines) {
+  RecordingStreams r;
+  std::vector<double> t;
+  for (const hal::ImuRecord& x : c.imu) t.push_back(x.sample.t_s);
+  r.imu = summarize_stream("imu", imu_source, t);
+  t.clear();
+  for (const hal::GnssPvtSample& p : c.pvt) t.push_back(p.t_s);
+  r.gnss = summarize_stream("gnss", gnss_source, t);
+  const auto dup = gnss_lines.by_reason.find("duplicate epoch (same time_utc_usec)");
+  r.gnss.duplicates = dup == gnss_lines.by_reason.end() ? 0 : dup->second;
+  r.reference = summarize_stream("reference", ref_source, c.truth_t_s);
+  if (r.imu.samples > 0 && r.gnss.samples > 0)
+    r.imu_gnss_overlap_s = std::max(0.0, std::min(r.imu.t_last_s, r.gnss.t_last_s) - std::max(r.imu.t_first_s, r.gnss.t_first_s));
+  return r;
+}
+
+nlohmann::json imu_json(const Topic& it, const std::string& imu_name, const ImuReadStats& is, const StreamSummary& si,
+                        double vi_cov) {
+  return {{"topic", it.name()},
+          {"instance", it.instance()},
+          {"lines", is.lines.to_json()},
+          {"axes", "PX4 body FRD = body x forward, y right, z down (no change)"},
+          {"increments", imu_name == "vehicle_imu"
+                             ? "delta_angle / delta_velocity as logged, over delta_angle_dt ending at timestamp_sample"
+                             : "gyro_rad and accelerometer_m_s2 (means over the integration interval) times the "
+                               "interval since the previous sample, ending at timestamp"},
+          {"gaps", is.gaps},
+          {"longest_gap_s", is.longest_gap_s},
+          {"max_interval_mismatch_s", is.max_interval_mismatch_s},
+          {"max_accel_time_offset_s", is.max_accel_time_offset_s},
+          {"clipped_samples", is.clipped},
+          {"coverage", si.span_s > 0 ? is.covered_s / si.span_s : 0.0},
+          {"vehicle_imu_coverage", vi_cov}};
+}
+
 }  // namespace
 
 UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& opt) {
@@ -687,12 +749,12 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
   if (!imu.empty()) first_gps = std::min(first_gps, clock.gps_s(imu.front().boot_us));
   for (const GpsRow& r : gps) first_gps = std::min(first_gps, static_cast<double>(gps_us_from_utc_us(r.utc_us)) * 1e-6);
   const int week0 = static_cast<int>(std::floor(first_gps / 604800.0));
-  const double week0_s = 604800.0 * week0;
+  const std::int64_t week0_us = static_cast<std::int64_t>(week0) * kWeek_us;
 
   Converted c;
   for (const BootImu& b : imu) {
     hal::ImuRecord r = b.rec;
-    r.sample.t_s = clock.gps_s(b.boot_us) - week0_s;
+    r.sample.t_s = clock.nav_s(b.boot_us, week0_us);
     r.sample.dt_s = b.dt_boot_s * (1.0 + clock.drift);
     c.imu.push_back(r);
   }
@@ -701,12 +763,12 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
     const std::int64_t gus = gps_us_from_utc_us(g.utc_us);  // the receiver's own time of the fix
     p.gps_week = static_cast<int>(gus / kWeek_us);
     p.gps_tow_s = static_cast<double>(gus % kWeek_us) * 1e-6;
-    p.t_s = static_cast<double>(gus - static_cast<std::int64_t>(week0) * kWeek_us) * 1e-6;
+    p.t_s = static_cast<double>(gus - week0_us) * 1e-6;
     c.pvt.push_back(p);
   }
   for (const RefRow& r : ref) {
     c.truth.push_back(r);
-    c.truth_t_s.push_back(clock.gps_s(r.boot_us) - week0_s);
+    c.truth_t_s.push_back(clock.nav_s(r.boot_us, week0_us));
   }
   validate(c, is.lines, gnss_lines);
 
@@ -714,58 +776,12 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
   sum["time_scale"] = {{"gps_week0", week0},
                        {"definition", "t_s = GPS time in seconds since the start of GPS week " + std::to_string(week0) +
                                           " (= GPS time of week within that week)"}};
-  const double ekf2_delay_ms = param(f, "EKF2_GPS_DELAY");
-  const double boot0_gps = clock.gps_s(clock.boot0_us);
-  sum["time_fit"] = {
-      {"pairs", clock.pairs},
-      {"outliers", clock.outliers},
-      {"first_fix_boot_s", static_cast<double>(clock.boot0_us) * 1e-6},
-      {"first_fix_gps_week", static_cast<int>(std::floor(boot0_gps / 604800.0))},
-      {"first_fix_gps_tow_s", boot0_gps - 604800.0 * std::floor(boot0_gps / 604800.0)},
-      {"offset_s", clock.offset_s},
-      {"drift_ppm", clock.drift * 1e6},
-      {"fitted_drift_ppm", clock.fitted_drift * 1e6},
-      {"fitted_drift_sigma_ppm", std::isfinite(clock.drift_sigma) ? nlohmann::json(clock.drift_sigma * 1e6) : nlohmann::json(nullptr)},
-      {"drift_applied", clock.drift_significant},
-      {"residual_rms_ms", clock.residual_rms_s * 1e3},
-      {"residual_max_ms", clock.residual_max_s * 1e3},
-      {"gps_minus_utc_s", clock.gps_minus_utc_first_s},
-      {"leap_second_in_log", clock.gps_minus_utc_first_s != clock.gps_minus_utc_last_s},
-      {"leap_table_valid", gps.back().utc_us / 1000000 < kLeapTableValidUntilUnix_s},
-      {"gnss_latency_applied_s", opt.gnss_latency_s},
-      {"px4_ekf2_gps_delay_ms", std::isfinite(ekf2_delay_ms) ? nlohmann::json(ekf2_delay_ms) : nlohmann::json(nullptr)},
-      {"definition", "GPS time = GPS(first pair) + offset + (1 + drift) (boot - boot of the first pair); pairs: "
-                     "(timestamp + timestamp_time_relative - latency, time_utc_usec + GPS-UTC) of the GNSS fixes"}};
+  sum["time_fit"] = time_fit_json(clock, opt, param(f, "EKF2_GPS_DELAY"), gps.back().utc_us);
   UlogImportResult res;
-  std::vector<double> t;
-  for (const hal::ImuRecord& r : c.imu) t.push_back(r.sample.t_s);
-  res.streams.imu = summarize_stream("imu", it.name() + " instance " + std::to_string(it.instance()), t);
-  t.clear();
-  for (const hal::GnssPvtSample& p : c.pvt) t.push_back(p.t_s);
-  res.streams.gnss = summarize_stream("gnss", gt.name() + " instance " + std::to_string(gt.instance()), t);
-  res.streams.gnss.duplicates = gnss_lines.by_reason.count("duplicate epoch (same time_utc_usec)") != 0
-                                    ? gnss_lines.by_reason.at("duplicate epoch (same time_utc_usec)")
-                                    : 0;
-  res.streams.reference = summarize_stream("reference", rs.timeline, c.truth_t_s);
-  const StreamSummary &si = res.streams.imu, &sg = res.streams.gnss;
-  res.streams.imu_gnss_overlap_s =
-      std::max(0.0, std::min(si.t_last_s, sg.t_last_s) - std::max(si.t_first_s, sg.t_first_s)) * (si.samples && sg.samples ? 1 : 0);
+  res.streams = recording_streams(c, it.name() + " instance " + std::to_string(it.instance()),
+                                  gt.name() + " instance " + std::to_string(gt.instance()), rs.timeline, gnss_lines);
   sum["streams"] = res.streams.to_json();
-  sum["imu"] = {{"topic", it.name()},
-                {"instance", it.instance()},
-                {"lines", is.lines.to_json()},
-                {"axes", "PX4 body FRD = body x forward, y right, z down (no change)"},
-                {"increments", imu_name == "vehicle_imu"
-                                   ? "delta_angle / delta_velocity as logged, over delta_angle_dt ending at timestamp_sample"
-                                   : "gyro_rad and accelerometer_m_s2 (means over the integration interval) times the "
-                                     "interval since the previous sample, ending at timestamp"},
-                {"gaps", is.gaps},
-                {"longest_gap_s", is.longest_gap_s},
-                {"max_interval_mismatch_s", is.max_interval_mismatch_s},
-                {"max_accel_time_offset_s", is.max_accel_time_offset_s},
-                {"clipped_samples", is.clipped},
-                {"coverage", si.span_s > 0 ? is.covered_s / si.span_s : 0.0},
-                {"vehicle_imu_coverage", vi_cov}};
+  sum["imu"] = imu_json(it, imu_name, is, res.streams.imu, vi_cov);
   std::uint64_t no_vel = 0;
   for (const hal::GnssPvtSample& p : c.pvt) no_vel += p.has_velocity() ? 0 : 1;
   sum["gnss_pvt"] = {{"topic", gt.name()},

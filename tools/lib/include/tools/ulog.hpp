@@ -12,9 +12,9 @@
 //
 // Robustness (docs/faults.md): the reader never reads outside the file and never throws for
 // damaged content. A message is taken only when its type is known, its size is plausible for its
-// type and it ends where another plausible message (or the file / an appended segment) begins;
-// otherwise the bytes are skipped up to the next position where a chain of plausible messages
-// starts (or the next sync message) and the damage is counted with its reason and file offset.
+// type and it ends where another plausible message header (or the file / an appended segment)
+// begins; otherwise the bytes are skipped up to the next position where a chain of three
+// plausible messages starts, and the damage is counted with its reason and file offset.
 // Content errors (a malformed format, an info key without a type, a data message for an unknown
 // msg_id or of the wrong size) are counted and the message skipped. Only a file that is not a
 // ULog (short header, wrong magic) or that sets incompatible flag bits this reader does not know
@@ -154,7 +154,8 @@ struct File {
   std::array<std::uint64_t, 3> appended_offsets{};
   std::map<std::string, Format> formats;
   std::vector<InfoValue> info;                                   ///< 'I', in order
-  std::map<std::string, std::vector<std::vector<std::uint8_t>>> multi_info;  ///< 'M': key -> parts joined per entry
+  /// 'M': name -> entries, each the joined value bytes of a message and its continuations.
+  std::map<std::string, std::vector<std::vector<std::uint8_t>>> multi_info;
   std::map<std::string, double> parameters;   ///< 'P' of the definitions section (int32 and float)
   std::uint64_t parameter_changes = 0;        ///< 'P' in the data section (changes in flight)
   std::map<std::string, double> default_parameters;  ///< 'Q' (last value per name)

@@ -60,8 +60,11 @@ struct UlogClockFit {
   bool drift_significant = false;
   double residual_rms_s = 0.0, residual_max_s = 0.0;
   int gps_minus_utc_first_s = 0, gps_minus_utc_last_s = 0;
-  /// GPS seconds since the GPS epoch of a boot time (double: the offset from gps0 is kept apart).
-  double gps_s(std::int64_t boot_us) const;
+  /// GPS seconds since the GPS epoch of a boot time (about 0.2 us resolution at today's dates).
+  double gps_s(std::int64_t boot_us) const { return nav_s(boot_us, 0); }
+  /// GPS seconds since origin_us [us since the GPS epoch] of a boot time, without the loss of
+  /// precision of the large number (the navigation time scale: origin = the start of week0).
+  double nav_s(std::int64_t boot_us, std::int64_t origin_us) const;
 };
 
 /// Fits the clock to (boot time [us], UTC [us since 1970]) pairs; throws std::runtime_error
