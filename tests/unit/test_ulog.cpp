@@ -15,6 +15,7 @@
 #include "hal/lcm_channels.hpp"
 #include "hal/lcm_convert.hpp"
 #include "hal/lcm_log.hpp"
+#include "hal/time_tag_gate.hpp"
 #include "recordings.hpp"
 #include "tools/gps_utc.hpp"
 #include "tools/ulog.hpp"
@@ -419,6 +420,26 @@ TEST(UlogImport, AHandcraftedFlightLandsOnTheNavigationTimeScaleInTheProjectsFra
   const tools::UlogImportResult l = tools::import_ulog_file(f, opt);
   EXPECT_NEAR(l.streams.imu.t_first_s, tow0 + 0.1, 1e-9);
   EXPECT_NEAR(l.streams.gnss.t_first_s, tow0 + 0.2, 1e-9);
+  std::filesystem::remove(opt.log_path);
+}
+
+TEST(UlogImport, AWildTimeTagCostsOnlyItsOwnSample) {
+  Flight fl = make_flight();
+  // The 100th IMU message's timestamp with its top byte flipped (a bit error in the file).
+  tools::ulog::File f = tools::ulog::parse(fl.b.bytes);
+  const tools::ulog::Subscription* s = f.find("sensor_combined");
+  ASSERT_NE(s, nullptr);
+  std::vector<std::uint8_t> bytes = fl.b.bytes;
+  bytes[s->data[100].offset + 5] ^= 0x40;
+  f = tools::ulog::parse(bytes);
+  tools::UlogImportOptions opt;
+  opt.path = "wild.ulg";
+  opt.log_path = temp_path("wild.lcmlog");
+  const tools::UlogImportResult r = tools::import_ulog_file(f, opt);
+  EXPECT_EQ(r.summary["imu"]["lines"]["accepted"].get<int>(), 599);
+  EXPECT_EQ(r.summary["imu"]["lines"]["rejected"].get<int>(), 1);
+  EXPECT_EQ(r.summary["imu"]["lines"]["rejected_by_reason"].value(hal::to_string(hal::TimeTagRejection::kOutlier), 0), 1);
+  EXPECT_EQ(r.streams.imu.gaps, 1u);  // the interval over the lost sample
   std::filesystem::remove(opt.log_path);
 }
 

@@ -107,7 +107,8 @@ int run_replay() {
       continue;
     }
     node.on_event(in);
-    if (scoring && node.frame_completed()) {
+    // frame_completed() stays set until the next IMU event: score once per frame.
+    if (scoring && in.kind == fsw::InputEvent::Kind::kImu && node.frame_completed()) {
       scorer.on_frame(node.last_frame().nav, node.summary().init_t_s);
       if (node.last_frame().ekf_ran) scorer.on_ekf(node.last_frame().nav, node.summary().init_t_s, node.last_ekf_nav_sigma());
     }

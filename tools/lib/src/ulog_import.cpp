@@ -14,6 +14,7 @@
 #include "hal/lcm_channels.hpp"
 #include "hal/lcm_convert.hpp"
 #include "hal/lcm_log_sink.hpp"
+#include "hal/time_tag_gate.hpp"
 #include "tools/gps_utc.hpp"
 #include "tools/importers.hpp"
 
@@ -55,6 +56,30 @@ class Topic {
   const ulog::File& f_;
   const ulog::Subscription* s_;
 };
+
+/// The messages of a topic whose time tags pass the time-tag gate (hal::TimeTagGate: a wild time
+/// tag, e.g. a flipped bit, costs only its own message; a sustained jump is a new time base), in
+/// order. Every message is counted in st.lines, the rejected ones under their reason.
+std::vector<std::size_t> gated(const Topic& t, LineStats& st, double max_forward_s) {
+  hal::TimeTagGateConfig cfg;
+  cfg.max_forward_s = max_forward_s;
+  cfg.max_backward_s = 1.0;
+  cfg.strictly_increasing = true;
+  hal::TimeTagFilter<std::size_t> filter(cfg);
+  std::vector<std::size_t> out;
+  const auto accept = [&](std::size_t k) { out.push_back(k); };
+  const auto reject = [&](std::size_t k, hal::TimeTagRejection r) {
+    st.reject(k + 1, hal::to_string(r));
+  };
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    ++st.lines;
+    filter.push(static_cast<double>(t.sample_time_us(k)) * 1e-6, k, accept, reject);
+  }
+  filter.finish(accept, reject);
+  st.time_base_changes += filter.stats().new_bases;
+  st.last_time_jump = filter.stats().last_new_base_jump_s;
+  return out;
+}
 
 // ---------------------------------------------------------------------------------------------
 // What the log is
@@ -152,8 +177,7 @@ std::vector<GpsRow> read_gnss(const Topic& t, LineStats& st) {
   const ulog::Field *vn = t.field("vel_n_m_s"), *ve = t.field("vel_e_m_s"), *vd = t.field("vel_d_m_s");
   const ulog::Field *vok = t.field("vel_ned_valid"), *sacc = t.field("s_variance_m_s"), *nsat = t.field("satellites_used");
   std::int64_t last_utc = 0;
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    ++st.lines;
+  for (std::size_t k : gated(t, st, 10.0)) {
     const std::uint64_t line = k + 1;
     const int fx = static_cast<int>(t.get(k, &fix));
     const std::int64_t u = static_cast<std::int64_t>(t.u64(k, &utc));
@@ -309,10 +333,9 @@ std::vector<BootImu> read_sensor_combined(const Topic& t, ImuReadStats& st) {
   std::vector<BootImu> out;
   std::int64_t prev = 0;
   std::int32_t counter = 0;
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    ++st.lines.lines;
+  for (std::size_t k : gated(t, st.lines, 1.0)) {
     const std::uint64_t line = k + 1;
-    const std::int64_t ts = static_cast<std::int64_t>(t.u64(k, t.field("timestamp")));
+    const std::int64_t ts = t.sample_time_us(k);
     const double idt = t.get(k, &gdt) * 1e-6;
     const double rel = t.get(k, arel);
     if (std::isfinite(rel) && rel == 2147483647.0) {  // RELATIVE_TIMESTAMP_INVALID: no accelerometer sample
@@ -361,8 +384,7 @@ std::vector<BootImu> read_vehicle_imu(const Topic& t, ImuReadStats& st) {
   std::vector<BootImu> out;
   std::int64_t prev = 0;
   std::int32_t counter = 0;
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    ++st.lines.lines;
+  for (std::size_t k : gated(t, st.lines, 1.0)) {
     const std::uint64_t line = k + 1;
     const std::int64_t ts = t.sample_time_us(k);
     const double idt = t.get(k, &dadt) * 1e-6;
@@ -430,7 +452,8 @@ struct Series {
 };
 Series series(const Topic& topic, std::uint64_t& dropped) {
   Series s;
-  for (std::size_t k = 0; k < topic.size(); ++k) {
+  LineStats st;
+  for (std::size_t k : gated(topic, st, 10.0)) {
     const std::int64_t t = topic.sample_time_us(k);
     if (!s.t.empty() && t <= s.t.back()) {
       ++dropped;
@@ -439,6 +462,7 @@ Series series(const Topic& topic, std::uint64_t& dropped) {
     s.t.push_back(t);
     s.k.push_back(k);
   }
+  dropped += st.rejected;
   return s;
 }
 
