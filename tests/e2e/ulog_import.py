@@ -117,6 +117,50 @@ print(f"sitl: GNSS fixes within {worst:.3f} m of PX4's position estimate")
 info = run("log", "info", log)
 assert "reader rejections: 0" in info, info
 
+# The SITL log replayed and scored against PX4's estimate (docs/ulog.md, "Replay of a ULog"): static
+# alignment with thresholds for SITL's noisy IMU. Roll and pitch agree with PX4; the heading cannot
+# (SITL's IMU has no Earth rotation to gyrocompass), and the score shows it.
+probe = os.path.join(work, "sitl.toml")
+open(probe, "w").write("""name = "px4-sitl-probe"
+description = "PX4 SITL log: 250 Hz frames, GNSS fixes, static alignment"
+[executive]
+imu_samples_per_frame = 1
+nav_rate_hz = 250.0
+ekf_rate_hz = 5.0
+gnss_wait_s = 0.1
+max_gnss_age_s = 0.2
+[gnss]
+source = "pvt"
+pvt_max_quality = 5
+pvt_pos_sigma_floor_m = 0.5
+pvt_vel_sigma_floor_mps = 0.1
+[imu]
+arw_deg_per_rthr = 0.5
+vrw_mps_per_rthr = 0.1
+gyro_bias_sigma_degph = 100.0
+accel_bias_sigma_mg = 10.0
+gyro_bias_rw_radps_per_rts = 1e-4
+accel_bias_rw_mps2_per_rts = 1e-3
+[init]
+mode = "static"
+alignment_s = 5.0
+pos_sigma_m = 1.0
+vel_sigma_mps = 0.2
+roll_pitch_sigma_deg = 1.0
+heading_sigma_deg = 30.0
+static_max_rate_dev_dps = 2.0
+static_max_accel_dev_mps2 = 1.0
+static_max_speed_mps = 0.3
+""")
+score = os.path.join(work, "sitl_score.json")
+out = run("replay", log, "--filter-config", probe, "--outages", "5", "8", "2", "--score-json", score)
+print(out)
+assert "autopilot_estimate from vehicle_global_position+vehicle_attitude" in out, "the replay did not print the reference's label"
+sc = json.load(open(score))
+assert sc["attitude"]["roll"]["rms_deg"] < 0.2 and sc["attitude"]["pitch"]["rms_deg"] < 0.2, sc["attitude"]
+assert sc["attitude"]["heading"]["rms_deg"] > 90.0, "SITL's heading cannot come from gyrocompassing"
+assert sc["position"]["horizontal"]["rms_m"] < 0.5 and sc["outages"]["complete"] == 2, sc
+
 # A damaged copy: garbage inside, bytes flipped, cut short.
 raw = bytearray(open(logs["sample_px4_events"], "rb").read())
 rng = random.Random(5)
