@@ -458,6 +458,30 @@ TEST(UlogImport, ALogWithoutGnssTimeIsRefusedWithTheReason) {
   EXPECT_FALSE(std::filesystem::exists(opt.log_path));
 }
 
+TEST(UlogImport, FixesWithoutAnEllipsoidalHeightAreRefusedWithTheReason) {
+  UlogBuilder b = small_log(50);
+  b.format("vehicle_gps_position:uint64_t timestamp;uint64_t time_utc_usec;double latitude_deg;double longitude_deg;"
+           "double altitude_msl_m;double altitude_ellipsoid_m;float s_variance_m_s;float eph;float epv;uint8_t fix_type;"
+           "uint8_t[7] _padding0;");
+  b.add(0, 9, "vehicle_gps_position");
+  for (int k = 0; k < 5; ++k)
+    b.data(9, Pack().u64(1000000 + 50000 * static_cast<std::uint64_t>(k)).u64(1710763200000000ULL + 50000 * k).f64(47.0)
+                  .f64(8.0).f64(450.0).f64(0.0).f32(0.3f).f32(1.5f).f32(2.5f).u8(3).bytes);
+  const tools::ulog::File f = tools::ulog::parse(b.bytes);
+  ASSERT_EQ(f.damage.total(), 0u);
+  tools::UlogImportOptions opt;
+  opt.path = "msl_only.ulg";
+  opt.log_path = temp_path("msl_only.lcmlog");
+  try {
+    tools::import_ulog_file(f, opt);
+    FAIL() << "imported fixes without an ellipsoidal height";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no ellipsoidal height (alt_ellipsoid 0 beside an MSL altitude): 5"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(opt.log_path));
+}
+
 // ---------------------------------------------------------------------------------------------
 // The two real logs (../shared/data/px4-ulog; skipped without them)
 

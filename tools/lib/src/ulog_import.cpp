@@ -172,6 +172,7 @@ std::vector<GpsRow> read_gnss(const Topic& t, LineStats& st) {
   const double pos_scale = lat_deg != nullptr ? fsw::kDegToRad : 1e-7 * fsw::kDegToRad;
   const double h_scale = lat_deg != nullptr ? 1.0 : 1e-3;
   const ulog::Field* lat = lat_deg != nullptr ? lat_deg : lat_e7;
+  const ulog::Field* msl = lat_deg != nullptr ? t.field("altitude_msl_m") : t.field("alt");
   const ulog::Field &utc = t.need("time_utc_usec"), &fix = t.need("fix_type"), &eph = t.need("eph"), &epv = t.need("epv");
   const ulog::Field* rel = t.field("timestamp_time_relative");
   const ulog::Field *vn = t.field("vel_n_m_s"), *ve = t.field("vel_e_m_s"), *vd = t.field("vel_d_m_s");
@@ -218,6 +219,12 @@ std::vector<GpsRow> read_gnss(const Topic& t, LineStats& st) {
     p.n_sat = std::isfinite(ns) ? static_cast<int>(ns) : 0;
     if (!p.llh.allFinite() || !(e > 0.0) || !(v > 0.0)) {
       st.reject(line, "non-finite position or accuracy not positive");
+      continue;
+    }
+    // A driver that does not fill the ellipsoidal height leaves it 0 beside a real MSL altitude:
+    // no geoid here to convert the MSL one (the description-file import has it), so it is refused.
+    if (t.get(k, h) == 0.0 && std::isfinite(t.get(k, msl)) && t.get(k, msl) != 0.0) {
+      st.reject(line, "no ellipsoidal height (alt_ellipsoid 0 beside an MSL altitude)");
       continue;
     }
     last_utc = u;
@@ -745,9 +752,12 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
                              std::to_string(opt.gnss_instance) + "): the boot clock cannot be put on GPS time");
   LineStats gnss_lines;
   std::vector<GpsRow> gps = read_gnss(gt, gnss_lines);
-  if (gps.empty())
-    throw std::runtime_error(opt.path + ": " + gt.name() + " has no 3D fix with UTC time (" +
-                             std::to_string(gnss_lines.lines) + " messages): the boot clock cannot be put on GPS time");
+  if (gps.empty()) {
+    std::string why;
+    for (const auto& [reason, n] : gnss_lines.by_reason) why += "; " + reason + ": " + std::to_string(n);
+    throw std::runtime_error(opt.path + ": " + gt.name() + " has no usable fix (" + std::to_string(gnss_lines.lines) +
+                             " messages" + why + "): the boot clock cannot be put on GPS time");
+  }
   const std::int64_t latency_us = static_cast<std::int64_t>(std::llround(opt.gnss_latency_s * 1e6));
   std::vector<std::pair<std::int64_t, std::int64_t>> pairs;
   for (const GpsRow& r : gps) pairs.emplace_back(r.boot_us - latency_us, r.utc_us);
