@@ -27,6 +27,7 @@ struct FswNode::App {
   virtual const fsw::FlightAppHealth& health() const = 0;
   virtual const fsw::ExecutiveHealth& exec_health() const = 0;
   virtual void write_ekf(LcmLogSink& sink) const = 0;
+  virtual void nav_sigma(std::array<double, 6>& out) const = 0;
   virtual void write_health(LcmLogSink& sink, const fsw::FrameOutput& frame) const = 0;
 };
 
@@ -44,6 +45,9 @@ struct AppOf final : FswNode::App {
   const fsw::FlightAppHealth& health() const override { return app.health(); }
   const fsw::ExecutiveHealth& exec_health() const override { return app.executive().health(); }
   void write_ekf(LcmLogSink& sink) const override { sink.write_ekf(app.executive()); }
+  void nav_sigma(std::array<double, 6>& out) const override {
+    for (int i = 0; i < 6; ++i) out[static_cast<std::size_t>(i)] = app.executive().ekf_output().sigma(i);
+  }
   void write_health(LcmLogSink& sink, const fsw::FrameOutput& frame) const override {
     sink.write_health(app.executive(), frame, app.health().conversion);
   }
@@ -224,6 +228,7 @@ void FswNode::after_frame() {
   summary_.initialised = true;
   summary_.init_t_s = app_->health().init_t_s;
   if (frame_.ekf_ran) {
+    app_->nav_sigma(nav_sigma_);
     app_->write_ekf(sink_);
     app_->write_health(sink_, frame_);
   }

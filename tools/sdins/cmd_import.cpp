@@ -7,11 +7,13 @@
 #include "commands.hpp"
 #include "tools/importers.hpp"
 #include "tools/output_file.hpp"
+#include "tools/ulog_import.hpp"
 
 namespace sdins {
 namespace {
 struct Options {
   tools::ImportOptions imp;
+  tools::UlogImportOptions ulog;
   std::string json;
 } opt;
 }  // namespace
@@ -24,10 +26,10 @@ void register_import(CLI::App& app) {
       "reference on TRUTH; t_s on the GPS time scale (docs/import.md).");
   sub->add_option("FORMAT", opt.imp.format,
                   "rtklib: an RTKLIB .pos, an IMU CSV with its .tag, optionally a u-blox .ubx (through convbin); "
-                  "psins: imu_200hz.csv, gps_obs.csv, gps_eph.csv")
+                  "psins: imu_200hz.csv, gps_obs.csv, gps_eph.csv; ulog: a PX4 .ulg (docs/ulog.md)")
       ->required()
-      ->check(CLI::IsMember({"rtklib", "psins"}));
-  sub->add_option("PATH", opt.imp.path, "the recording's directory (rtklib: or its .pos file)")->required();
+      ->check(CLI::IsMember({"rtklib", "psins", "ulog"}));
+  sub->add_option("PATH", opt.imp.path, "the recording's directory (rtklib: or its .pos file; ulog: the .ulg file)")->required();
   sub->add_option("--log", opt.imp.log_path, "the LCM log to write")->required();
   sub->add_option("--json", opt.json, "write the summary as JSON");
   sub->add_option("--axes", opt.imp.axes,
@@ -49,9 +51,39 @@ void register_import(CLI::App& app) {
   sub->add_flag("--keep-temp", opt.imp.keep_temp, "keep convbin's RINEX files (the directory is in the summary)");
   sub->add_option("--convbin", opt.imp.convbin, "RTKLIB's convbin program, for a u-blox .ubx beside the solution")
       ->capture_default_str();
+  sub->add_option("--imu-topic", opt.ulog.imu_topic,
+                  "ulog: IMU topic (auto: vehicle_imu when it covers its span, else sensor_combined)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "sensor_combined", "vehicle_imu"}));
+  sub->add_option("--gnss-topic", opt.ulog.gnss_topic,
+                  "ulog: GNSS topic (auto: of vehicle_gps_position and sensor_gps the one with more messages)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "vehicle_gps_position", "sensor_gps"}));
+  sub->add_option("--gnss-latency", opt.ulog.gnss_latency_s,
+                  "ulog: receiver latency [s]: a fix's UTC is valid this long before its boot time stamp (the summary "
+                  "prints PX4's own EKF2_GPS_DELAY)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
 }
 
+namespace {
+/// sdins import ulog: the summary also goes beside the log (LOG.json), where replay finds the
+/// reference's label.
+int run_import_ulog() {
+  opt.ulog.path = opt.imp.path;
+  opt.ulog.log_path = opt.imp.log_path;
+  const std::string sidecar = opt.imp.log_path + ".json";
+  tools::require_distinct({opt.imp.log_path, opt.json == sidecar ? std::string() : opt.json, sidecar}, {opt.imp.path});
+  const tools::UlogImportResult r = tools::import_ulog(opt.ulog);
+  tools::write_json_file(sidecar, r.summary);
+  if (!opt.json.empty() && opt.json != sidecar) tools::write_json_file(opt.json, r.summary);
+  std::fputs(tools::ulog_import_summary_text(r.summary).c_str(), stdout);
+  return 0;
+}
+}  // namespace
+
 int run_import() {
+  if (opt.imp.format == "ulog") return run_import_ulog();
   // docs/faults.md: neither output may be (or lie inside) the recording, nor each other.
   tools::require_distinct({opt.imp.log_path, opt.json}, {opt.imp.path});
   const nlohmann::json summary = tools::import_recording(opt.imp);

@@ -19,6 +19,7 @@
 #include "tools/fsw_report.hpp"
 #include "tools/interrupt.hpp"
 #include "tools/output_file.hpp"
+#include "tools/replay_score.hpp"
 
 namespace sdins {
 namespace {
@@ -27,6 +28,9 @@ struct Options {
   FswRunOptions run;
   std::vector<double> outages;  ///< length, period, first (s after initialisation)
   bool candump = false;
+  std::string score_json, score_csv, score_plot;
+  double score_from_s = 0.0;
+  double score_max_gap_s = 1.0;
 } opt;
 }  // namespace
 
@@ -45,12 +49,30 @@ void register_replay(CLI::App& app) {
                   "initialisation, to score the coasting solution against a reference (LENGTH PERIOD FIRST [s]; default: "
                   "none)")
       ->expected(3);
+  sub->add_option("--score-json", opt.score_json,
+                  "write the score against the log's reference (TRUTH) as JSON: errors, NEES, outages with their drift "
+                  "curves (docs/running.md)");
+  sub->add_option("--score-csv", opt.score_csv,
+                  "write the errors against the reference as CSV (20 rows/s; outage rows carry the time since it began)");
+  sub->add_option("--score-plot", opt.score_plot,
+                  "with --outages and --score-json: a PNG of the outages' errors vs the time since each began "
+                  "(plot_outages.py, python3-matplotlib)");
+  sub->add_option("--score-from", opt.score_from_s, "score the frames from this long after initialisation [s]")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e7));
+  sub->add_option("--score-max-gap", opt.score_max_gap_s,
+                  "the reference samples around a frame may be at most this far apart [s]")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-3, 1e3));
 }
 
 namespace {
 /// --candump: the bus recording's frames into hal::CanFswInput as `sdins fsw` receives them.
 int replay_candump(const sim::FilterConfig& filter) {
   if (!opt.outages.empty()) throw std::runtime_error("--outages: not with --candump (it withholds LCM-log inputs)");
+  if (!opt.score_json.empty() || !opt.score_csv.empty() || !opt.score_plot.empty())
+    throw std::runtime_error("--score-json/--score-csv/--score-plot: not with --candump (a bus recording carries no "
+                             "reference trajectory to score against)");
   tools::require_raw_gnss(filter, "--filter-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
   hal::CandumpReader reader;
   if (!reader.open(opt.in)) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
@@ -105,7 +127,10 @@ int replay_candump(const sim::FilterConfig& filter) {
 }  // namespace
 
 int run_replay() {
-  tools::require_distinct({opt.run.log, opt.run.json}, {opt.in, opt.run.filter_config});
+  tools::require_distinct({opt.run.log, opt.run.json, opt.score_json, opt.score_csv, opt.score_plot},
+                          {opt.in, opt.run.filter_config});
+  if (!opt.score_plot.empty() && (opt.score_json.empty() || opt.outages.size() != 3))
+    throw std::runtime_error("--score-plot needs --outages and --score-json (the plot reads the score JSON)");
   const sim::FilterConfig filter = opt.run.filter();
   if (opt.candump) return replay_candump(filter);
   const bool pvt = filter.gnss_source == sim::GnssSource::kPvt;
@@ -118,6 +143,19 @@ int run_replay() {
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
+  // Scoring (docs/running.md): against TRUTH when the log has it.
+  tools::ScoreOptions so;
+  so.from_s = opt.score_from_s;
+  so.max_reference_gap_s = opt.score_max_gap_s;
+  if (opt.outages.size() == 3) {
+    so.outage_length_s = opt.outages[0];
+    so.outage_period_s = opt.outages[1];
+    so.outage_first_s = opt.outages[2];
+  }
+  tools::ReplayScorer scorer(tools::load_reference(opt.in), so);
+  const bool scoring = !scorer.reference().samples.empty();
+  if (!scoring && (!opt.score_json.empty() || !opt.score_csv.empty()))
+    throw std::runtime_error(opt.in + " has no usable reference on TRUTH: nothing to score (--score-json/--score-csv)");
   fsw::InputEvent in;
   std::uint64_t raw_not_used = 0, withheld = 0;
   // GNSS outages: inputs at times within [t0 + k period, t0 + k period + length) are withheld.
@@ -140,6 +178,11 @@ int run_replay() {
       continue;
     }
     node.on_event(in);
+    // frame_completed() stays set until the next IMU event: score once per frame.
+    if (scoring && in.kind == fsw::InputEvent::Kind::kImu && node.frame_completed()) {
+      scorer.on_frame(node.last_frame().nav, node.summary().init_t_s);
+      if (node.last_frame().ekf_ran) scorer.on_ekf(node.last_frame().nav, node.summary().init_t_s, node.last_ekf_nav_sigma());
+    }
   }
   const bool stopped = tools::interrupted();
   if (stopped)
@@ -169,6 +212,8 @@ int run_replay() {
     std::printf("GNSS outages: %.1f s every %.1f s from %.1f s after initialisation, %llu inputs withheld\n",
                 opt.outages[0], opt.outages[1], opt.outages[2], static_cast<unsigned long long>(withheld));
   tools::print_fsw_summary(node);
+  const nlohmann::json score = scoring ? scorer.result() : nlohmann::json(nullptr);
+  if (scoring) std::fputs(tools::ReplayScorer::text(score).c_str(), stdout);
   if (stopped)
     throw tools::Interrupted("replay stopped after " + std::to_string(st.delivered) + " inputs (the summary so far is "
                              "above); no log or JSON written");
@@ -194,8 +239,14 @@ int run_replay() {
                    {"other_events", st.other_events},
                    {"log_events", ls.events},
                    {"log_rejections", ls.total_rejections()}};
+    j["score"] = score;
     tools::write_json_file(opt.run.json, j);
   }
+  if (!opt.score_json.empty()) tools::write_json_file(opt.score_json, score);
+  if (!opt.score_csv.empty()) tools::write_text_file(opt.score_csv, scorer.csv());
+  if (!opt.score_plot.empty() &&
+      run_plot_script("plot_outages.py", shell_quote(opt.score_json) + " " + shell_quote(opt.score_plot)) != 0)
+    throw std::runtime_error("plot_outages.py failed: " + opt.score_plot + " not written (the score JSON and CSV are)");
   return node.summary().initialised ? 0 : 2;
 }
 

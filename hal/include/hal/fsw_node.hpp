@@ -6,6 +6,8 @@
 // navigation frame's solution, so two runs can be compared bit for bit (SIL vs HIL, replay).
 #pragma once
 
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -84,6 +86,9 @@ class FswNode {
   /// Whether the last IMU event completed a minor frame, and its output.
   const fsw::FrameOutput& last_frame() const { return frame_; }
   bool frame_completed() const { return frame_done_; }
+  /// The navigation part of the EKF's published 1-sigma after its last run (as on EKF_STATE):
+  /// position E, N, U [m], velocity E, N, U [m/s]; NaN before the first run.
+  const std::array<double, 6>& last_ekf_nav_sigma() const { return nav_sigma_; }
   /// The 1 Hz thread's execution times (empty with EkfGroup::kInline).
   const EkfGroupTimes& ekf_group_times() const { return group_times_; }
 
@@ -100,6 +105,7 @@ class FswNode {
   FswNodeConfig cfg_{};
   LcmLogSink sink_;
   fsw::FrameOutput frame_{};
+  std::array<double, 6> nav_sigma_{NAN, NAN, NAN, NAN, NAN, NAN};
   bool frame_done_ = false;
   bool closed_ = false;
   FswNodeSummary summary_{};

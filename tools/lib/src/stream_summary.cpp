@@ -1,0 +1,57 @@
+// Stream summaries (tools/stream_summary.hpp).
+#include "tools/stream_summary.hpp"
+
+#include <algorithm>
+
+namespace tools {
+
+StreamSummary summarize_stream(const std::string& name, const std::string& source, const std::vector<double>& t_s) {
+  StreamSummary s;
+  s.name = name;
+  s.source = source;
+  s.samples = t_s.size();
+  if (t_s.empty()) return s;
+  s.t_first_s = t_s.front();
+  s.t_last_s = t_s.back();
+  s.span_s = s.t_last_s - s.t_first_s;
+  if (t_s.size() < 2) return s;
+  std::vector<double> dt(t_s.size() - 1);
+  for (std::size_t k = 1; k < t_s.size(); ++k) dt[k - 1] = t_s[k] - t_s[k - 1];
+  std::vector<double> sorted = dt;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  s.dt_median_s = sorted[sorted.size() / 2];
+  s.dt_min_s = *std::min_element(dt.begin(), dt.end());
+  s.dt_max_s = *std::max_element(dt.begin(), dt.end());
+  s.rate_hz = s.dt_median_s > 0.0 ? 1.0 / s.dt_median_s : 0.0;
+  s.mean_rate_hz = s.span_s > 0.0 ? static_cast<double>(t_s.size() - 1) / s.span_s : 0.0;
+  for (double d : dt)
+    if (d > 1.5 * s.dt_median_s) {
+      ++s.gaps;
+      s.longest_gap_s = std::max(s.longest_gap_s, d);
+    }
+  return s;
+}
+
+nlohmann::json StreamSummary::to_json() const {
+  return {{"name", name},
+          {"source", source},
+          {"samples", samples},
+          {"t_first_s", t_first_s},
+          {"t_last_s", t_last_s},
+          {"span_s", span_s},
+          {"rate_hz", rate_hz},
+          {"mean_rate_hz", mean_rate_hz},
+          {"dt_s", {{"min", dt_min_s}, {"median", dt_median_s}, {"max", dt_max_s}}},
+          {"gaps", gaps},
+          {"longest_gap_s", longest_gap_s},
+          {"duplicates", duplicates}};
+}
+
+nlohmann::json RecordingStreams::to_json() const {
+  return {{"imu", imu.to_json()},
+          {"gnss", gnss.to_json()},
+          {"reference", reference.to_json()},
+          {"imu_gnss_overlap_s", imu_gnss_overlap_s}};
+}
+
+}  // namespace tools
