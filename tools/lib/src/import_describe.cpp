@@ -177,7 +177,8 @@ struct ClockFit {
   double gps_s(double local_s) const { return gps0_s + offset_s + slope * (local_s - local0_s); }
   nlohmann::json to_json(double latency_s) const {
     return {{"pairs", pairs},
-            {"model", "GPS seconds = gps0 + offset + slope * (local - latency - local0)"},
+            {"model", "GPS seconds = gps0 + offset + slope * (local - local0), fitted to (local clock, GPS time + latency) "
+                       "of the GNSS rows: the local clock stamps a fix on arrival, latency after its validity"},
             {"local0_s", local0_s},
             {"gps0_s", gps0_s},
             {"offset_s", offset_s},
@@ -600,7 +601,7 @@ GnssResult read_gnss_rows(const GnssStreamSpec& s) {
       std::string why;
       TimeContext none;
       if (s.time.base != TimeBase::kLocal && row_gps_time(s.time, r.v[0], r.v[1], none, gt, why))
-        g.clock_pairs.emplace_back(r.v[18] * s.local_scale_s - s.latency_s, gps_seconds(gt));
+        g.clock_pairs.emplace_back(r.v[18] * s.local_scale_s, gps_seconds(gt) + s.latency_s);  // arrival on both clocks
     }
   return g;
 }
@@ -630,8 +631,10 @@ void gnss_solutions(const GnssStreamSpec& s, GnssResult& g, const ImportTimeScal
   for (const Row& r : g.rows) {
     GpsTime gt;
     std::string why;
-    const double raw = s.time.base == TimeBase::kLocal ? r.v[0] - s.latency_s / s.time.scale_s : r.v[0];
-    if (!row_gps_time(s.time, raw, r.v[1], ctx, gt, why)) {
+    // A fix stamped by the local clock on arrival was valid latency_s earlier.
+    const bool ok_time = row_gps_time(s.time, r.v[0], r.v[1], ctx, gt, why);
+    if (ok_time && s.time.base == TimeBase::kLocal) gt = gps_from_seconds(gps_seconds(gt) - s.latency_s);
+    if (!ok_time) {
       g.info.lines.reject(r.line, why);
       --g.info.lines.accepted;
       continue;

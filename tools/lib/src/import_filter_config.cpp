@@ -37,26 +37,24 @@ Rates rates_from(const nlohmann::json& s) {
   Rates r;
   if (s["imu"].is_object()) {
     const auto& i = s["imu"];
-    // The median interval is the robust rate (the mean counts gaps).
-    if (i.contains("dt_s") && i["dt_s"]["median"].get<double>() > 0.0) {
-      r.imu_hz = 1.0 / i["dt_s"]["median"].get<double>();
-      r.imu_from = "the IMU's median interval " + num(i["dt_s"]["median"].get<double>()) + " s";
-    } else {
-      r.imu_hz = rate_of(i["samples"]);
-      r.imu_from = "the IMU's mean rate";
-    }
-    // A mean rate that differs from the median one (irregular intervals): the mean counts.
+    // The mean rate over the span, unless gaps make it differ from the median interval's by more
+    // than 2 % (quantised time tags make single intervals, and so the median, jitter).
     const double mean = rate_of(i["samples"]);
-    if (mean > 0.0 && std::abs(mean - r.imu_hz) > 0.02 * r.imu_hz) {
+    const double med = i.contains("dt_s") && i["dt_s"]["median"].get<double>() > 0.0 ? 1.0 / i["dt_s"]["median"].get<double>() : 0.0;
+    if (mean > 0.0 && (med <= 0.0 || std::abs(mean - med) <= 0.02 * mean)) {
       r.imu_hz = mean;
-      r.imu_from = "the IMU's mean rate (its intervals are irregular: median and mean differ by more than 2 %)";
+      r.imu_from = "the IMU's mean rate over its span";
+    } else if (med > 0.0) {
+      r.imu_hz = med;
+      r.imu_from = "the IMU's median interval (its mean rate counts gaps)";
     }
   }
   if (!(r.imu_hz > 0.0)) {
     r.imu_hz = 200.0;
     r.imu_from = "no IMU in the import: the flight software's 200 Hz";
   }
-  r.samples_per_frame = std::max(1, static_cast<int>(std::ceil(r.imu_hz / 200.0 - 1e-6)));
+  // A rate within 1 % of a multiple of 200 Hz counts as that multiple (a clock ratio away from it).
+  r.samples_per_frame = std::max(1, static_cast<int>(std::ceil(r.imu_hz / 200.0 - 0.01)));
   r.nav_hz = r.imu_hz / r.samples_per_frame;
   // Whole hertz when the rate is within 1 % of one (the measured rate is a clock ratio away from it).
   if (std::abs(r.nav_hz - std::round(r.nav_hz)) <= 0.01 * r.nav_hz) r.nav_hz = std::round(r.nav_hz);
