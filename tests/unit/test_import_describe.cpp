@@ -375,3 +375,37 @@ time = { column = 1, unit = "ms", base = "gps_seconds" }
 }
 
 }  // namespace
+
+namespace {
+
+sim::FilterConfig config_from(const nlohmann::json& summary) {
+  const std::string text = tools::starting_filter_config(summary, "t");
+  sim::FilterConfig cfg;
+  const auto pr = sim::parse_filter_config_text(text, "t.toml", cfg);
+  EXPECT_TRUE(pr.ok) << pr.error << "\n" << text;
+  return cfg;
+}
+
+TEST(ImportDescribe, StartingConfigurationFromAMinimalSummary) {
+  // What another importer (a ULog reader) may have: rates and qualities only.
+  const nlohmann::json s = {{"imu", {{"samples", {{"count", 1001}, {"rate_hz", 250.0}}}}},
+                            {"gnss_pvt", {{"samples", {{"count", 51}, {"rate_hz", 5.0}}}, {"by_quality", {{"5", 51}}}}}};
+  const sim::FilterConfig cfg = config_from(s);
+  EXPECT_EQ(cfg.app.exec.imu_samples_per_frame, 2);  // 250 Hz -> 125 Hz frames
+  EXPECT_DOUBLE_EQ(cfg.app.exec.nav_rate_hz, 125.0);
+  EXPECT_EQ(cfg.app.exec.frames_per_ekf, 25);
+  EXPECT_EQ(cfg.app.exec.ekf_latency_frames, 6);
+  EXPECT_EQ(cfg.app.pvt_max_quality, 5);
+  // Nothing known: the flight software's rates, a valid latency.
+  const sim::FilterConfig none = config_from(nlohmann::json::object());
+  EXPECT_LT(none.app.exec.ekf_latency_frames, none.app.exec.frames_per_ekf);
+  // A 10 Hz IMU with 5 Hz GNSS: 2 frames per EKF step, the latency 1.
+  nlohmann::json slow_summary;
+  slow_summary["imu"]["samples"] = {{"count", 100}, {"rate_hz", 10.0}};
+  slow_summary["gnss_pvt"]["samples"] = {{"count", 50}, {"rate_hz", 5.0}};
+  const sim::FilterConfig slow = config_from(slow_summary);
+  EXPECT_EQ(slow.app.exec.frames_per_ekf, 2);
+  EXPECT_EQ(slow.app.exec.ekf_latency_frames, 1);
+}
+
+}  // namespace

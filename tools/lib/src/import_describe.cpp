@@ -1111,45 +1111,12 @@ nlohmann::json imu_summary(const RecordingDescription& d, ImuResult& imu, Collec
 
 }  // namespace
 
-nlohmann::json import_described(const RecordingDescription& d, const DescribeOptions& opt) {
-  if (opt.log_path.empty()) throw std::runtime_error("no output log (--log)");
-  Streams st;
-  const int week0 = read_streams(d, st);
-  const ImportTimeScale ts{week0};
-  Collected c;
-  if (st.imu.have) {
-    imu_records(d.imu, st.imu, ts, st.ctx);
-    c.imu = st.imu.records;
-  }
-  if (d.gnss.present) {
-    gnss_solutions(d.gnss, st.gnss, ts, st.ctx);
-    c.pvt = st.gnss.pvt;
-  }
-  RawCounts rc;
-  if (d.raw.present) raw_epochs(d.raw, st.raw, ts, st.ctx, rc, c.raw);
+namespace {
 
-  std::uint64_t clipped_raw = 0, clipped_pvt = 0;
-  if (d.clip_gnss_to_imu && !c.imu.empty()) {
-    const double a = c.imu.front().sample.t_s - 1.0, b = c.imu.back().sample.t_s + 1.0;
-    const auto out_raw = [&](const fsw::GnssRawEpoch& e) { return e.t_s < a || e.t_s > b; };
-    const auto out_pvt = [&](const hal::GnssPvtSample& p) { return p.t_s < a || p.t_s > b; };
-    clipped_raw = static_cast<std::uint64_t>(std::count_if(c.raw.begin(), c.raw.end(), out_raw));
-    clipped_pvt = static_cast<std::uint64_t>(std::count_if(c.pvt.begin(), c.pvt.end(), out_pvt));
-    c.raw.erase(std::remove_if(c.raw.begin(), c.raw.end(), out_raw), c.raw.end());
-    c.pvt.erase(std::remove_if(c.pvt.begin(), c.pvt.end(), out_pvt), c.pvt.end());
-    st.gnss.pvt = c.pvt;
-  }
-  if (d.reference.present) {
-    st.ref = read_reference(d.reference, &st.gnss, ts, st.ctx);
-    c.truth = st.ref.epochs;
-  }
-  nlohmann::json alm_json = nullptr;
-  if (!c.raw.empty()) {
-    const GpsTime first{c.raw.front().gps_week, c.raw.front().gps_tow_s};
-    alm_json = almanacs_from_ephemeris(st.raw.ephs, rc.prns, first, c.raw.front().t_s,
-                                       c.raw.back().t_s - c.raw.front().t_s, d.max_fit_error_m, c.almanacs);
-  }
-
+/// The summary of the streams read (the keys of import_recording's summary, plus streams and checks).
+nlohmann::json streams_summary(const RecordingDescription& d, const DescribeOptions& opt, Streams& st, Collected& c,
+                               const RawCounts& rc, int week0, std::uint64_t clipped_raw, std::uint64_t clipped_pvt,
+                               const nlohmann::json& alm_json) {
   nlohmann::json sum;
   sum["format"] = d.format;
   sum["input"] = opt.input.empty() ? d.source : opt.input;
@@ -1231,28 +1198,80 @@ nlohmann::json import_described(const RecordingDescription& d, const DescribeOpt
     warnings.push_back("gnss: no velocity sigma given (vel_sigma or vel_sigma_mps): 0.2 m/s per axis assumed");
   for (const std::string& w : warnings) st.warnings.push_back(w);
   sum["warnings"] = st.warnings;
+  return sum;
+}
+
+}  // namespace
+
+void finish_import_outputs(nlohmann::json& sum, const std::string& log_path, const std::string& filter_path,
+                           const std::string& name, const std::string& importer, bool write_sidecar) {
+  if (!filter_path.empty()) {
+    const std::string text = starting_filter_config(sum, name);
+    sim::FilterConfig check;
+    const sim::FilterConfigParseResult pr = sim::parse_filter_config_text(text, filter_path, check);
+    if (!pr.ok) throw std::runtime_error("the starting filter configuration does not parse (a bug): " + pr.error);
+    write_text_file(filter_path, text);
+    sum["filter_config"] = filter_path;
+  }
+  if (write_sidecar) {
+    sum["sidecar"] = import_sidecar_path(log_path);
+    nlohmann::json side = sum;
+    side["format"] = "sdins-import-summary";
+    side["importer"] = importer;
+    side["version"] = 1;
+    write_json_file(import_sidecar_path(log_path), side);
+  }
+}
+
+nlohmann::json import_described(const RecordingDescription& d, const DescribeOptions& opt) {
+  if (opt.log_path.empty()) throw std::runtime_error("no output log (--log)");
+  Streams st;
+  const int week0 = read_streams(d, st);
+  const ImportTimeScale ts{week0};
+  Collected c;
+  if (st.imu.have) {
+    imu_records(d.imu, st.imu, ts, st.ctx);
+    c.imu = st.imu.records;
+  }
+  if (d.gnss.present) {
+    gnss_solutions(d.gnss, st.gnss, ts, st.ctx);
+    c.pvt = st.gnss.pvt;
+  }
+  RawCounts rc;
+  if (d.raw.present) raw_epochs(d.raw, st.raw, ts, st.ctx, rc, c.raw);
+
+  std::uint64_t clipped_raw = 0, clipped_pvt = 0;
+  if (d.clip_gnss_to_imu && !c.imu.empty()) {
+    const double a = c.imu.front().sample.t_s - 1.0, b = c.imu.back().sample.t_s + 1.0;
+    const auto out_raw = [&](const fsw::GnssRawEpoch& e) { return e.t_s < a || e.t_s > b; };
+    const auto out_pvt = [&](const hal::GnssPvtSample& p) { return p.t_s < a || p.t_s > b; };
+    clipped_raw = static_cast<std::uint64_t>(std::count_if(c.raw.begin(), c.raw.end(), out_raw));
+    clipped_pvt = static_cast<std::uint64_t>(std::count_if(c.pvt.begin(), c.pvt.end(), out_pvt));
+    c.raw.erase(std::remove_if(c.raw.begin(), c.raw.end(), out_raw), c.raw.end());
+    c.pvt.erase(std::remove_if(c.pvt.begin(), c.pvt.end(), out_pvt), c.pvt.end());
+    st.gnss.pvt = c.pvt;
+  }
+  if (d.reference.present) {
+    st.ref = read_reference(d.reference, &st.gnss, ts, st.ctx);
+    c.truth = st.ref.epochs;
+  }
+  nlohmann::json alm_json = nullptr;
+  if (!c.raw.empty()) {
+    const GpsTime first{c.raw.front().gps_week, c.raw.front().gps_tow_s};
+    alm_json = almanacs_from_ephemeris(st.raw.ephs, rc.prns, first, c.raw.front().t_s,
+                                       c.raw.back().t_s - c.raw.front().t_s, d.max_fit_error_m, c.almanacs);
+  }
+
+  nlohmann::json sum = streams_summary(d, opt, st, c, rc, week0, clipped_raw, clipped_pvt, alm_json);
   sum["log"] = write_log(opt.log_path, c);
   sum["rejected_lines_total"] = total_rejected(sum);
 
-  if (opt.write_filter_config) {
-    const std::string path = d.filter_config_out.empty()
-                                 ? fs::path(opt.log_path).replace_extension(".filter.toml").string()
-                                 : d.filter_config_out;
-    const std::string text = starting_filter_config(sum, d.name.empty() ? fs::path(opt.log_path).stem().string() : d.name);
-    sim::FilterConfig check;
-    const sim::FilterConfigParseResult pr = sim::parse_filter_config_text(text, path, check);
-    if (!pr.ok) throw std::runtime_error("the starting filter configuration does not parse (a bug): " + pr.error);
-    write_text_file(path, text);
-    sum["filter_config"] = path;
-  }
-  if (opt.write_sidecar) {
-    nlohmann::json side = sum;
-    side["format"] = "sdins-import-summary";
-    side["importer"] = d.format;
-    side["version"] = 1;
-    write_json_file(import_sidecar_path(opt.log_path), side);
-    sum["sidecar"] = import_sidecar_path(opt.log_path);
-  }
+  const std::string filter_path =
+      !opt.write_filter_config ? std::string()
+      : d.filter_config_out.empty() ? fs::path(opt.log_path).replace_extension(".filter.toml").string()
+                                    : d.filter_config_out;
+  finish_import_outputs(sum, opt.log_path, filter_path, d.name.empty() ? fs::path(opt.log_path).stem().string() : d.name,
+                        d.format, opt.write_sidecar);
   return sum;
 }
 

@@ -21,9 +21,21 @@ std::string num(double v, const char* f = "%.6g") {
   return s;
 }
 
+/// j[key], or null when j has no such key (const operator[] must not be used for a missing key).
+const nlohmann::json& at(const nlohmann::json& j, const char* key) {
+  static const nlohmann::json kNull;
+  return j.is_object() && j.contains(key) ? j[key] : kNull;
+}
+
+/// A number of j (null, missing or not a number: def).
+double number_at(const nlohmann::json& j, const char* key, double def) {
+  const nlohmann::json& v = at(j, key);
+  return v.is_number() ? v.get<double>() : def;
+}
+
 double rate_of(const nlohmann::json& samples) {
-  if (!samples.is_object() || samples.value("count", 0) < 2) return 0.0;
-  return samples.value("rate_hz", 0.0);
+  if (number_at(samples, "count", 0) < 2) return 0.0;
+  return number_at(samples, "rate_hz", 0.0);
 }
 
 /// The navigation rate from the IMU's: samples per frame so that frames run at <= 200 Hz.
@@ -35,12 +47,13 @@ struct Rates {
 
 Rates rates_from(const nlohmann::json& s) {
   Rates r;
-  if (s["imu"].is_object()) {
-    const auto& i = s["imu"];
+  if (at(s, "imu").is_object()) {
+    const auto& i = at(s, "imu");
     // The mean rate over the span, unless gaps make it differ from the median interval's by more
     // than 2 % (quantised time tags make single intervals, and so the median, jitter).
-    const double mean = rate_of(i["samples"]);
-    const double med = i.contains("dt_s") && i["dt_s"]["median"].get<double>() > 0.0 ? 1.0 / i["dt_s"]["median"].get<double>() : 0.0;
+    const double mean = rate_of(at(i, "samples"));
+    const double med_dt = number_at(at(i, "dt_s"), "median", 0.0);
+    const double med = med_dt > 0.0 ? 1.0 / med_dt : 0.0;
     if (mean > 0.0 && (med <= 0.0 || std::abs(mean - med) <= 0.02 * mean)) {
       r.imu_hz = mean;
       r.imu_from = "the IMU's mean rate over its span";
@@ -59,11 +72,11 @@ Rates rates_from(const nlohmann::json& s) {
   // Whole hertz when the rate is within 1 % of one (the measured rate is a clock ratio away from it).
   if (std::abs(r.nav_hz - std::round(r.nav_hz)) <= 0.01 * r.nav_hz) r.nav_hz = std::round(r.nav_hz);
   const auto gnss_rate = [&](const char* key, const char* samples, const char* what) {
-    if (!s[key].is_object()) return;
-    const auto& g = s[key];
+    if (!at(s, key).is_object()) return;
+    const auto& g = at(s, key);
     double hz = 0.0;
-    if (g.contains("stream") && g["stream"].contains("rate_hz")) hz = g["stream"]["rate_hz"].get<double>();
-    if (!(hz > 0.0)) hz = rate_of(g[samples]);
+    hz = number_at(at(g, "stream"), "rate_hz", 0.0);
+    if (!(hz > 0.0)) hz = rate_of(at(g, samples));
     if (hz > r.gnss_hz) {
       r.gnss_hz = hz;
       r.gnss_from = what;
@@ -87,7 +100,8 @@ Rates rates_from(const nlohmann::json& s) {
 std::string starting_filter_config(const nlohmann::json& s, const std::string& name) {
   const Rates r = rates_from(s);
   std::ostringstream o;
-  o << "# Starting filter configuration written by `sdins import` for " << s.value("input", std::string("?")) << ".\n"
+  o << "# Starting filter configuration written by `sdins import` for "
+    << (at(s, "input").is_string() ? at(s, "input").get<std::string>() : std::string("?")) << ".\n"
     << "# Every value below says where it came from; the rates follow the data, the sensor noise is a\n"
     << "# consumer-MEMS starting point: replace it with your IMU's datasheet values (config/README.md).\n"
     << "# Use: sdins replay LOG --filter-config THIS_FILE\n";
@@ -109,16 +123,16 @@ std::string starting_filter_config(const nlohmann::json& s, const std::string& n
 
   // GNSS: raw pseudoranges when the import fitted almanacs for at least four satellites, else solutions.
   std::size_t almanac_prns = 0;
-  if (s["almanac"].is_object()) almanac_prns = s["almanac"]["written"].size();
-  const bool have_pvt = s["gnss_pvt"].is_object() && s["gnss_pvt"]["samples"].value("count", 0) > 0;
+  almanac_prns = at(at(s, "almanac"), "written").size();
+  const bool have_pvt = number_at(at(at(s, "gnss_pvt"), "samples"), "count", 0) > 0;
   const bool raw = almanac_prns >= 4 && !have_pvt;
   o << "[gnss]\n";
   if (raw) {
     o << "source = \"raw\"   # raw epochs with almanacs fitted for " << almanac_prns << " satellites (>= 4)\n";
   } else {
     int max_q = 1;
-    if (have_pvt)
-      for (const auto& [k, v] : s["gnss_pvt"]["by_quality"].items()) {
+    if (have_pvt && at(at(s, "gnss_pvt"), "by_quality").is_object())
+      for (const auto& [k, v] : at(at(s, "gnss_pvt"), "by_quality").items()) {
         const int q = std::stoi(k);
         if (q >= 1 && q <= 6 && v.get<std::uint64_t>() > 0) max_q = std::max(max_q, q);
       }
@@ -143,11 +157,11 @@ std::string starting_filter_config(const nlohmann::json& s, const std::string& n
 
   double min_speed = 3.0;
   std::string speed_from = "no velocity in the import: the shipped default";
-  if (s.contains("speed") && s["speed"].is_object()) {
-    const double p90 = s["speed"]["p90_mps"].get<double>();
+  if (at(s, "speed").is_object()) {
+    const double p90 = number_at(at(s, "speed"), "p90_mps", 0.0);
     min_speed = std::clamp(0.3 * p90, 0.5, 5.0);
     speed_from = "0.3 x the 90th percentile horizontal speed " + num(p90, "%.2f") + " m/s of the " +
-                 s["speed"]["source"].get<std::string>() + ", within [0.5, 5] m/s";
+                 (at(at(s, "speed"), "source").is_string() ? at(at(s, "speed"), "source").get<std::string>() : std::string("GNSS solutions")) + ", within [0.5, 5] m/s";
   }
   o << "[init]\n"
     << "mode = \"track\"   # heading from the GNSS track once moving; \"static\" for a long rest with a gyro that senses the Earth rate,\n"

@@ -200,11 +200,23 @@ std::string describe_summary_text(const nlohmann::json& summary);
 /// "reference" names what TRUTH holds: {"kind", "source", "has_attitude"}.
 std::string import_sidecar_path(const std::string& log_path);
 
+/// The files every import writes beside its log, for any importer (the description engine, the
+/// presets, a ULog reader): the starting filter configuration at filter_path (empty: none; checked
+/// to parse) and the sidecar import_sidecar_path(log_path) holding `sum` with "format":
+/// "sdins-import-summary", "importer", "version"; adds "filter_config" and "sidecar" to sum. A
+/// summary for it needs "input", "reference" (null or {kind, source, has_attitude}) and the keys
+/// starting_filter_config reads.
+void finish_import_outputs(nlohmann::json& sum, const std::string& log_path, const std::string& filter_path,
+                           const std::string& name, const std::string& importer, bool write_sidecar = true);
+
 /// A starting filter configuration (TOML text, commented with where each value came from) from an
 /// import summary's streams: navigation rate from the IMU, EKF rate from the GNSS, a valid
 /// ekf_latency_frames, the GNSS source and its floors, the initialisation speed. Used by the
-/// description import and by any importer that produces the same summary keys ("imu", "gnss_pvt",
-/// "gnss_raw", "speed").
+/// description import and by any importer that produces the same summary keys: "input";
+/// "imu": {"samples": span_json (count, rate_hz), "dt_s": {"median"}} or null; "gnss_pvt":
+/// {"samples", "by_quality": {"Q": n}, optional "stream": {"rate_hz"}} or null; "gnss_raw":
+/// {"epochs": span_json} or null; "almanac": {"written": [PRNs]} or null; "speed": {"p90_mps",
+/// "source"} or null (missing keys mean "not in this recording").
 std::string starting_filter_config(const nlohmann::json& summary, const std::string& name);
 
 /// The presets (`sdins import rtklib|psins`): a description built from a recording's directory.
