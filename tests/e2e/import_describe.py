@@ -478,6 +478,27 @@ def recordings(sdins, data, descriptions, work):
         ha, hb = sha(a), sha(b)
         print(f"{r}: preset {preset} {ha}, description {hb}")
         assert ha == hb, f"{r}: the description's log differs from the {preset} preset's"
+    # The RINEX 3 route: convbin's files of the walk (kept) described as obs + nav give the same log.
+    keep = os.path.join(work, "walk.keep.lcmlog")
+    js = os.path.join(work, "walk.keep.json")
+    run(sdins, "import", "rtklib", os.path.join(data, "gnss-imu-walk"), "--keep-temp", "--log", keep, "--json", js)
+    import json
+    with open(js) as f:
+        tmp = json.load(f)["convbin"]["temp_dir"]
+    try:
+        with open(os.path.join(descriptions, "gnss-imu-walk.import.toml")) as f:
+            text = f.read()
+        text = text.replace('format = "ubx"', 'format = "rinex3"').replace(
+            'ubx = "gnss_1730.ubx"', f'obs = "{tmp}/raw.obs"\nnav = "{tmp}/raw.nav"')
+        desc = os.path.join(work, "walk-rinex.import.toml")
+        with open(desc, "w") as f:
+            f.write(text)
+        rin = os.path.join(work, "walk.rinex.lcmlog")
+        run(sdins, "import", "describe", desc, "--data", os.path.join(data, "gnss-imu-walk"), "--log", rin)
+        print(f"gnss-imu-walk through RINEX 3 obs + nav: {sha(rin)}")
+        assert sha(rin) == sha(keep), "the walk through its RINEX files differs from the ubx route"
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
     print("recordings: OK")
 
 
