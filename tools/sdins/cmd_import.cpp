@@ -3,6 +3,7 @@
 // format. The work is in the tools library (tools/importers.hpp); this file parses options and prints.
 #include <cstdio>
 #include <filesystem>
+#include <vector>
 #include <stdexcept>
 
 #include "commands.hpp"
@@ -81,6 +82,9 @@ int run_import() {
     tools::RecordingDescription d;
     const tools::DescriptionParseResult pr = tools::parse_recording_description_file(opt.imp.path, opt.data_dir, d);
     if (!pr.ok) throw std::runtime_error(pr.error);
+    std::vector<std::string> inputs = tools::description_inputs(d);
+    inputs.push_back(opt.imp.path);
+    tools::require_distinct({log, opt.json, tools::import_sidecar_path(log), filter_out}, inputs);
     d.filter_config_out = filter_out;
     tools::DescribeOptions o;
     o.log_path = log;

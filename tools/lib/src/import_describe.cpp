@@ -67,7 +67,12 @@ TableRead read_table(const TableLayout& l, const std::vector<ColumnRef>& cols, L
   std::uint64_t line_no = 0;
   for (const std::string& file : l.files) {
     out.files += (out.files.empty() ? "" : ", ") + file;
-    std::ifstream in = open_in(file);
+    std::ifstream in;
+    try {
+      in = open_in(file);
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error("the " + stream + " stream's file: " + e.what());
+    }
     std::string line;
     bool terminated = true;
     int skipped = 0;

@@ -71,6 +71,21 @@ class DescriptionReader : public ts::Reader {
     };
   }
 
+  /// A string key that must be one of options.
+  Handler one_of(std::string& out, std::vector<std::string> options) {
+    return [this, &out, options](const toml::node& n, const std::string& p) {
+      std::string expected;
+      for (std::size_t i = 0; i < options.size(); ++i) {
+        if (const auto* v = n.as_string(); v && v->get() == options[i]) {
+          out = options[i];
+          return true;
+        }
+        expected += (i == 0 ? "" : i + 1 == options.size() ? " or " : ", ") + ("\"" + options[i] + "\"");
+      }
+      return fail(n, "'" + p + "' must be " + expected + got(n));
+    };
+  }
+
   /// A file name, resolved against the description's directory.
   Handler path(std::string& out) {
     return [this, &out](const toml::node& n, const std::string& p) {
@@ -204,7 +219,7 @@ class DescriptionReader : public ts::Reader {
                                                 {"rtklib_tag", TimeBase::kRtklibTag}})},
                        {"week", integer(s.week, 0, 10000)},
                        {"week_column", column(s.week_column)},
-                       {"week_from", text(week_from)},
+                       {"week_from", one_of(week_from, {"ephemeris"})},
                        {"tag_file", path(s.tag_file)},
                        {"clock_ratio", number(s.clock_ratio, ts::closed(0.99, 1.01))}}))
       return false;
@@ -283,7 +298,7 @@ class DescriptionReader : public ts::Reader {
                                 {"columns", columns3(pc.vel.cols)},
                                 {"unit", unit(kSpeed, pc.vel.unit, pc.vel.scale)},
                                 {"course_unit", unit(kAngle, pc.course_unit, pc.course_scale)},
-                                {"vertical_positive", text(vertical)}}))
+                                {"vertical_positive", one_of(vertical, {"up", "down"})}}))
         return false;
       if (pc.velocity == VelocityForm::kNone) return fail(n, "'" + p + ".form' is required (enu, ned, ecef or speed_course)");
       if (!pc.vel.set()) return fail(n, "'" + p + ".columns' is required");
@@ -306,7 +321,7 @@ class DescriptionReader : public ts::Reader {
     bool have_rot = false;
     if (const auto* k = t.get("kind"); k && k->is_string()) kind = k->as_string()->get();
     if (!fields_with(t, p, layout_keys(t, p, s.table),
-                     {{"kind", text(kind)},
+                     {{"kind", one_of(kind, {"rates", "increments"})},
                       {"time", time_table(s.time)},
                       {"gyro", [&](const toml::node& n, const std::string& q) { return vec3(s.gyro, kind == "increments" ? &kAngle : &kRate)(n, q); }},
                       {"accel", [&](const toml::node& n, const std::string& q) { return vec3(s.accel, kind == "increments" ? &kDeltaV : &kAccel)(n, q); }},
@@ -471,7 +486,7 @@ class DescriptionReader : public ts::Reader {
                           {"cn0", column(s.cn0)},
                           {"ephemeris", sub([&](const toml::table& e, const std::string& q) {
                              return fields(e, q, {{"file", path(s.ephemeris_file)},
-                                                  {"format", text(s.ephemeris_format)}});
+                                                  {"format", one_of(s.ephemeris_format, {"csv", "rinex3"})}});
                            })}}))
       return false;
     (void)cn0_unit;
@@ -502,7 +517,7 @@ class DescriptionReader : public ts::Reader {
     std::string from = "table";
     double att_scale = fsw::kDegToRad;
     if (!fields_with(t, p, layout_and_position(t, p, s.table, s.pos), {{"kind", text(s.kind)},
-                          {"from", text(from)},
+                          {"from", one_of(from, {"table", "gnss"})},
                           {"max_quality", integer(s.max_quality, 1, 7)},
                           {"time", [&](const toml::node& n, const std::string& q) { time_given = true; return time_table(s.time)(n, q); }},
                           {"attitude", vec3(s.attitude, &kAngle)}}))
@@ -533,6 +548,18 @@ const char* to_string(TimeBase b) {
     case TimeBase::kRtklibTag: return "rtklib_tag";
   }
   return "?";
+}
+
+std::vector<std::string> description_inputs(const RecordingDescription& d) {
+  std::vector<std::string> v;
+  const auto add = [&](const std::string& f) {
+    if (!f.empty()) v.push_back(f);
+  };
+  for (const auto* l : {&d.imu.table, &d.gnss.table, &d.raw.table, &d.reference.table})
+    for (const std::string& f : l->files) add(f);
+  for (const std::string& f : {d.imu.time.tag_file, d.raw.obs_file, d.raw.nav_file, d.raw.ubx_file, d.raw.ephemeris_file})
+    add(f);
+  return v;
 }
 
 DescriptionParseResult parse_recording_description_text(const std::string& text, const std::string& source,

@@ -181,6 +181,10 @@ DescriptionParseResult parse_recording_description_text(const std::string& text,
 DescriptionParseResult parse_recording_description_file(const std::string& path, const std::string& data_dir,
                                                         RecordingDescription& out);
 
+/// Every input file a description names (tables, time tags, RINEX, u-blox, ephemeris), for the
+/// check that no output overwrites one.
+std::vector<std::string> description_inputs(const RecordingDescription& d);
+
 struct DescribeOptions {
   std::string log_path;
   std::string input;              ///< for the summary ("input")
