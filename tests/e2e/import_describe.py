@@ -456,7 +456,27 @@ def roundtrip(sdins, work, seeds):
         tol_v, tol_a = 1e-5 + 10.0 * wdt, 1e-5 + 5.0 * wdt
         assert wdt <= 1.1e-3, f"seed {seed}: outputs {wdt} s apart"
         assert wp <= 1e-3 and wv <= tol_v and wa <= tol_a, f"seed {seed}: replay differs by {wp} m, {wv} m/s, {wa} deg"
+    cli_faults(sdins, os.path.join(work, "canonical"))
     print("round trip: OK")
+
+
+def cli_faults(sdins, d):
+    """Refusals: an output onto an input named by the description, a description error; nothing written."""
+    imu = os.path.join(d, "imu.txt")
+    before = sha(imu)
+    p = subprocess.run([sdins, "import", "describe", os.path.join(d, "recording.toml"), "--log", imu],
+                       capture_output=True, text=True)
+    assert p.returncode != 0 and "refusing to overwrite an input" in p.stderr, (p.returncode, p.stderr)
+    assert sha(imu) == before, "the IMU table was overwritten"
+    bad = os.path.join(d, "bad.toml")
+    with open(bad, "w") as f:
+        f.write('[imu]\nfile = "imu.txt"\nkind = "rate"\n')
+    out = os.path.join(d, "bad.lcmlog")
+    p = subprocess.run([sdins, "import", "describe", bad, "--log", out], capture_output=True, text=True)
+    assert p.returncode != 0 and f"{bad}:3:8: 'imu.kind' must be \"rates\" or \"increments\"" in p.stderr, p.stderr
+    for f in (out, out + ".json", os.path.join(d, "bad.filter.toml")):
+        assert not os.path.exists(f), f"{f} written by a refused import"
+    print("refusals: OK")
 
 
 def recordings(sdins, data, descriptions, work):

@@ -605,7 +605,7 @@ GnssResult read_gnss_rows(const GnssStreamSpec& s) {
       GpsTime gt;
       std::string why;
       TimeContext none;
-      if (s.time.base != TimeBase::kLocal && row_gps_time(s.time, r.v[0], r.v[1], none, gt, why))
+      if (row_gps_time(s.time, r.v[0], r.v[1], none, gt, why))
         g.clock_pairs.emplace_back(r.v[18] * s.local_scale_s, gps_seconds(gt) + s.latency_s);  // arrival on both clocks
     }
   return g;
@@ -636,10 +636,7 @@ void gnss_solutions(const GnssStreamSpec& s, GnssResult& g, const ImportTimeScal
   for (const Row& r : g.rows) {
     GpsTime gt;
     std::string why;
-    // A fix stamped by the local clock on arrival was valid latency_s earlier.
-    const bool ok_time = row_gps_time(s.time, r.v[0], r.v[1], ctx, gt, why);
-    if (ok_time && s.time.base == TimeBase::kLocal) gt = gps_from_seconds(gps_seconds(gt) - s.latency_s);
-    if (!ok_time) {
+    if (!row_gps_time(s.time, r.v[0], r.v[1], ctx, gt, why)) {
       g.info.lines.reject(r.line, why);
       --g.info.lines.accepted;
       continue;

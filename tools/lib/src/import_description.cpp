@@ -391,8 +391,9 @@ class DescriptionReader : public ts::Reader {
       return fail(t, "'" + p + "lat', '" + p + "lon' and '" + p + "height' are required");
     if (!s.pos_sigma.set() && s.uere_m <= 0.0 && s.uere_by_kind.empty())
       return fail(t, "the GNSS sigmas: give '" + p + "pos_sigma' columns or a '" + p + "sigma_model'");
-    if (s.time.base == TimeBase::kLocal && !s.local_clock.set())
-      return fail(t, "'" + p + "time.base' = \"local\" needs the clock pair ('" + p + "local_clock') to be fitted");
+    if (s.time.base == TimeBase::kLocal)
+      return fail(t, "'" + p + "time.base' = \"local\": the GNSS rows carry the GPS time the clock pair is fitted to; "
+                     "give their GPS time as 'time' and the local clock as '" + p + "local_clock'");
     return true;
   }
 
