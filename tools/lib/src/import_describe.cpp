@@ -234,13 +234,30 @@ struct TimeContext {
   std::uint64_t leap_rows = 0;
 };
 
+/// GPS seconds since the GPS epoch -> week and seconds of week; false for a time before the epoch
+/// or past week 9999.
+bool placed(double gps_s, GpsTime& out, std::string& why) {
+  if (!(gps_s >= 0.0 && gps_s < 1e4 * fsw::kSecondsPerWeek)) {
+    why = "GPS time out of range (before 1980-01-06 or past week 9999)";
+    return false;
+  }
+  out = gps_from_seconds(gps_s);
+  return true;
+}
+
 /// A row's raw time (and week column) -> GPS time; false (with a reason) when it cannot be placed.
 bool row_gps_time(const TimeSpec& ts, double raw, double week_raw, TimeContext& ctx, GpsTime& out, std::string& why) {
   const double v = raw * ts.scale_s;
   switch (ts.base) {
     case TimeBase::kGpsTow: {
       int week = ts.week;
-      if (ts.week_column.set()) week = static_cast<int>(week_raw);
+      if (ts.week_column.set()) {
+        if (!(week_raw >= 0.0 && week_raw < 10000.0) || week_raw != std::floor(week_raw)) {
+          why = "GPS week out of range";
+          return false;
+        }
+        week = static_cast<int>(week_raw);
+      }
       if (week < 0 && ts.week_from_ephemeris) week = ctx.ephemeris_week;
       if (week < 0) {
         why = "no GPS week";
@@ -254,8 +271,7 @@ bool row_gps_time(const TimeSpec& ts, double raw, double week_raw, TimeContext& 
       return true;
     }
     case TimeBase::kGpsSeconds:
-      out = gps_from_seconds(v);
-      return true;
+      return placed(v, out, why);
     case TimeBase::kUnix: {
       if (v < static_cast<double>(kGpsEpochGtime_s)) {
         why = "UNIX time before the GPS epoch";
@@ -264,16 +280,14 @@ bool row_gps_time(const TimeSpec& ts, double raw, double week_raw, TimeContext& 
       const int leap = gps_minus_utc_s(v);
       ctx.leap_seconds.insert(leap);
       ++ctx.leap_rows;
-      out = gps_from_seconds(v - static_cast<double>(kGpsEpochGtime_s) + leap);
-      return true;
+      return placed(v - static_cast<double>(kGpsEpochGtime_s) + leap, out, why);
     }
     case TimeBase::kLocal:
       if (!ctx.fit.valid) {
         why = "no clock fit";
         return false;
       }
-      out = gps_from_seconds(ctx.fit.gps_s(v));
-      return true;
+      return placed(ctx.fit.gps_s(v), out, why);
     case TimeBase::kRtklibTag:
       break;  // placed by the caller (the tag maps the whole stream)
   }
@@ -615,6 +629,10 @@ int solution_kind(const GnssStreamSpec& s, const Row& r, bool& ok) {
   ok = true;
   if (!s.quality.set()) return s.quality_default;
   const double q = r.v[16];
+  if (!(std::abs(q) < 1e6)) {
+    ok = false;
+    return 0;
+  }
   if (!s.quality_map.empty()) {
     const auto it = s.quality_map.find(std::lround(q));
     if (it == s.quality_map.end() || q != std::round(q)) {
@@ -648,7 +666,8 @@ void gnss_solutions(const GnssStreamSpec& s, GnssResult& g, const ImportTimeScal
     bool ok = position_llh(s.pos, r, p.llh, g.geoid_rows);
     bool kind_ok = true;
     p.quality = solution_kind(s, r, kind_ok);
-    p.n_sat = s.n_sat.set() ? static_cast<int>(r.v[17]) : 0;
+    const bool nsat_ok = !s.n_sat.set() || (r.v[17] >= 0.0 && r.v[17] <= 255.0);
+    p.n_sat = s.n_sat.set() && nsat_ok ? static_cast<int>(r.v[17]) : 0;
     if (s.pos_sigma.set()) {
       p.pos_sigma_enu_m = vec_at(r, 8, s.pos_sigma.scale);
     } else {
@@ -665,8 +684,10 @@ void gnss_solutions(const GnssStreamSpec& s, GnssResult& g, const ImportTimeScal
     } else {
       p.vel_sigma_enu_mps = fsw::Vec3::Constant(hal::kGnssPvtNoVelocity);
     }
-    if (!ok || !kind_ok) {
-      g.info.lines.reject(r.line, !ok ? "position out of range (check the angle unit)" : "fix quality not in the map");
+    if (!ok || !kind_ok || !nsat_ok) {
+      g.info.lines.reject(r.line, !ok        ? "position out of range (check the angle unit)"
+                                  : !kind_ok ? "fix quality not in the map (or not a solution kind)"
+                                             : "satellite count outside 0..255");
       --g.info.lines.accepted;
       continue;
     }
