@@ -2,9 +2,12 @@
 // log + raw u-blox receiver log, or the PSINS tight-coupling data set) into the project's LCM log
 // format. The work is in the tools library (tools/importers.hpp); this file parses options and prints.
 #include <cstdio>
+#include <filesystem>
+#include <vector>
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "tools/import_describe.hpp"
 #include "tools/importers.hpp"
 #include "tools/output_file.hpp"
 #include "tools/ulog_import.hpp"
@@ -15,7 +18,10 @@ struct Options {
   tools::ImportOptions imp;
   tools::UlogImportOptions ulog;
   std::string json;
+  std::string data_dir;
+  std::string filter_config;
 } opt;
+CLI::App* import_cmd = nullptr;
 }  // namespace
 
 void register_import(CLI::App& app) {
@@ -23,13 +29,24 @@ void register_import(CLI::App& app) {
       "import",
       "Convert a recording into an LCM log: IMU (body axes x forward, y right, z down; increments), GNSS_RAW "
       "(pseudorange + rate) with GPS_ALMANAC fitted to the broadcast ephemeris, GNSS_PVT solutions and the RTK "
-      "reference on TRUTH; t_s on the GPS time scale (docs/import.md).");
+      "reference on TRUTH; t_s on the GPS time scale (docs/import.md). `describe FILE.toml`: any recording described by "
+      "a TOML file (docs/own-recording.md); rtklib and psins are presets of the same path. Beside the log: its summary "
+      "(LOG.json) and a starting filter configuration (LOG without extension + .filter.toml).");
+  import_cmd = sub;
   sub->add_option("FORMAT", opt.imp.format,
                   "rtklib: an RTKLIB .pos, an IMU CSV with its .tag, optionally a u-blox .ubx (through convbin); "
-                  "psins: imu_200hz.csv, gps_obs.csv, gps_eph.csv; ulog: a PX4 .ulg (docs/ulog.md)")
+                  "psins: imu_200hz.csv, gps_obs.csv, gps_eph.csv; ulog: a PX4 .ulg (docs/ulog.md); describe: a recording "
+                  "description (TOML)")
       ->required()
-      ->check(CLI::IsMember({"rtklib", "psins", "ulog"}));
-  sub->add_option("PATH", opt.imp.path, "the recording's directory (rtklib: or its .pos file; ulog: the .ulg file)")->required();
+      ->check(CLI::IsMember({"rtklib", "psins", "ulog", "describe"}));
+  sub->add_option("PATH", opt.imp.path,
+                  "the recording's directory (rtklib: or its .pos file; ulog: the .ulg file; describe: the description file)")
+      ->required();
+  sub->add_option("--data", opt.data_dir,
+                  "describe: the directory that the description's relative file names are in (default: the "
+                  "description's own directory)");
+  sub->add_option("--filter-config-out", opt.filter_config,
+                  "where to write the starting filter configuration (default: the log's name with .filter.toml)");
   sub->add_option("--log", opt.imp.log_path, "the LCM log to write")->required();
   sub->add_option("--json", opt.json, "write the summary as JSON");
   sub->add_option("--axes", opt.imp.axes,
@@ -84,9 +101,35 @@ int run_import_ulog() {
 
 int run_import() {
   if (opt.imp.format == "ulog") return run_import_ulog();
-  // docs/faults.md: neither output may be (or lie inside) the recording, nor each other.
-  tools::require_distinct({opt.imp.log_path, opt.json}, {opt.imp.path});
-  const nlohmann::json summary = tools::import_recording(opt.imp);
+  const std::string log = opt.imp.log_path;
+  std::string filter_out = opt.filter_config;
+  if (filter_out.empty()) filter_out = std::filesystem::path(log).replace_extension(".filter.toml").string();
+  // docs/faults.md: no output may be (or lie inside) the recording, nor each other.
+  tools::require_distinct({log, opt.json, tools::import_sidecar_path(log), filter_out}, {opt.imp.path});
+  nlohmann::json summary;
+  if (opt.imp.format == "describe") {
+    for (const char* o : {"--axes", "--truth-max-q", "--max-fit-error", "--clip-gnss-to-imu", "--imu-clock-ratio",
+                          "--keep-temp", "--convbin"})
+      if (import_cmd->count(o) > 0)
+        throw std::runtime_error(std::string(o) + " is an option of the rtklib/psins presets; a description states it "
+                                 "in its file (docs/own-recording.md)");
+    tools::RecordingDescription d;
+    const tools::DescriptionParseResult pr = tools::parse_recording_description_file(opt.imp.path, opt.data_dir, d);
+    if (!pr.ok) throw std::runtime_error(pr.error);
+    std::vector<std::string> inputs = tools::description_inputs(d);
+    inputs.push_back(opt.imp.path);
+    tools::require_distinct({log, opt.json, tools::import_sidecar_path(log), filter_out}, inputs);
+    d.filter_config_out = filter_out;
+    tools::DescribeOptions o;
+    o.log_path = log;
+    o.input = opt.imp.path;
+    summary = tools::import_described(d, o);
+  } else {
+    if (!opt.data_dir.empty()) throw std::runtime_error("--data is an option of `import describe`");
+    tools::RecordingDescription d = opt.imp.format == "rtklib" ? tools::rtklib_preset(opt.imp) : tools::psins_preset(opt.imp);
+    d.filter_config_out = filter_out;
+    summary = tools::import_described(d, tools::describe_options(opt.imp));
+  }
   if (!opt.json.empty()) tools::write_json_file(opt.json, summary);
   std::fputs(tools::import_summary_text(summary).c_str(), stdout);
   return 0;

@@ -199,6 +199,11 @@ FlownScenario scenario_from_sidecar(const std::string& log_path) {
   try {
     std::ifstream in(sidecar);
     const nlohmann::json j = nlohmann::json::parse(in);
+    if (j.value("format", "") == "sdins-import-summary") {  // `sdins import` writes its summary there
+      out.note = "no scenario is known for this recording (" + sidecar +
+                 " is its import summary): a measured recording; the segments are suggested without a prediction";
+      return out;
+    }
     if (j.value("format", "") != "sdins-sim-sidecar") {
       out.note = sidecar + " is not an sdins sim sidecar: no scenario is known, segments without a prediction";
       return out;

@@ -19,38 +19,27 @@
 #include "hal/input_file.hpp"
 #include "hal/lcm_channels.hpp"
 #include "hal/lcm_log_sink.hpp"
+#include "import_common.hpp"
+#include "tools/import_describe.hpp"
 #include "tools/importers.hpp"
 
 extern char** environ;
 
 namespace tools {
-namespace {
-
-namespace fs = std::filesystem;
+namespace import_detail {
 
 // ---------------------------------------------------------------------------------------------
 // What goes into the log
 
 enum class EventKind : int { kAlmanac = 0, kImu = 1, kGnssRaw = 2, kGnssPvt = 3, kTruth = 4 };
 
-struct TimedAlmanac {
-  double t_s;  ///< when it is written (-inf: at the start of the log)
-  fsw::GpsAlmanac almanac;
-};
-
-struct Collected {
-  std::vector<TimedAlmanac> almanacs;  ///< the first set at the earliest time of the log, updates later
-  std::vector<hal::ImuRecord> imu;
-  std::vector<fsw::GnssRawEpoch> raw;
-  std::vector<hal::GnssPvtSample> pvt;
-  std::vector<hal::GnssPvtSample> truth;  ///< reference epochs (RTK solution), position and velocity only
-};
-
+namespace {
 struct Event {
   double t_s;
   EventKind kind;
   std::size_t idx;
 };
+}  // namespace
 
 nlohmann::json write_log(const std::string& path, const Collected& c) {
   std::vector<Event> ev;
@@ -87,9 +76,9 @@ nlohmann::json write_log(const std::string& path, const Collected& c) {
       case EventKind::kGnssRaw: st = sink.write_gnss(c.raw[e.idx]); ch = hal::kLcmChannelGnssRaw; break;
       case EventKind::kGnssPvt: st = sink.write_pvt(c.pvt[e.idx]); ch = hal::kLcmChannelGnssPvt; break;
       case EventKind::kTruth: {
-        const hal::GnssPvtSample& p = c.truth[e.idx];
-        const fsw::Vec3 v = p.has_velocity() ? p.vel_enu_mps : fsw::Vec3::Constant(std::nan(""));
-        st = sink.write_reference(p.t_s, p.llh, v);
+        const ReferenceEpoch& r = c.truth[e.idx];
+        st = r.has_attitude ? sink.write_truth(r.t_s, r.llh, r.vel_enu_mps, r.C_b_n)
+                            : sink.write_reference(r.t_s, r.llh, r.vel_enu_mps);
         ch = hal::kLcmChannelTruth;
         break;
       }
@@ -287,29 +276,19 @@ nlohmann::json almanacs_from_ephemeris(const std::vector<GpsEphemeris>& ephs, co
 // ---------------------------------------------------------------------------------------------
 // Raw epochs
 
-struct RawCounts {
-  std::uint64_t epochs_in = 0, non_gps = 0, no_pseudorange = 0, no_doppler = 0, bad_pseudorange = 0, over_16 = 0,
-                duplicate_prn = 0, empty_epochs = 0, measurements = 0;
-  std::set<int> prns;
-  nlohmann::json to_json() const {
-    return {{"epochs_read", epochs_in},
-            {"measurements", measurements},
-            {"satellites", std::vector<int>(prns.begin(), prns.end())},
-            {"skipped",
-             {{"non_gps_observations", non_gps},
-              {"gps_without_pseudorange", no_pseudorange},
-              {"gps_without_doppler", no_doppler},
-              {"pseudorange_outside_1e7_5e7_m", bad_pseudorange},
-              {"duplicate_prn", duplicate_prn},
-              {"beyond_16_per_epoch", over_16},
-              {"epochs_without_gps", empty_epochs}}}};
-  }
-};
-
-struct RawMeas {
-  int prn;
-  double pr, prr, cn0;
-};
+nlohmann::json RawCounts::to_json() const {
+  return {{"epochs_read", epochs_in},
+          {"measurements", measurements},
+          {"satellites", std::vector<int>(prns.begin(), prns.end())},
+          {"skipped",
+           {{"non_gps_observations", non_gps},
+            {"gps_without_pseudorange", no_pseudorange},
+            {"gps_without_doppler", no_doppler},
+            {"pseudorange_outside_1e7_5e7_m", bad_pseudorange},
+            {"duplicate_prn", duplicate_prn},
+            {"beyond_16_per_epoch", over_16},
+            {"epochs_without_gps", empty_epochs}}}};
+}
 
 /// One epoch from measurements (at most 16, the strongest first when there are more).
 bool make_epoch(double t_s, const GpsTime& t, std::vector<RawMeas> m, RawCounts& c, fsw::GnssRawEpoch& e) {
@@ -411,362 +390,10 @@ std::string join(const std::vector<std::string>& v) {
   return s;
 }
 
-struct TempDir {
-  fs::path path;
-  bool keep = false;
-  ~TempDir() {
-    std::error_code ec;
-    if (!path.empty() && !keep) fs::remove_all(path, ec);
-  }
-};
+}  // namespace import_detail
 
-// ---------------------------------------------------------------------------------------------
-// rtklib
-
-nlohmann::json import_rtklib(const ImportOptions& opt) {
-  const fs::path in(opt.path);
-  fs::path dir, pos;
-  if (fs::is_directory(in)) {
-    dir = in;
-    const auto p = files_with(dir, ".pos");
-    if (p.empty()) throw std::runtime_error("no RTKLIB solution (*.pos) in " + dir.string());
-    if (p.size() > 1) throw std::runtime_error("several .pos files in " + dir.string() + " (" + names(p) + "): name one");
-    pos = p.front();
-  } else if (fs::is_regular_file(in) && in.extension() == ".pos") {
-    pos = in;
-    dir = in.parent_path().empty() ? fs::path(".") : in.parent_path();
-  } else {
-    throw std::runtime_error(opt.path + " is neither a directory nor a .pos file");
-  }
-  // The IMU log: a CSV with its .tag beside it.
-  std::vector<fs::path> imu_csv, untagged;
-  for (const fs::path& c : files_with(dir, ".csv"))
-    (fs::exists(c.string() + ".tag") ? imu_csv : untagged).push_back(c);
-  // docs/faults.md: an IMU log without its time tag is an error, not an import without the IMU.
-  if (imu_csv.empty() && !untagged.empty())
-    throw std::runtime_error("IMU CSV without its time-tag file in " + dir.string() + " (" + names(untagged) +
-                             ": no " + untagged.front().filename().string() +
-                             ".tag beside it): the IMU cannot be placed on GPS time");
-  if (imu_csv.size() > 1) throw std::runtime_error("several IMU CSVs with a .tag in " + dir.string() + " (" + names(imu_csv) + ")");
-  const auto ubx = files_with(dir, ".ubx");
-  if (ubx.size() > 1) throw std::runtime_error("several .ubx files in " + dir.string() + " (" + names(ubx) + ")");
-
-  const AxisMap axes = parse_axis_map(opt.axes.empty() ? kAxesGnssImu : opt.axes);
-  nlohmann::json sum;
-  sum["format"] = "rtklib";
-  sum["input"] = opt.path;
-
-  // Solutions.
-  std::ifstream pf = open_in(pos);
-  PosFile pf_data = read_rtklib_pos(pf);
-
-  // IMU.
-  std::vector<ImuCsvSample> imu_samples;
-  LineStats imu_lines;
-  TimeTag tag;
-  TickToGps map;
-  const bool have_imu = !imu_csv.empty();
-  if (have_imu) {
-    std::ifstream f = open_in(imu_csv.front());
-    imu_samples = read_gnss_imu_csv(f, imu_lines);
-    const std::string tag_path = imu_csv.front().string() + ".tag";
-    tag = read_time_tag(tag_path);
-    try {
-      map = tick_to_gps(tag, imu_samples);
-    } catch (const std::runtime_error& e) {
-      throw std::runtime_error(tag_path + ": " + e.what());
-    }
-    // docs/faults.md: the time base is checked, never guessed. The tag's span against the IMU's own
-    // ticks (ms) must be a clock ratio, not a truncated CSV or a cut .tag stretching the samples.
-    if (tag.non_monotonic > 0)
-      throw std::runtime_error(tag_path + ": " + std::to_string(tag.non_monotonic) +
-                               " records go backwards in tick or offset: a damaged time-tag file");
-    if (imu_lines.time_base_changes > 0 && imu_lines.last_time_jump < 0.0)
-      throw std::runtime_error(imu_csv.front().string() + ": the IMU tick goes back by " +
-                               std::to_string(-imu_lines.last_time_jump) + " ms near line " +
-                               std::to_string(imu_lines.last_time_jump_line) +
-                               " and stays there (the IMU restarted): one .tag cannot place both parts on GPS time");
-    const double ratio = map.seconds_per_tick * 1e3;
-    const double imu_span_s = 1e-3 * static_cast<double>(imu_samples.back().tick_ms - imu_samples.front().tick_ms);
-    const std::string why = tag_path + ": the last tag record is " + std::to_string(tag.last_tick_s()) +
-                            " s after the start but the IMU's own ticks span " + std::to_string(imu_span_s) +
-                            " s (ratio " + std::to_string(ratio) + ", beyond the " +
-                            std::to_string(kMaxTagClockDeviation) +
-                            " a clock drift can explain): a cut .tag or a truncated IMU CSV";
-    if (opt.imu_clock_ratio > 0.0) {
-      if (!(std::abs(ratio - 1.0) <= kMaxTagClockDeviation)) {
-        std::fprintf(stderr, "sdins import: warning: %s; using --imu-clock-ratio %g (the IMU's own clock)\n",
-                     why.c_str(), opt.imu_clock_ratio);
-        sum["warnings"].push_back(why + "; the IMU's own clock used (--imu-clock-ratio)");
-      }
-      map.seconds_per_tick = opt.imu_clock_ratio * 1e-3;
-    } else if (!(std::abs(ratio - 1.0) <= kMaxTagClockDeviation)) {
-      throw std::runtime_error(why + "; to place the IMU by its own clock from the tag's start time instead, pass "
-                               "--imu-clock-ratio 1");
-    }
-  }
-
-  // Raw GNSS through convbin.
-  std::vector<RinexObsEpoch> obs;
-  std::vector<GpsEphemeris> ephs;
-  RinexObsStats obs_stats;
-  LineStats nav_lines;
-  TempDir tmp;
-  nlohmann::json convbin_json = nullptr;
-  if (!ubx.empty()) {
-    tmp.path = make_temp_dir();
-    tmp.keep = opt.keep_temp;
-    const std::string obs_path = (tmp.path / "raw.obs").string(), nav_path = (tmp.path / "raw.nav").string();
-    // RINEX 3.04 with Doppler and SNR; only GPS (the flight software is GPS L1 C/A).
-    const std::vector<std::string> cmd = {opt.convbin, "-r", "ubx", "-v", "3.04", "-od", "-os", "-y", "R", "-y", "E",
-                                          "-y", "J", "-y", "S", "-y", "C", "-y", "I", "-o", obs_path, "-n", nav_path,
-                                          ubx.front().string()};
-    const int rc = run_program(cmd, (tmp.path / "convbin.log").string());
-    if (rc != 0 || !fs::exists(obs_path) || fs::file_size(obs_path) == 0)
-      throw std::runtime_error("convbin failed (exit " + std::to_string(rc) + ", is RTKLIB installed? Debian: rtklib): " +
-                               join(cmd));
-    std::ifstream of = open_in(obs_path);
-    obs = read_rinex3_obs(of, obs_stats);
-    if (fs::exists(nav_path)) {
-      std::ifstream nf = open_in(nav_path);
-      ephs = read_rinex3_nav(nf, nav_lines);
-    }
-    std::set<int> eph_prns;
-    for (const GpsEphemeris& e : ephs) eph_prns.insert(e.prn);
-    convbin_json = {{"command", join(cmd)},
-                    {"exit_status", rc},
-                    {"temp_dir", opt.keep_temp ? tmp.path.string() : std::string("(removed)")},
-                    {"rinex_version", obs_stats.version},
-                    {"obs_bytes", fs::file_size(obs_path)},
-                    {"obs_epochs", obs.size()},
-                    {"obs_lines", obs_stats.lines.to_json()},
-                    {"event_epochs", obs_stats.event_epochs},
-                    {"nav_bytes", fs::exists(nav_path) ? fs::file_size(nav_path) : 0},
-                    {"nav_gps_ephemerides", ephs.size()},
-                    {"nav_gps_prns", std::vector<int>(eph_prns.begin(), eph_prns.end())},
-                    {"nav_records", nav_lines.to_json()}};
-  }
-
-  // The time scale: the GPS week of the earliest sample.
-  int week0 = 1 << 30;
-  if (!pf_data.samples.empty()) week0 = std::min(week0, pf_data.samples.front().gps_week);
-  if (have_imu) week0 = std::min(week0, map.start.week);
-  if (!obs.empty()) week0 = std::min(week0, obs.front().time.week);
-  if (week0 == (1 << 30)) throw std::runtime_error("nothing to import in " + opt.path);
-  const ImportTimeScale ts{week0};
-
-  Collected c;
-  // IMU: g -> m/s^2, deg/s -> rad/s, sensor -> body, rates -> trapezoid increments.
-  if (have_imu) {
-    const double t_start = ts.t_s(map.start);
-    std::vector<RateSample> rs;
-    rs.reserve(imu_samples.size());
-    for (const ImuCsvSample& s : imu_samples) {
-      RateSample r;
-      r.t_s = t_start + map.offset_s(s.tick_ms);
-      r.f_mps2 = axes.apply(fsw::Vec3(s.accel_g[0], s.accel_g[1], s.accel_g[2]) * fsw::kStandardGravity_mps2);
-      r.omega_radps = axes.apply(fsw::Vec3(s.gyro_dps[0], s.gyro_dps[1], s.gyro_dps[2]) * fsw::kDegToRad);
-      r.counter = static_cast<std::int32_t>(s.line - 1);  // zero-based line: rejected lines show as counter gaps
-      rs.push_back(r);
-    }
-    c.imu = increments_from_rates(rs);
-  }
-  for (hal::GnssPvtSample p : pf_data.samples) {
-    p.t_s = ts.t_s(GpsTime{p.gps_week, p.gps_tow_s});
-    c.pvt.push_back(p);
-  }
-  RawCounts rc;
-  for (const RinexObsEpoch& ep : obs) {
-    ++rc.epochs_in;
-    std::vector<RawMeas> m;
-    for (const RinexObsSat& s : ep.sats) {
-      if (s.sys != 'G') {
-        ++rc.non_gps;
-        continue;
-      }
-      if (!s.has_c1c) {
-        ++rc.no_pseudorange;
-        continue;
-      }
-      if (!s.has_d1c) {
-        ++rc.no_doppler;
-        continue;
-      }
-      if (s.c1c_m < 1e7 || s.c1c_m > 5e7) {
-        ++rc.bad_pseudorange;
-        continue;
-      }
-      m.push_back({s.prn, s.c1c_m, -s.d1c_hz * kGpsL1Wavelength_m, s.has_s1c ? s.s1c_dbhz : 0.0});
-    }
-    fsw::GnssRawEpoch e;
-    if (make_epoch(ts.t_s(ep.time), ep.time, m, rc, e)) c.raw.push_back(e);
-  }
-
-  // Optional clipping to the IMU span.
-  std::uint64_t clipped_raw = 0, clipped_pvt = 0;
-  if (opt.clip_gnss_to_imu && !c.imu.empty()) {
-    const double a = c.imu.front().sample.t_s - 1.0, b = c.imu.back().sample.t_s + 1.0;
-    const auto out_raw = [&](const fsw::GnssRawEpoch& e) { return e.t_s < a || e.t_s > b; };
-    const auto out_pvt = [&](const hal::GnssPvtSample& p) { return p.t_s < a || p.t_s > b; };
-    clipped_raw = static_cast<std::uint64_t>(std::count_if(c.raw.begin(), c.raw.end(), out_raw));
-    clipped_pvt = static_cast<std::uint64_t>(std::count_if(c.pvt.begin(), c.pvt.end(), out_pvt));
-    c.raw.erase(std::remove_if(c.raw.begin(), c.raw.end(), out_raw), c.raw.end());
-    c.pvt.erase(std::remove_if(c.pvt.begin(), c.pvt.end(), out_pvt), c.pvt.end());
-  }
-  std::uint64_t truth_left_out = 0;
-  for (const hal::GnssPvtSample& p : c.pvt) {
-    if (p.quality >= 1 && p.quality <= opt.truth_max_quality)
-      c.truth.push_back(p);
-    else
-      ++truth_left_out;
-  }
-  nlohmann::json alm_json = nullptr;
-  if (!c.raw.empty()) {
-    const GpsTime first{c.raw.front().gps_week, c.raw.front().gps_tow_s};
-    const double span = c.raw.back().t_s - c.raw.front().t_s;
-    alm_json = almanacs_from_ephemeris(ephs, rc.prns, first, c.raw.front().t_s, span, opt.max_fit_error_m, c.almanacs);
-  }
-
-  sum["time_scale"] = {{"gps_week0", week0},
-                       {"definition", "t_s = GPS time in seconds since the start of GPS week " + std::to_string(week0) +
-                                          " (= GPS time of week within that week)"}};
-  sum["files"] = {{"pos", pos.string()},
-                  {"imu_csv", have_imu ? imu_csv.front().string() : std::string()},
-                  {"imu_tag", have_imu ? imu_csv.front().string() + ".tag" : std::string()},
-                  {"ubx", ubx.empty() ? std::string() : ubx.front().string()}};
-  if (have_imu) {
-    nlohmann::json ij = finish_imu(c.imu, imu_lines, axes);
-    ij["tag"] = {{"label", tag.label},
-                 {"start_week", map.start.week},
-                 {"start_tow_s", map.start.tow_s},
-                 {"records", tag.records.size()},
-                 {"last_tick_s", tag.last_tick_s()},
-                 {"non_monotonic_records", tag.non_monotonic},
-                 {"trailing_bytes", tag.trailing_bytes}};
-    ij["tick_ms_first"] = imu_samples.front().tick_ms;
-    ij["tick_ms_last"] = imu_samples.back().tick_ms;
-    ij["seconds_per_imu_second"] = map.seconds_per_tick * 1e3;
-    ij["timing"] = opt.imu_clock_ratio > 0.0
-                       ? "first accepted sample at the tag's start time, linear in the IMU tick at --imu-clock-ratio"
-                       : "first accepted sample at the tag's start time, last at start + last tag tick, linear in the IMU tick";
-    ij["increments"] = "trapezoid of consecutive samples over (t[k-1], t[k]]: n accepted lines give n - 1 samples";
-    sum["imu"] = ij;
-  } else {
-    sum["imu"] = nullptr;
-  }
-  sum["gnss_pvt"] = pvt_json(c.pvt, pf_data.lines, pos.string());
-  sum["gnss_pvt"]["clipped_to_imu"] = clipped_pvt;
-  sum["gnss_pvt"]["has_velocity"] = pf_data.has_velocity;
-  sum["truth"] = {{"samples", c.truth.size()},
-                  {"max_quality", opt.truth_max_quality},
-                  {"left_out", truth_left_out},
-                  {"note", "the RTK solution as reference (position, velocity; attitude NaN), not truth"}};
-  if (!ubx.empty()) {
-    nlohmann::json rj = rc.to_json();
-    rj["epochs"] = raw_span(c.raw);
-    rj["clipped_to_imu"] = clipped_raw;
-    rj["pseudorange_rate"] = "-D1C * c / 1575.42 MHz (L1 C/A Doppler)";
-    sum["gnss_raw"] = rj;
-  } else {
-    sum["gnss_raw"] = nullptr;
-  }
-  sum["convbin"] = convbin_json;
-  sum["almanac"] = alm_json;
-  sum["log"] = write_log(opt.log_path, c);
-  return sum;
-}
-
-// ---------------------------------------------------------------------------------------------
-// psins
-
-nlohmann::json import_psins(const ImportOptions& opt) {
-  const fs::path dir(opt.path);
-  if (!fs::is_directory(dir)) throw std::runtime_error(opt.path + " is not a directory (psins-tc layout expected)");
-  const fs::path imu_p = dir / "imu_200hz.csv", obs_p = dir / "gps_obs.csv", eph_p = dir / "gps_eph.csv";
-  for (const fs::path& p : {imu_p, obs_p, eph_p})
-    if (!fs::exists(p)) throw std::runtime_error("missing " + p.string());
-  const AxisMap axes = parse_axis_map(opt.axes.empty() ? kAxesPsins : opt.axes);
-
-  LineStats imu_lines, obs_lines, eph_lines;
-  std::ifstream fi = open_in(imu_p), fo = open_in(obs_p), fe = open_in(eph_p);
-  const std::vector<PsinsImuRow> imu_rows = read_psins_imu(fi, imu_lines);
-  const std::vector<PsinsObsRow> obs_rows = read_psins_obs(fo, obs_lines);
-  const std::vector<GpsEphemeris> ephs = read_psins_eph(fe, eph_lines);
-  if (ephs.empty()) throw std::runtime_error("no usable ephemeris in " + eph_p.string() + ": the GPS week is unknown");
-  // The GPS week: the files carry only the time of week; the ephemerides carry the week (WN).
-  std::map<int, int> weeks;
-  for (const GpsEphemeris& e : ephs) ++weeks[e.week];
-  const int week = std::max_element(weeks.begin(), weeks.end(), [](auto& a, auto& b) { return a.second < b.second; })->first;
-  const ImportTimeScale ts{week};
-
-  Collected c;
-  // IMU: increments over (t[k-1], t[k]]; the first row's interval is the median one.
-  {
-    std::vector<double> d;
-    for (std::size_t k = 1; k < imu_rows.size(); ++k) d.push_back(imu_rows[k].tow_s - imu_rows[k - 1].tow_s);
-    const double nominal = d.empty() ? 0.005 : median(d);
-    for (std::size_t k = 0; k < imu_rows.size(); ++k) {
-      hal::ImuRecord r;
-      r.sample.t_s = ts.t_s(GpsTime{week, imu_rows[k].tow_s});
-      r.sample.dt_s = k == 0 ? nominal : imu_rows[k].tow_s - imu_rows[k - 1].tow_s;
-      r.sample.dtheta_rad = axes.apply(imu_rows[k].dtheta_rad);
-      r.sample.dv_mps = axes.apply(imu_rows[k].dv_mps);
-      r.counter = static_cast<std::int32_t>(imu_rows[k].line - 1);  // zero-based line (the header is line 0)
-      c.imu.push_back(r);
-    }
-  }
-  // Raw epochs: rows of equal time of week; rate = -Doppler (the file's Doppler is -range rate).
-  RawCounts rc;
-  for (std::size_t i = 0; i < obs_rows.size();) {
-    std::size_t j = i;
-    std::vector<RawMeas> m;
-    while (j < obs_rows.size() && obs_rows[j].tow_s == obs_rows[i].tow_s) {
-      m.push_back({obs_rows[j].prn, obs_rows[j].pseudorange_m, -obs_rows[j].doppler_mps, 0.0});
-      ++j;
-    }
-    ++rc.epochs_in;
-    const GpsTime t{week, obs_rows[i].tow_s};
-    fsw::GnssRawEpoch e;
-    if (make_epoch(ts.t_s(t), t, m, rc, e)) c.raw.push_back(e);
-    i = j;
-  }
-  std::uint64_t clipped_raw = 0;
-  if (opt.clip_gnss_to_imu && !c.imu.empty()) {
-    const double a = c.imu.front().sample.t_s - 1.0, b = c.imu.back().sample.t_s + 1.0;
-    const auto out_raw = [&](const fsw::GnssRawEpoch& e) { return e.t_s < a || e.t_s > b; };
-    clipped_raw = static_cast<std::uint64_t>(std::count_if(c.raw.begin(), c.raw.end(), out_raw));
-    c.raw.erase(std::remove_if(c.raw.begin(), c.raw.end(), out_raw), c.raw.end());
-  }
-  nlohmann::json alm_json = nullptr;
-  if (!c.raw.empty()) {
-    const GpsTime first{c.raw.front().gps_week, c.raw.front().gps_tow_s};
-    alm_json = almanacs_from_ephemeris(ephs, rc.prns, first, c.raw.front().t_s, c.raw.back().t_s - c.raw.front().t_s,
-                                       opt.max_fit_error_m, c.almanacs);
-  }
-
-  nlohmann::json sum;
-  sum["format"] = "psins";
-  sum["input"] = opt.path;
-  sum["time_scale"] = {{"gps_week0", week},
-                       {"definition", "t_s = GPS time in seconds since the start of GPS week " + std::to_string(week) +
-                                          " (= GPS time of week; the week is the ephemerides' WN)"}};
-  sum["files"] = {{"imu", imu_p.string()}, {"obs", obs_p.string()}, {"eph", eph_p.string()}};
-  nlohmann::json ij = finish_imu(c.imu, imu_lines, axes);
-  ij["increments"] = "as recorded (PSINS delta-theta / delta-v), t_s = the row's time (end of the interval)";
-  sum["imu"] = ij;
-  nlohmann::json rj = rc.to_json();
-  rj["lines"] = obs_lines.to_json();
-  rj["epochs"] = raw_span(c.raw);
-  rj["clipped_to_imu"] = clipped_raw;
-  rj["pseudorange_rate"] = "-(the file's Doppler column, which is minus the range rate in m/s); C/N0 unknown: 0";
-  sum["gnss_raw"] = rj;
-  sum["ephemeris"] = {{"lines", eph_lines.to_json()}, {"gps_week", week}};
-  sum["almanac"] = alm_json;
-  sum["gnss_pvt"] = nullptr;
-  sum["truth"] = nullptr;
-  sum["log"] = write_log(opt.log_path, c);
-  return sum;
-}
+namespace {
+using namespace import_detail;
 
 // ---------------------------------------------------------------------------------------------
 // Text
@@ -813,18 +440,10 @@ std::string lines_text(const nlohmann::json& l) {
 
 nlohmann::json import_recording(const ImportOptions& opt) {
   if (opt.log_path.empty()) throw std::runtime_error("no output log (--log)");
-  nlohmann::json j;
-  if (opt.format == "rtklib")
-    j = import_rtklib(opt);
-  else if (opt.format == "psins")
-    j = import_psins(opt);
-  else
-    throw std::runtime_error("unknown import format '" + opt.format + "' (rtklib, psins)");
-  std::uint64_t rejected = 0;
-  for (const char* k : {"imu", "gnss_pvt", "gnss_raw", "ephemeris"})
-    if (j.contains(k) && !j[k].is_null() && j[k].contains("lines")) rejected += j[k]["lines"]["rejected"].get<std::uint64_t>();
-  j["rejected_lines_total"] = rejected;
-  return j;
+  // One code path: the dedicated formats are presets of the description import.
+  if (opt.format == "rtklib") return import_described(rtklib_preset(opt), describe_options(opt));
+  if (opt.format == "psins") return import_described(psins_preset(opt), describe_options(opt));
+  throw std::runtime_error("unknown import format '" + opt.format + "' (rtklib, psins)");
 }
 
 namespace {
@@ -863,9 +482,15 @@ std::string import_summary_text(const nlohmann::json& j) {
     for (const auto& [k, v] : p["by_quality"].items()) o << " " << k << ":" << v.get<std::uint64_t>();
     o << "\n";
   }
-  if (has(j, "truth"))
-    o << "TRUTH:        " << j["truth"]["samples"].get<std::uint64_t>() << " reference epochs (RTK solution, Q <= "
-      << j["truth"]["max_quality"].get<int>() << "), " << j["truth"]["left_out"].get<std::uint64_t>() << " left out\n";
+  if (has(j, "truth")) {
+    const auto& t = j["truth"];
+    o << "TRUTH:        " << t["samples"].get<std::uint64_t>() << " reference epochs (" << t.value("kind", std::string("rtk"));
+    if (t.contains("max_quality"))
+      o << " from the solutions, Q <= " << t["max_quality"].get<int>() << "), " << t["left_out"].get<std::uint64_t>()
+        << " left out\n";
+    else
+      o << ", " << t.value("source", std::string()) << ")\n";
+  }
   if (has(j, "convbin")) {
     const auto& c = j["convbin"];
     o << "convbin:      RINEX " << c["rinex_version"].get<std::string>() << ", " << c["obs_epochs"].get<std::uint64_t>()
@@ -915,6 +540,7 @@ std::string import_summary_text(const nlohmann::json& j) {
     first = false;
   }
   o << "); " << j.value("rejected_lines_total", std::uint64_t{0}) << " input lines rejected in all\n";
+  o << describe_summary_text(j);
   return o.str();
 }
 
