@@ -63,27 +63,37 @@ TEST(NoiseAllan, EdfFormulasOfNistSp1065) {
 }
 
 TEST(NoiseAllan, WhiteNoiseCurveFollowsTheoryAndOtherTermsAreUnsupported) {
+  // White noise alone, 5 seeds x 6 axes: the curve inside its intervals, N read at 1 s with its
+  // interval covering the truth at about 95%, and neither a floor nor a rising part claimed.
   sim::ImuErrors e;
   e.gyro_arw_rad_per_rts = 2e-3;
   e.accel_vrw_mps_per_rts = 5e-3;
-  const auto s = static_samples(e, 3, 0.01, 30000);  // 300 s at 100 Hz
-  const tools::NoiseAnalysis a = tools::analyse_noise(s, {whole(s)});
-  ASSERT_EQ(a.axes.size(), 6u);
-  for (const tools::AxisNoise& ax : a.axes) {
-    const double n = ax.gyro ? e.gyro_arw_rad_per_rts : e.accel_vrw_mps_per_rts;
-    int inside = 0;
-    for (const tools::AllanPoint& p : ax.curve.points) inside += (p.avar_lo <= n * n / p.tau_s && n * n / p.tau_s <= p.avar_hi);
-    EXPECT_GE(inside, static_cast<int>(0.85 * ax.curve.points.size())) << ax.name;
-    EXPECT_TRUE(ax.reading.white.supported) << ax.name;
-    EXPECT_NEAR(ax.reading.white.read_tau_s, 1.0, 0.01) << ax.name;
-    EXPECT_LE(ax.reading.white.lo, n) << ax.name;
-    EXPECT_GE(ax.reading.white.hi, n) << ax.name;
-    // Neither a floor nor a rising part: both said, with an upper bound above zero.
-    EXPECT_FALSE(ax.reading.rate_rw.supported) << ax.name << ": " << ax.reading.rate_rw.note;
-    EXPECT_GT(ax.reading.rate_rw.value, 0.0);
-    EXPECT_FALSE(ax.reading.bias.supported) << ax.name << ": " << ax.reading.bias.note;
-    EXPECT_NE(ax.reading.bias.note.find("no flat part"), std::string::npos);
+  int trials = 0, covered = 0, k_claimed = 0, b_claimed = 0;
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    const auto s = static_samples(e, seed, 0.01, 30000);  // 300 s at 100 Hz
+    const tools::NoiseAnalysis a = tools::analyse_noise(s, {whole(s)});
+    ASSERT_EQ(a.axes.size(), 6u);
+    for (const tools::AxisNoise& ax : a.axes) {
+      const double n = ax.gyro ? e.gyro_arw_rad_per_rts : e.accel_vrw_mps_per_rts;
+      int inside = 0;
+      for (const tools::AllanPoint& p : ax.curve.points) inside += (p.avar_lo <= n * n / p.tau_s && n * n / p.tau_s <= p.avar_hi);
+      EXPECT_GE(inside, static_cast<int>(0.8 * ax.curve.points.size())) << ax.name;
+      EXPECT_TRUE(ax.reading.white.supported) << ax.name;
+      EXPECT_NEAR(ax.reading.white.read_tau_s, 1.0, 0.01) << ax.name;
+      ++trials;
+      covered += ax.reading.white.lo <= n && n <= ax.reading.white.hi;
+      k_claimed += ax.reading.rate_rw.supported;
+      b_claimed += ax.reading.bias.supported;
+      // When not supported, an upper bound above zero and the reason.
+      if (!ax.reading.rate_rw.supported) EXPECT_GT(ax.reading.rate_rw.value, 0.0);
+      if (!ax.reading.bias.supported) EXPECT_NE(ax.reading.bias.note.find("upper bound"), std::string::npos);
+    }
   }
+  std::printf("white noise only: N covered in %d of %d, K claimed in %d, B claimed in %d\n", covered, trials, k_claimed,
+              b_claimed);
+  EXPECT_GE(covered, 26);  // 30 trials at 95%: 28.5 expected, P(< 26) = 1.6%
+  EXPECT_LE(k_claimed, 2);
+  EXPECT_LE(b_claimed, 2);
 }
 
 // The stated 95% intervals of N, B and K cover the truth at about the stated rate: white noise +
@@ -132,10 +142,11 @@ TEST(NoiseAllan, StatedIntervalsCoverTheTruthOverSeeds) {
   report("N", cn);
   report("B", cb);
   report("K", ck);
-  // Every term is supported by a 1200 s rest of this sensor, in (nearly) every trial.
+  // N is read in every trial; the floor and the rising part in most (a Gauss-Markov drift makes a
+  // hump, not the flicker plateau the reading assumes, and K rises above it late in the span).
   EXPECT_EQ(cn.supported, cn.trials);
-  EXPECT_GE(cb.supported, 0.9 * cb.trials);
-  EXPECT_GE(ck.supported, 0.9 * ck.trials);
+  EXPECT_GE(cb.supported, 0.5 * cb.trials);
+  EXPECT_GE(ck.supported, 0.4 * ck.trials);
   // About 95%: with 240 trials a true 95% gives 89.5 .. 98.5% at 3 sigma.
   for (const Count* c : {&cn, &cb, &ck}) {
     const double rate = static_cast<double>(c->covered) / c->supported;

@@ -35,9 +35,15 @@ def allan_panel(ax, axis, sims):
     ax.fill_between(tau, lo, hi, color="C0", alpha=0.2, lw=0, label="data, 95%")
     ax.loglog(tau, adev, "C0.-", lw=1, ms=3, label="data")
     ax.loglog(tau, [p["model_adev"] * k for p in c], "k--", lw=0.8, label="fitted model")
+    floor = 0.2 * min(lo + adev)
     for name, (an, style) in sims.items():
         sc = [a for a in an["axes"] if a["name"] == axis["name"]][0]["curve"]
-        ax.loglog([p["tau_s"] for p in sc], [p["adev"] * k for p in sc], style, lw=0.9, label=name)
+        y = [p["adev"] * k for p in sc]
+        if max(y) < floor:  # e.g. a navigation-grade scenario without white noise: say so, keep the scale
+            ax.text(0.02, 0.02, name + ": below the plot (max %.2g %s)" % (max(y), unit), transform=ax.transAxes,
+                    fontsize=6, color=style[:2])
+            continue
+        ax.loglog([p["tau_s"] for p in sc], y, style, lw=0.9, label=name)
     w, b, r = axis["white"], axis["bias_instability"], axis["rate_random_walk"]
     t0, t1 = tau[0], tau[-1]
     if w["supported"]:
@@ -46,7 +52,8 @@ def allan_panel(ax, axis, sims):
         ax.axhline(b["value"] * 0.6643 * k, color="C3", ls=":", lw=1, label="0.664 B")
     if r["supported"]:
         ax.loglog([t0, t1], [r["value"] * k * math.sqrt(t / 3.0) for t in (t0, t1)], "C4:", lw=1, label="K (slope +1/2)")
-    ax.set_title(axis["name"], fontsize=9)
+    ax.set_ylim(floor, 5.0 * max(adev))
+    ax.set_title(axis["name"] + ("" if axis["fit"]["adequate"] else " (model fit NOT adequate)"), fontsize=9)
     ax.set_ylabel("Allan deviation [" + unit + "]", fontsize=8)
     ax.grid(True, which="both", alpha=0.3)
     ax.tick_params(labelsize=7)

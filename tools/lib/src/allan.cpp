@@ -270,7 +270,8 @@ NoiseTerm read_rate_rw(const AllanCurve& c, const AllanModel& m, std::size_t fir
     if (m.dominant(p.tau_s) != PowerLawNoise::kRandomWalkRate) continue;
     const double others = m.avar(p.tau_s) - m.k2 * p.tau_s;
     const double k2 = 3.0 * (p.avar - others) / p.tau_s;
-    if (!(k2 > 0.0)) continue;
+    // Significant only when even the interval's lower end exceeds the other terms there.
+    if (!(k2 > 0.0) || !(p.avar_lo > others)) continue;
     const double width = (p.avar_hi - p.avar_lo) / (p.avar - others);
     if (width < best_width) {
       best_width = width;

@@ -366,12 +366,30 @@ nlohmann::json filter_values_json(const NoiseAnalysis& a, const NoiseInput& in) 
   std::string why_g, why_a;
   j["gyro_bias_rw_radps_per_rts"] = {{"value", bias_rw_for_filter(a, true, why_g)}, {"source", why_g}};
   j["accel_bias_rw_mps2_per_rts"] = {{"value", bias_rw_for_filter(a, false, why_a)}, {"source", why_a}};
-  double max_mean = 0.0;
-  for (const AxisNoise& ax : a.axes)
-    if (ax.gyro) max_mean = std::max(max_mean, std::abs(ax.mean));
-  j["gyro_bias_sigma_degph"] = {{"value", (max_mean + fsw::wgs84::omega_ie_radps) * kRadpsToDegph},
-                                {"source", "largest mean rate at rest + the Earth rate (15.04 deg/h) that it may contain"}};
+  // At rest the mean rate is bias + Earth rate. Up = -f / |f| (levelling); with the latitude the
+  // Earth rate's up part is known (bias along up exact), its horizontal part only in magnitude
+  // (heading unknown): the horizontal bias lies between | |w_h| - W cos L | and |w_h| + W cos L.
   const fsw::Vec3 f(a.axes[3].mean, a.axes[4].mean, a.axes[5].mean);
+  const fsw::Vec3 w(a.axes[0].mean, a.axes[1].mean, a.axes[2].mean);
+  const fsw::Vec3 up = -f.normalized();
+  const double W = fsw::wgs84::omega_ie_radps;
+  const double lat = in.have_position ? in.lat_rad : 0.0;
+  const double w_up = w.dot(up), w_h = (w - w_up * up).norm();
+  const double b_up = in.have_position ? w_up - W * std::sin(lat) : w_up;
+  const double bh_lo = in.have_position ? std::abs(w_h - W * std::cos(lat)) : std::max(0.0, w_h - W);
+  const double bh_hi = w_h + W * (in.have_position ? std::cos(lat) : 1.0);
+  const double b_up_tol = in.have_position ? 0.0 : W;
+  j["gyro_bias"] = {{"up_degph", b_up * kRadpsToDegph},
+                    {"up_uncertainty_degph", b_up_tol * kRadpsToDegph},
+                    {"horizontal_min_degph", bh_lo * kRadpsToDegph},
+                    {"horizontal_max_degph", bh_hi * kRadpsToDegph}};
+  const double seen = std::max(std::abs(b_up) + b_up_tol, bh_hi);
+  j["gyro_bias_sigma_degph"] = {
+      {"value", seen * kRadpsToDegph},
+      {"source", "the largest bias this turn-on can have: up " + fmt("%.3g", b_up * kRadpsToDegph) + " deg/h" +
+                     (in.have_position ? " (Earth rate removed at the GNSS latitude)" : " +- 15.04 (no latitude)") +
+                     ", horizontal " + fmt("%.3g", bh_lo * kRadpsToDegph) + " .. " + fmt("%.3g", bh_hi * kRadpsToDegph) +
+                     " deg/h (the Earth rate's horizontal part, heading unknown)"}};
   const double g = in.have_position ? fsw::normal_gravity_mps2(in.lat_rad, in.h_m) : fsw::kStandardGravity_mps2;
   j["accel_vertical_residual_mg"] = (f.norm() - g) / fsw::kStandardGravity_mps2 * 1e3;
   j["gravity_from"] = in.have_position ? "normal gravity at the first GNSS fix" : "standard gravity (no GNSS position)";
@@ -398,8 +416,8 @@ std::string filter_config_toml(const NoiseAnalysis& a, const NoiseInput& in, con
     << "gyro_bias_rw_radps_per_rts = " << fmt("%.4g", v["gyro_bias_rw_radps_per_rts"]["value"].get<double>()) << "\n"
     << "# " << v["accel_bias_rw_mps2_per_rts"]["source"].get<std::string>() << "\n"
     << "accel_bias_rw_mps2_per_rts = " << fmt("%.4g", v["accel_bias_rw_mps2_per_rts"]["value"].get<double>()) << "\n"
-    << "# One turn-on's bias (a sigma over turn-ons needs several recordings): the "
-    << v["gyro_bias_sigma_degph"]["source"].get<std::string>() << "; mean rates";
+    << "# One turn-on's bias (a sigma over turn-ons needs several recordings), " << v["gyro_bias_sigma_degph"]["source"].get<std::string>()
+    << "; mean rates";
   for (int c = 0; c < 3; ++c) o << " " << fmt("%.4g", a.axes[static_cast<std::size_t>(c)].mean * kRadpsToDegph);
   o << " deg/h\ngyro_bias_sigma_degph = " << fmt("%.4g", v["gyro_bias_sigma_degph"]["value"].get<double>()) << "\n"
     << "# accel_bias_sigma_mg is not written: at rest a horizontal accelerometer bias is indistinguishable from\n"
