@@ -99,7 +99,9 @@ int run_noise() {
               in.speed.size());
   if (rest.segments.empty()) {
     std::fputs(tools::noise_summary_text(rest, tools::NoiseAnalysis{}).c_str(), stdout);
-    throw std::runtime_error(opt.log + ": no rest segment of at least " + std::to_string(opt.rest.min_rest_s) +
+    char len[32];
+    std::snprintf(len, sizeof len, "%g", opt.rest.min_rest_s);
+    throw std::runtime_error(opt.log + ": no rest segment of at least " + len +
                              " s (see the detector line above; --min-rest, --threshold-factor, --max-speed)");
   }
   std::vector<tools::RestSegment> used = rest.segments;

@@ -25,7 +25,7 @@ double median(std::vector<double> v) {
   return v[k];
 }
 
-/// Mean of the k smallest values' median: the reference of a window statistic.
+/// The median of the k smallest values: the reference of a window statistic.
 double quiet_reference(std::vector<double> v, std::size_t k) {
   if (v.empty()) return 0.0;
   k = std::clamp<std::size_t>(k, 1, v.size());
@@ -578,7 +578,9 @@ std::string noise_summary_text(const RestDetection& d, const NoiseAnalysis& a) {
   for (const RestSegment& s : d.segments)
     o << " [" << fmt("%.3f", s.t_begin_s) << ", " << fmt("%.3f", s.t_end_s) << "] s (" << fmt("%.1f", s.duration_s())
       << " s)";
-  o << "\nAllan analysis over " << fmt("%.1f", a.rest_s) << " s, tau0 " << fmt("%.4g", a.tau0_s)
+  o << "\n";
+  if (a.axes.empty()) return o.str();
+  o << "Allan analysis over " << fmt("%.1f", a.rest_s) << " s, tau0 " << fmt("%.4g", a.tau0_s)
     << " s; 95% intervals (chi-squared, NIST SP 1065 edf):\n";
   for (const AxisNoise& ax : a.axes) {
     o << "  " << ax.name << ": mean " << fmt("%.5g", ax.gyro ? ax.mean * kRadpsToDegph : ax.mean)
