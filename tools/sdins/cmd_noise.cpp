@@ -113,6 +113,14 @@ int run_noise() {
   }
   const tools::NoiseAnalysis data = tools::analyse_noise(in.imu, used);
   std::fputs(tools::noise_summary_text(rest, data).c_str(), stdout);
+  // Pooling assumes one noise process: each segment alone, and a flag where they disagree.
+  nlohmann::json per_segment = nlohmann::json::array();
+  if (used.size() > 1) {
+    std::vector<tools::NoiseAnalysis> each;
+    for (const tools::RestSegment& s : used) each.push_back(tools::analyse_noise(in.imu, {s}));
+    const std::string text = tools::segments_text(each, per_segment);
+    std::fputs(text.c_str(), stdout);
+  }
   // The simulator's model for the scenario's grade and for the terms just read.
   const double lat = in.have_position ? in.lat_rad : sc.start.lat_deg * fsw::kDegToRad;
   const sim::ImuErrors grade = sim::draw_imu_errors(sc.imu, sc.effects, sc.seed);
@@ -140,6 +148,7 @@ int run_noise() {
   j["speed_source"] = in.speed_source;
   j["rest"] = tools::to_json(rest);
   j["segment_analysed"] = opt.segment;  // -1: all pooled
+  j["per_segment"] = per_segment;
   j["data"] = tools::to_json(data);
   j["filter_values"] = values;
   j["configured"] = cfg;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -648,6 +649,45 @@ std::string compare_text(const NoiseAnalysis& data, const NoiseAnalysis& model, 
       << " (tau " << fmt("%.3g", r["min_tau_s"].get<double>()) << " s) .. " << fmt("%.3g", r["max"].get<double>())
       << " (tau " << fmt("%.3g", r["max_tau_s"].get<double>()) << " s), " << r["points_inside_data_95"].get<int>() << "/"
       << r["points"].get<int>() << " points inside the data's 95%\n";
+  }
+  return o.str();
+}
+
+std::string segments_text(const std::vector<NoiseAnalysis>& each, nlohmann::json& j) {
+  std::ostringstream o;
+  o << "each rest segment alone, white noise N (95%):\n";
+  std::vector<std::string> disagree;
+  for (std::size_t c = 0; c < 6; ++c) {
+    const bool gyro = c < 3;
+    o << "  " << std::left << std::setw(8) << kAxisNames[c] << std::right << " " << unit(gyro, 0) << ":";
+    double max_lo = 0.0, min_hi = 1e300;
+    bool all = true;
+    nlohmann::json row = nlohmann::json::array();
+    for (const NoiseAnalysis& a : each) {
+      const NoiseTerm& t = a.axes[c].reading.white;
+      char b[96];
+      if (t.supported)
+        std::snprintf(b, sizeof b, "%9.4g [%.4g, %.4g]", display(gyro, 0, t.value), display(gyro, 0, t.lo),
+                      display(gyro, 0, t.hi));
+      else
+        std::snprintf(b, sizeof b, "%9s", ("< " + fmt("%.4g", display(gyro, 0, t.value))).c_str());
+      o << "  " << std::left << std::setw(30) << b << std::right;
+      row.push_back(term_json(t));
+      all &= t.supported;
+      if (t.supported) {
+        max_lo = std::max(max_lo, t.lo);
+        min_hi = std::min(min_hi, t.hi);
+      }
+    }
+    const bool apart = all && max_lo > min_hi;
+    if (apart) disagree.push_back(kAxisNames[c]);
+    o << (apart ? "  <- the segments' intervals do not overlap" : "") << "\n";
+    j.push_back({{"axis", kAxisNames[c]}, {"white", row}, {"disagree", apart}});
+  }
+  if (!disagree.empty()) {
+    o << "  the noise differs between the rests on";
+    for (const auto& a : disagree) o << " " << a;
+    o << ": the pooled reading mixes them (--segment K analyses one)\n";
   }
   return o.str();
 }

@@ -120,6 +120,10 @@ std::string noise_summary_text(const RestDetection& d, const NoiseAnalysis& a);
 /// Data against a model's analysis: per axis and term, both readings and their ratio.
 nlohmann::json compare_json(const NoiseAnalysis& data, const NoiseAnalysis& model);
 std::string compare_text(const NoiseAnalysis& data, const NoiseAnalysis& model, const std::string& model_name);
+/// The white noise N of every axis per segment analysed alone, and the axes whose segments'
+/// 95% intervals do not overlap (the noise was not the same in every rest: pooling mixes them).
+/// Fills j with the same.
+std::string segments_text(const std::vector<NoiseAnalysis>& each, nlohmann::json& j);
 /// One line of an IMU error model's noise terms in display units.
 std::string imu_errors_text(const sim::ImuErrors& e);
 
