@@ -86,6 +86,9 @@ print("drive rest segments:", seg)
 assert s["speed_source"] == "GNSS_PVT"
 assert seg[0][0] < 5 and 15 <= seg[0][1] <= 40, seg
 assert all(ax["white"]["supported"] for ax in s["data"]["axes"]), "drive: white noise on every axis"
+# Two rests: each analysed alone too; they disagree on some axes (the end rest holds a disturbance).
+assert len(s["per_segment"]) == 6 and all(len(r["white"]) == 2 for r in s["per_segment"]), s["per_segment"]
+assert any(r["disagree"] for r in s["per_segment"]), "drive: the two rests' noise differs on some axis"
 
 # gnss-imu-walk: the walker stands at the start (~12 s, but moves the IMU by hand: sway) and at the end.
 s, _ = noise("gnss-imu-walk", "rtklib")
