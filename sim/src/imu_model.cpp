@@ -69,6 +69,9 @@ ImuErrors draw_imu_errors(const ImuConfig& cfg, const EffectSet& effects, std::u
     e.gyro_bias_instability_radps = s.gyro_bias_instability_degph * fsw::kDegPerHourToRadps;
     e.accel_bias_instability_mps2 = s.accel_bias_instability_ug * fsw::kMicroG_mps2;
     e.bias_instability_tau_s = s.bias_instability_tau_s;
+    // deg/h/sqrt(h) -> rad/s/sqrt(s); ug/sqrt(h) -> m/s^2/sqrt(s)
+    e.gyro_bias_rw_radps_per_rts = s.gyro_bias_rw_degph_per_rthr * fsw::kDegPerHourToRadps / 60.0;
+    e.accel_bias_rw_mps2_per_rts = s.accel_bias_rw_ug_per_rthr * fsw::kMicroG_mps2 / 60.0;
   }
   add_effects(e, effects);
   return e;
@@ -85,14 +88,19 @@ fsw::ImuSample ImuModel::measure(const TruthSample& truth) {
     drift_g_ = a * drift_g_ + normal3(rng_, q * e_.gyro_bias_instability_radps);
     drift_a_ = a * drift_a_ + normal3(rng_, q * e_.accel_bias_instability_mps2);
   }
+  // Bias random walks (drawn only when set: the seeded runs without them are unchanged).
+  if (e_.gyro_bias_rw_radps_per_rts > 0.0 || e_.accel_bias_rw_mps2_per_rts > 0.0) {
+    walk_g_ += normal3(rng_, e_.gyro_bias_rw_radps_per_rts * std::sqrt(dt));
+    walk_a_ += normal3(rng_, e_.accel_bias_rw_mps2_per_rts * std::sqrt(dt));
+  }
   const Mat3 Kg = Mat3::Identity() + Mat3(e_.gyro_scale_factor.asDiagonal()) + e_.gyro_misalignment_rad;
   const Mat3 Ka = Mat3::Identity() + Mat3(e_.accel_scale_factor.asDiagonal()) + e_.accel_misalignment_rad;
   fsw::ImuSample s;
   s.t_s = truth.t_s * (1.0 + e_.clock_drift) + e_.time_offset_s;
   s.dt_s = dt * (1.0 + e_.clock_drift);
   s.dtheta_rad = Kg * truth.dtheta_rad + e_.gyro_g_sensitivity_radps_per_mps2.cwiseProduct(truth.dv_mps) +
-                 (e_.gyro_bias_radps + drift_g_) * dt;
-  s.dv_mps = Ka * truth.dv_mps + (e_.accel_bias_mps2 + drift_a_) * dt;
+                 (e_.gyro_bias_radps + drift_g_ + walk_g_) * dt;
+  s.dv_mps = Ka * truth.dv_mps + (e_.accel_bias_mps2 + drift_a_ + walk_a_) * dt;
   if (e_.gyro_arw_rad_per_rts > 0.0) s.dtheta_rad += normal3(rng_, e_.gyro_arw_rad_per_rts * std::sqrt(dt));
   if (e_.accel_vrw_mps_per_rts > 0.0) s.dv_mps += normal3(rng_, e_.accel_vrw_mps_per_rts * std::sqrt(dt));
   return s;

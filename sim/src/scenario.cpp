@@ -218,6 +218,8 @@ class Parser : public toml_schema::Reader {
         {"gyro_bias_instability_degph", number(s.gyro_bias_instability_degph, non_negative())},
         {"accel_bias_instability_ug", number(s.accel_bias_instability_ug, non_negative())},
         {"bias_instability_tau_s", number(s.bias_instability_tau_s, positive())},
+        {"gyro_bias_rw_degph_per_rthr", number(s.gyro_bias_rw_degph_per_rthr, non_negative())},
+        {"accel_bias_rw_ug_per_rthr", number(s.accel_bias_rw_ug_per_rthr, non_negative())},
     });
   }
 

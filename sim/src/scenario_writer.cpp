@@ -199,7 +199,9 @@ ScenarioWriteResult write_scenario_toml(const Scenario& sc, const std::string& h
     << "accel_vrw_ug_per_rthz = " << num(s.accel_vrw_ug_per_rthz) << "\n"
     << "gyro_bias_instability_degph = " << num(s.gyro_bias_instability_degph) << "\n"
     << "accel_bias_instability_ug = " << num(s.accel_bias_instability_ug) << "\n"
-    << "bias_instability_tau_s = " << num(s.bias_instability_tau_s) << "\n\n";
+    << "bias_instability_tau_s = " << num(s.bias_instability_tau_s) << "\n"
+    << "gyro_bias_rw_degph_per_rthr = " << num(s.gyro_bias_rw_degph_per_rthr) << "\n"
+    << "accel_bias_rw_ug_per_rthr = " << num(s.accel_bias_rw_ug_per_rthr) << "\n\n";
   o << "[effects]\n";
   for (const fsw::EffectInfo& info : fsw::kEffectCatalogue) {
     if (!sc.effects.on(info.effect)) continue;

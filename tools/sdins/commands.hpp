@@ -28,6 +28,7 @@ void register_fsw(CLI::App& app);
 void register_diagnose(CLI::App& app);
 void register_sim(CLI::App& app);
 void register_import(CLI::App& app);
+void register_noise(CLI::App& app);
 int run_selected(CLI::App& app);
 
 int run_analyze();
@@ -47,6 +48,7 @@ int run_fsw();
 int run_diagnose();
 int run_sim();
 int run_import();
+int run_noise();
 
 /// The options every command that flies a scenario takes: --scenario FILE, --duration S, --seed N.
 struct ScenarioOptions {

@@ -127,6 +127,7 @@ int run_selected(CLI::App& app) {
   if (app.got_subcommand("diagnose")) return run_diagnose();
   if (app.got_subcommand("sim")) return run_sim();
   if (app.got_subcommand("import")) return run_import();
+  if (app.got_subcommand("noise")) return run_noise();
   return 1;
 }
 

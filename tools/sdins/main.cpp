@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
   sdins::register_diagnose(app);
   sdins::register_sim(app);
   sdins::register_import(app);
+  sdins::register_noise(app);
   tools::require_finite_numbers(app);  // docs/faults.md: NaN / infinities refused by every option
   tools::install_interrupt_handlers();
   try {

@@ -1,11 +1,12 @@
 // IMU error model applied to the ideal increments of the truth generator.
 //
-//   dtheta_meas = (I + diag(sf_g) + M_g) dtheta + G_g dv + (b_g + d_g(t)) dt + n_g
-//   dv_meas     = (I + diag(sf_a) + M_a) dv + (b_a + d_a(t)) dt + n_a
+//   dtheta_meas = (I + diag(sf_g) + M_g) dtheta + G_g dv + (b_g + d_g(t) + w_g(t)) dt + n_g
+//   dv_meas     = (I + diag(sf_a) + M_a) dv + (b_a + d_a(t) + w_a(t)) dt + n_a
 //
 // M holds the misalignments (M(i, j) = gamma_ij, see fsw/effect_catalogue.hpp), G_g the diagonal
-// gyro g-sensitivity, b the constant biases, d(t) first-order Gauss-Markov bias drifts and n
-// white noise (angle / velocity random walk). Time tags are shifted by the IMU-to-GNSS time
+// gyro g-sensitivity, b the constant biases, d(t) first-order Gauss-Markov bias drifts, w(t) bias
+// random walks (rate random walk, the filter's bias model; docs/noise.md) and n white noise
+// (angle / velocity random walk). Time tags are shifted by the IMU-to-GNSS time
 // offset effect. Everything is drawn from the seed with the project's own portable generator so
 // that the same scenario and seed give bit-identical output everywhere.
 #pragma once
@@ -33,6 +34,8 @@ struct ImuErrors {
   double gyro_bias_instability_radps = 0.0;    ///< 1-sigma of the Gauss-Markov drift
   double accel_bias_instability_mps2 = 0.0;
   double bias_instability_tau_s = 3600.0;
+  double gyro_bias_rw_radps_per_rts = 0.0;     ///< bias random walk (rate random walk) [rad/s/sqrt(s)]
+  double accel_bias_rw_mps2_per_rts = 0.0;     ///< [m/s^2/sqrt(s)]
   double time_offset_s = 0.0;                  ///< IMU time tag minus GNSS (true) time
   double clock_drift = 0.0;                    ///< IMU clock rate error: tags at t (1 + drift) + offset
 };
@@ -56,6 +59,8 @@ class ImuModel {
   Rng rng_;
   Vec3 drift_g_ = Vec3::Zero();
   Vec3 drift_a_ = Vec3::Zero();
+  Vec3 walk_g_ = Vec3::Zero();
+  Vec3 walk_a_ = Vec3::Zero();
 };
 
 /// GNSS antenna position and velocity from the truth and the body-frame lever arm.

@@ -72,6 +72,8 @@ struct ImuErrorSigmas {
   double gyro_bias_instability_degph = 0.0; ///< 1-sigma of a first-order Gauss-Markov bias drift
   double accel_bias_instability_ug = 0.0;   ///< 1-sigma of a first-order Gauss-Markov bias drift
   double bias_instability_tau_s = 3600.0;   ///< correlation time of both drifts
+  double gyro_bias_rw_degph_per_rthr = 0.0; ///< gyro bias random walk (rate random walk) [deg/h/sqrt(h)]
+  double accel_bias_rw_ug_per_rthr = 0.0;   ///< accelerometer bias random walk [ug/sqrt(h)]
   bool operator==(const ImuErrorSigmas&) const = default;
 };
 
