@@ -50,7 +50,6 @@ int run_replay() {
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
-  fsw::InputEvent in;
   std::uint64_t raw_not_used = 0, withheld = 0;
   // GNSS outages: inputs at times within [t0 + k period, t0 + k period + length) are withheld.
   const auto in_outage = [&](double t) {
@@ -59,20 +58,22 @@ int run_replay() {
     if (t < t0) return false;
     return std::fmod(t - t0, opt.outages[1]) < opt.outages[0];
   };
-  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
-  while (reader.next(in) == hal::LcmLogStatus::kOk) {
-    if (tools::interrupted()) break;
+  const auto keep = [&](const fsw::InputEvent& in) {
     const bool gnss = in.kind == fsw::InputEvent::Kind::kGnssRaw || in.kind == fsw::InputEvent::Kind::kGnssPvt;
     if (gnss && in_outage(in.t_s)) {
       ++withheld;
-      continue;
+      return false;
     }
     if (in.kind == fsw::InputEvent::Kind::kGnssRaw && pvt) {
       ++raw_not_used;  // the configuration takes solutions
-      continue;
+      return false;
     }
-    node.on_event(in);
-  }
+    return true;
+  };
+  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
+  tools::UntilInterrupted<hal::LcmReplayReader> log{reader};
+  auto inputs = fsw::filtered(log, keep);
+  fsw::drive(inputs, node);
   const bool stopped = tools::interrupted();
   if (stopped)
     node.abort();  // an interrupted replay leaves no partial log (the target keeps its old contents)
