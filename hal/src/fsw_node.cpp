@@ -225,6 +225,7 @@ void FswNode::before_event(const fsw::InputEvent& ev) {
 
 void FswNode::after_event(const fsw::InputEvent& ev, const fsw::FrameOutput& out) {
   if (ev.kind != fsw::InputEvent::Kind::kImu) return;  // out is an IMU event's
+  if (out.frame_closed) ++summary_.minor_frames;
   if (group_ && out.ekf_released) group_->release();
   if (out.nav_valid) after_frame(out);
 }

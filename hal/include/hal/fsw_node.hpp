@@ -51,6 +51,9 @@ struct FswNodeSummary {
   bool initialised = false;
   double init_t_s = 0.0;
   std::uint64_t nav_frames = 0;
+  /// Minor frames the flight application closed (FrameOutput::frame_closed: before initialisation
+  /// too, a frame's worth of levelling samples each).
+  std::uint64_t minor_frames = 0;
   std::uint64_t digest = 0;   ///< FNV-1a over every frame's (t, llh, vel, quaternion) bytes
   fsw::NavState last_nav{};
 };

@@ -399,8 +399,6 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
 
   double exec_acc = 0.0, exec_cpu_acc = 0.0, exec_sum = 0.0, late_sum = 0.0;
   const double budget_s = ncfg.app.exec.frame_budget_s;  // the executive's overrun threshold
-  const int spf = std::max(1, ncfg.app.exec.imu_samples_per_frame);
-  int imu_in_frame = 0;
   double imu_t_s = 0.0;  // the last IMU sample's time
   bool have_base = false;
   double base_mono = 0.0, base_t = 0.0;
@@ -448,19 +446,17 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
         if (late > cfg.late_threshold_s) ++r.imu_late;
       }
     }
-    const std::uint64_t nav_before = node.summary().nav_frames;
+    const std::uint64_t nav_before = node.summary().nav_frames, minor_before = node.summary().minor_frames;
     in.push(f, f.timestamp_s);
     fsw::drive(in, node);
     if (cfg.realtime) {
-      // A minor frame's execution: the handling of every frame since the previous one completed.
-      // Before initialisation there are no navigation frames: every imu_samples_per_frame IMU
-      // samples (levelling, the initialisation attempts on the GNSS epochs) count as one frame.
+      // A minor frame's execution: the handling of every frame since the previous one completed,
+      // as the flight application closes them (FrameOutput::frame_closed: before initialisation
+      // a frame's worth of levelling samples and the initialisation attempts on the GNSS epochs).
       exec_acc += hal::mono_now_s() - arrival;
       exec_cpu_acc += hal::thread_cpu_now_s() - arrival_cpu;
-      if (!f.extended && f.id == can::kIdImuSample) ++imu_in_frame;
       const bool nav_frame = node.summary().nav_frames != nav_before;
-      const bool pre_init_frame = !node.summary().initialised && imu_in_frame >= spf;
-      if (nav_frame || pre_init_frame) {
+      if (node.summary().minor_frames != minor_before) {
         node.set_prev_tick_exec_s(exec_acc);
         ++r.minor_frames_timed;
         r.frame_exec_s.push_back(exec_acc);
@@ -478,7 +474,6 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
         if (exec_acc > budget_s) ++(exec_cpu_acc > budget_s ? r.overruns_execution : r.overruns_stalled);
         exec_acc = 0.0;
         exec_cpu_acc = 0.0;
-        imu_in_frame = 0;
       }
     }
     if (in.control_changed()) {

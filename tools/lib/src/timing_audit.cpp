@@ -106,7 +106,6 @@ struct FrameTimer {
   const sim::SensorStream& stream;
   const TimingAuditConfig& cfg;
   const double overhead_s;
-  const int spf;
   Pass& p;
   std::array<fsw::ImuSample, 2 * fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
   int n_in_frame = 0;
@@ -142,9 +141,9 @@ struct FrameTimer {
     const fsw::ImuSample& sample = ev.imu;
     if (n_in_frame < static_cast<int>(frame.size())) frame[static_cast<std::size_t>(n_in_frame++)] = sample;
     if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_imu failed");
-    // A frame ends with a navigation frame, or (before initialisation) with a frame's worth of samples.
-    const bool closes = out.nav_valid || (!app.initialised() && n_in_frame >= spf) || n_in_frame >= static_cast<int>(frame.size());
-    if (closes) close_frame(out, sample);
+    // A frame ends where the flight application closes it (FrameOutput::frame_closed: a navigation
+    // frame, or before initialisation a frame's worth of samples).
+    if (out.frame_closed || n_in_frame >= static_cast<int>(frame.size())) close_frame(out, sample);
   }
   void close_frame(const fsw::FrameOutput& out, const fsw::ImuSample& sample) {
     const fsw::FlightApp<Layout>& app = driver.app();
@@ -223,7 +222,7 @@ Pass fly(const sim::Scenario& sc, const sim::TruthTrack& truth, const std::vecto
   for (auto& s : p.stage_s) s.reserve(n_frames);
   for (auto& s : p.stage_pre) s.reserve(n_frames);
 
-  FrameTimer<Layout> timer{*driver, stream, cfg, overhead_s, spf, p};
+  FrameTimer<Layout> timer{*driver, stream, cfg, overhead_s, p};
   if (first != nullptr) {
     (void)driver->step(*first, timer);
     fsw::drive(stream, *driver, timer);
