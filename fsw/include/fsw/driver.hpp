@@ -130,7 +130,7 @@ template <int N>
 class EventBatch {
  public:
   static constexpr int kCapacity = N;
-  /// Starts a new batch (the handed-out position too).
+  /// Empties the batch (and its handed-out position).
   void clear() { n_ = next_ = 0; }
   /// The slot the next event is written into; false when full.
   InputEvent* slot() { return n_ < N ? &ev_[n_] : nullptr; }
