@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "fsw/driver.hpp"
 #include "fsw/flight_app.hpp"
 
 namespace sdins_target {
@@ -55,13 +56,14 @@ class Line {
   int n_ = 0;
 };
 
-/// One flight application with its output and timing bookkeeping.
+/// One flight application (its driver, fsw/driver.hpp) and the model's observer of it: the timing
+/// bookkeeping, the 1 Hz group run apart, the output lines.
 template <class Layout>
 struct Model {
   const char* name;
-  fsw::FlightApp<Layout> app{};
-  fsw::FrameOutput out{};
-  fsw::InputEvent ev{};  ///< what the flight application is fed (FlightApp::on_event), one at a time
+  const Board* board = nullptr;
+  fsw::FlightDriver<Layout> driver{};
+  const fsw::FlightApp<Layout>& app = driver.app();
   std::uint64_t digest = fsw::kNavDigestSeed;
   std::uint32_t frames = 0, epochs = 0;
   std::uint32_t imu_ticks = 0, gnss_ticks = 0;  // 200 Hz group work since the last completed frame
@@ -70,40 +72,34 @@ struct Model {
   // Before initialisation there are no frames: the worst single call (levelling, the single-point
   // fix that initialises) is kept apart.
   std::uint32_t pre_init_imu_worst = 0, pre_init_gnss_worst = 0;
+  bool was_initialised = false;
+  std::uint32_t t0 = 0;
 
   explicit Model(const char* n) : name(n) {}
 
-  std::uint32_t elapsed(const Board& b, std::uint32_t t0) const { return (t0 - b.ticks()) & b.tick_mask; }
+  std::uint32_t elapsed(const Board& b, std::uint32_t since) const { return (since - b.ticks()) & b.tick_mask; }
 
-  void almanac(const Board&, const fsw::GpsAlmanac& a) {
-    ev.kind = fsw::InputEvent::Kind::kAlmanac;
-    ev.almanac = a;
-    app.on_event(ev, out);
+  /// One event through the driver, this model observing it.
+  fsw::Status step(const fsw::InputEvent& ev) { return driver.step(ev, *this); }
+  // The observer (fsw/driver.hpp): the clock around the 200 Hz group's calls.
+  void before(const fsw::InputEvent&) {
+    was_initialised = app.initialised();
+    t0 = board->ticks != nullptr ? board->ticks() : 0u;
   }
-  void gnss(const Board& b, const fsw::GnssRawEpoch& e) {
-    ev.kind = fsw::InputEvent::Kind::kGnssRaw;  // filled before the clock starts: the copy is the harness's
-    ev.t_s = e.t_s;
-    ev.gnss = e;
-    const bool was_initialised = app.initialised();
-    const std::uint32_t t0 = b.ticks != nullptr ? b.ticks() : 0u;
-    app.on_event(ev, out);
-    if (b.ticks == nullptr) return;
-    const std::uint32_t dt = elapsed(b, t0);
-    if (was_initialised)
-      gnss_ticks += dt;
-    else if (dt > pre_init_gnss_worst)
-      pre_init_gnss_worst = dt;
-  }
-  void imu(const Board& b, const fsw::ImuSample& s) {
-    ev.kind = fsw::InputEvent::Kind::kImu;
-    ev.t_s = s.t_s;
-    ev.imu = s;
-    const bool was_initialised = app.initialised();
-    const std::uint32_t t0 = b.ticks != nullptr ? b.ticks() : 0u;
-    out.nav_valid = false;
-    const fsw::Status st = app.on_event(ev, out);
-    if (b.ticks != nullptr) {
-      const std::uint32_t dt = elapsed(b, t0);
+  void after(const fsw::InputEvent& ev, fsw::Status st, const fsw::FrameOutput& out) {
+    const Board& b = *board;
+    const bool timed = b.ticks != nullptr;
+    const std::uint32_t dt = timed ? elapsed(b, t0) : 0u;
+    if (ev.kind == fsw::InputEvent::Kind::kGnssRaw) {
+      if (!timed) return;
+      if (was_initialised)
+        gnss_ticks += dt;
+      else if (dt > pre_init_gnss_worst)
+        pre_init_gnss_worst = dt;
+      return;
+    }
+    if (ev.kind != fsw::InputEvent::Kind::kImu) return;
+    if (timed) {
       if (was_initialised)
         imu_ticks += dt;
       else if (dt > pre_init_imu_worst)
@@ -113,13 +109,13 @@ struct Model {
     if (out.ekf_released) {
       // The 1 Hz group, run here as a lower-priority task would between two 200 Hz frames (its
       // correction lands ekf_latency_frames later either way), counted apart.
-      const std::uint32_t t1 = b.ticks != nullptr ? b.ticks() : 0u;
-      if (app.run_ekf_group() != fsw::Status::kOk) ++errors;
-      if (b.ticks != nullptr) ekf_ticks = elapsed(b, t1);
+      const std::uint32_t t1 = timed ? b.ticks() : 0u;
+      if (driver.app().run_ekf_group() != fsw::Status::kOk) ++errors;
+      if (timed) ekf_ticks = elapsed(b, t1);
     }
-    if (out.nav_valid) frame(b);
+    if (out.nav_valid) frame(b, out);
   }
-  void frame(const Board& b) {
+  void frame(const Board& b, const fsw::FrameOutput& out) {
     const fsw::NavState& n = out.nav;
     fsw::nav_digest_add(digest, n);
     Line f("F");
@@ -199,15 +195,64 @@ struct Model {
 Model<fsw::Layout24Full> g_m24("24");
 Model<fsw::Layout15Full> g_m15("15");
 fsw::FlightAppConfig g_cfg;
-fsw::GnssRawEpoch g_raw;
-fsw::GpsAlmanac g_alm;
-fsw::ImuSample g_imu;
 
 template <class T>
 ReplayResult read_payload(const Board& b, std::uint32_t size, T& obj) {
   if (size != sizeof(T)) return ReplayResult::kBadEvent;
   return b.read(&obj, sizeof(T)) == sizeof(T) ? ReplayResult::kOk : ReplayResult::kTruncated;
 }
+
+/// The recorded input as an event source (fsw/driver.hpp): one event read from the board per
+/// next(), straight into the event both models are fed; nullptr at the end of the input
+/// (status kOk) or at a damaged event (status says why).
+class RecordedInput {
+ public:
+  const fsw::InputEvent* next() {
+    std::uint32_t head[2];
+    const std::size_t got_head = board->read(head, sizeof head);
+    if (got_head == 0) return nullptr;  // the end of the input
+    if (got_head != sizeof head) return fail(ReplayResult::kTruncated);
+    ReplayResult r = ReplayResult::kBadEvent;
+    switch (head[0]) {
+      case kTagAlmanac:
+        ev_.kind = fsw::InputEvent::Kind::kAlmanac;
+        r = read_payload(*board, head[1], ev_.almanac);
+        break;
+      case kTagGnss:
+        ev_.kind = fsw::InputEvent::Kind::kGnssRaw;
+        r = read_payload(*board, head[1], ev_.gnss);
+        ev_.t_s = ev_.gnss.t_s;
+        break;
+      case kTagImu:
+        ev_.kind = fsw::InputEvent::Kind::kImu;
+        r = read_payload(*board, head[1], ev_.imu);
+        ev_.t_s = ev_.imu.t_s;
+        break;
+      default: break;
+    }
+    return r == ReplayResult::kOk ? &ev_ : fail(r);
+  }
+  const Board* board = nullptr;
+  ReplayResult status = ReplayResult::kOk;
+
+ private:
+  const fsw::InputEvent* fail(ReplayResult r) {
+    status = r;
+    return nullptr;
+  }
+  fsw::InputEvent ev_{};
+};
+RecordedInput g_input;
+
+/// Both models of HIL fed each event: the target of the one driver loop.
+struct BothModels {
+  template <class Observer>
+  fsw::Status step(const fsw::InputEvent& ev, Observer&) {
+    const fsw::Status st = g_m24.step(ev);
+    (void)g_m15.step(ev);
+    return st;
+  }
+};
 
 bool read_all(const Board& b, void* dst, std::size_t n) { return b.read(dst, n) == n; }
 
@@ -247,34 +292,14 @@ ReplayResult run_replay(const Board& b) {
   layout_fingerprint(want);
   if (!read_all(b, got, sizeof got) || std::memcmp(want, got, sizeof got) != 0) return ReplayResult::kBadHeader;
   if (!read_all(b, &g_cfg, sizeof g_cfg)) return ReplayResult::kBadHeader;
-  g_cfg.exec.ekf_group_inline = false;  // the two rate groups are run (and counted) apart: Model::imu
-  if (g_m24.app.init(g_cfg) != fsw::Status::kOk || g_m15.app.init(g_cfg) != fsw::Status::kOk)
+  g_cfg.exec.ekf_group_inline = false;  // the two rate groups are run (and counted) apart: Model::after
+  if (g_m24.driver.init(g_cfg) != fsw::Status::kOk || g_m15.driver.init(g_cfg) != fsw::Status::kOk)
     return ReplayResult::kBadConfig;
-  for (;;) {
-    std::uint32_t head[2];
-    const std::size_t got_head = b.read(head, sizeof head);
-    if (got_head == 0) break;  // the end of the input
-    if (got_head != sizeof head) return ReplayResult::kTruncated;
-    switch (head[0]) {
-      case kTagAlmanac:
-        if (const ReplayResult r = read_payload(b, head[1], g_alm); r != ReplayResult::kOk) return r;
-        g_m24.almanac(b, g_alm);
-        g_m15.almanac(b, g_alm);
-        break;
-      case kTagGnss:
-        if (const ReplayResult r = read_payload(b, head[1], g_raw); r != ReplayResult::kOk) return r;
-        g_m24.gnss(b, g_raw);
-        g_m15.gnss(b, g_raw);
-        break;
-      case kTagImu:
-        if (const ReplayResult r = read_payload(b, head[1], g_imu); r != ReplayResult::kOk) return r;
-        g_m24.imu(b, g_imu);
-        g_m15.imu(b, g_imu);
-        break;
-      default:
-        return ReplayResult::kBadEvent;
-    }
-  }
+  g_m24.board = g_m15.board = g_input.board = &b;
+  g_input.status = ReplayResult::kOk;
+  BothModels both;
+  fsw::drive(g_input, both);
+  if (g_input.status != ReplayResult::kOk) return g_input.status;
   g_m24.finish(b);
   g_m15.finish(b);
   return ReplayResult::kOk;

@@ -451,6 +451,7 @@ Status FlightApp<Layout>::try_initialise_pvt(const GnssPvtMeasurement& m) {
 
 template <class Layout>
 Status FlightApp<Layout>::on_imu(const ImuSample& s, FrameOutput& out) {
+  out.frame_closed = false;
   out.nav_valid = false;
   out.ekf_ran = false;
   out.ekf_updated = false;
@@ -459,6 +460,7 @@ Status FlightApp<Layout>::on_imu(const ImuSample& s, FrameOutput& out) {
   ++health_.imu_received;
   if (!health_.initialised) {
     ++health_.imu_before_init;
+    out.frame_closed = health_.imu_before_init % static_cast<std::uint32_t>(cfg_.exec.imu_samples_per_frame) == 0u;
     const bool aligning = cfg_.init_mode != InitMode::kTrack;
     if (!(s.dt_s > 0.0) || !s.dv_mps.allFinite() || !std::isfinite(s.dt_s) ||
         (aligning && (!s.dtheta_rad.allFinite() || !std::isfinite(s.t_s)))) {
@@ -485,8 +487,10 @@ Status FlightApp<Layout>::on_imu(const ImuSample& s, FrameOutput& out) {
     ++health_.imu_rejected;  // at or before the initialisation epoch: already represented
     return Status::kOk;
   }
+  // The minor frame ends where the executive's frame builder completes one (a rejected sample
+  // leaves it a sample short, and the batch follows it: one grouping, not two).
   batch_[static_cast<std::size_t>(n_batch_++)] = s;
-  if (n_batch_ < cfg_.exec.imu_samples_per_frame) return Status::kOk;
+  if (n_batch_ < exec_.samples_to_frame_end()) return Status::kOk;
   FrameInput in;
   in.imu = batch_.data();
   in.n_imu = n_batch_;
@@ -496,7 +500,9 @@ Status FlightApp<Layout>::on_imu(const ImuSample& s, FrameOutput& out) {
   have_epoch_ = false;
   have_pvt_ = false;
   n_batch_ = 0;
-  return exec_.tick(in, out);
+  const Status st = exec_.tick(in, out);
+  out.frame_closed = true;
+  return st;
 }
 
 template <class Layout>

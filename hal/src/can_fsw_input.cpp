@@ -7,7 +7,6 @@ can::CodecStatus CanFswInput::push(const CanFrame& f, double rx_time_s) {
   if (!f.extended && f.id == can::kIdSimControl) {
     on_control(f);
     rx_.poll(rx_time_s);
-    drain();
     return can::CodecStatus::kOk;
   }
   if (!f.extended && f.id == can::kIdFswAck) {  // another node's acknowledgement: not for us
@@ -21,7 +20,6 @@ can::CodecStatus CanFswInput::push(const CanFrame& f, double rx_time_s) {
     ++data_frames_;
     if (!f.extended && f.id == can::kIdImuSample) ++imu_frames_;
   }
-  drain();
   return st;
 }
 
@@ -40,7 +38,7 @@ void CanFswInput::on_control(const CanFrame& f) {
     base_data_ = data_frames_;
     base_imu_frames_ = imu_frames_;
     base_imu_delivered_ = imu_delivered_;
-    base_nav_ = node_.summary().nav_frames;
+    base_nav_ = progress_.nav_frames;
     control_changed_ = true;
     return;
   }
@@ -62,33 +60,43 @@ can::FswAckFrame CanFswInput::ack() const {
   a.imu_frames = static_cast<std::uint32_t>(imu_frames_ - base_imu_frames_);
   a.frames = static_cast<std::uint32_t>(data_frames_ - base_data_);
   a.imu_delivered = static_cast<std::uint32_t>(imu_delivered_ - base_imu_delivered_);
-  a.nav_frames = static_cast<std::uint32_t>(node_.summary().nav_frames - base_nav_);
-  if (node_.summary().initialised) a.flags |= can::kAckInitialised;
+  a.nav_frames = static_cast<std::uint32_t>(progress_.nav_frames - base_nav_);
+  if (progress_.initialised) a.flags |= can::kAckInitialised;
   if (end_received_) a.flags |= can::kAckEndReceived;
   return a;
 }
 
 void CanFswInput::poll(double now_s) {
   rx_.poll(now_s);
-  drain();
 }
 
 void CanFswInput::finish() {
   rx_.flush();
-  drain();
 }
 
-void CanFswInput::drain() {
+const fsw::InputEvent* CanFswInput::next() {
+  // The almanac elements first, then the epochs, then the samples, of what the last frames
+  // completed (the order the flight software has always been fed them in).
   fsw::GpsAlmanac a;
-  while (rx_.pop_almanac(a)) node_.on_event(fsw::InputEvent::of_almanac(a, last_imu_t_s_));
-  fsw::GnssRawEpoch e;
-  while (rx_.pop_gps(e)) node_.on_event(fsw::InputEvent::of_gnss(e));
-  fsw::ImuSample s;
-  while (rx_.pop_imu(s)) {
-    node_.on_event(fsw::InputEvent::of_imu(s));
-    last_imu_t_s_ = s.t_s;
-    ++imu_delivered_;
+  if (rx_.pop_almanac(a)) {
+    event_ = fsw::InputEvent::of_almanac(a, last_imu_t_s_);
+    return &event_;
   }
+  if (rx_.pop_gps(event_.gnss)) {
+    event_.kind = fsw::InputEvent::Kind::kGnssRaw;
+    event_.t_s = event_.gnss.t_s;
+    return &event_;
+  }
+  if (rx_.pop_imu(event_.imu)) {
+    event_.kind = fsw::InputEvent::Kind::kImu;
+    event_.t_s = event_.imu.t_s;
+    event_.imu_counter = -1;
+    event_.imu_status = 0;
+    last_imu_t_s_ = event_.imu.t_s;
+    ++imu_delivered_;
+    return &event_;
+  }
+  return nullptr;
 }
 
 }  // namespace hal

@@ -12,14 +12,26 @@
 #include <mutex>
 #include <thread>
 
+#include "fsw/driver.hpp"
 #include "fsw/nav_digest.hpp"
 
 namespace hal {
 
+/// The node's own observers of its flight driver: the input log and the lockstep wait before the
+/// event, the 1 Hz release, the digest and the telemetry after it.
+struct FswNode::Observers {
+  FswNode& node;
+  void before(const fsw::InputEvent& ev) { node.before_event(ev); }
+  void after(const fsw::InputEvent& ev, fsw::Status, const fsw::FrameOutput& out) { node.after_event(ev, out); }
+};
+
+/// The flight driver of the layout the configuration names (one virtual call per event: the
+/// host node's harnesses run in real or virtual time, not in the Monte Carlo's inner loop).
 struct FswNode::App {
   virtual ~App() = default;
   virtual fsw::Status init(const fsw::FlightAppConfig& cfg) = 0;
-  virtual fsw::Status on_event(const fsw::InputEvent& ev, fsw::FrameOutput& out) = 0;
+  virtual fsw::Status step(const fsw::InputEvent& ev, Observers& obs) = 0;
+  virtual const fsw::FrameOutput& frame() const = 0;
   virtual void set_prev_tick_exec_s(double s) = 0;
   virtual fsw::Status run_ekf_group() = 0;
   virtual bool ekf_result_due_next_frame() const = 0;
@@ -35,9 +47,11 @@ namespace {
 
 template <class Layout>
 struct AppOf final : FswNode::App {
-  fsw::FlightApp<Layout> app;
-  fsw::Status init(const fsw::FlightAppConfig& cfg) override { return app.init(cfg); }
-  fsw::Status on_event(const fsw::InputEvent& ev, fsw::FrameOutput& out) override { return app.on_event(ev, out); }
+  fsw::FlightDriver<Layout> driver;
+  fsw::FlightApp<Layout>& app = driver.app();
+  fsw::Status init(const fsw::FlightAppConfig& cfg) override { return driver.init(cfg); }
+  fsw::Status step(const fsw::InputEvent& ev, FswNode::Observers& obs) override { return driver.step(ev, obs); }
+  const fsw::FrameOutput& frame() const override { return driver.frame(); }
   void set_prev_tick_exec_s(double s) override { app.set_prev_tick_exec_s(s); }
   fsw::Status run_ekf_group() override { return app.run_ekf_group(); }
   bool ekf_result_due_next_frame() const override { return app.ekf_result_due_next_frame(); }
@@ -180,10 +194,14 @@ bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
   return true;
 }
 
-void FswNode::on_event(const fsw::InputEvent& ev) {
-  const bool imu = ev.kind == fsw::InputEvent::Kind::kImu;
-  if (imu) frame_done_ = false;
-  if (!app_) return;
+fsw::Status FswNode::step(const fsw::InputEvent& ev) {
+  if (ev.kind == fsw::InputEvent::Kind::kImu) frame_done_ = false;
+  if (!app_) return fsw::Status::kNotInitialised;
+  Observers obs{*this};
+  return app_->step(ev, obs);
+}
+
+void FswNode::before_event(const fsw::InputEvent& ev) {
   if (cfg_.log_inputs) {
     switch (ev.kind) {
       case fsw::InputEvent::Kind::kAlmanac: sink_.write_almanac(ev.almanac, ev.t_s); break;
@@ -197,40 +215,39 @@ void FswNode::on_event(const fsw::InputEvent& ev) {
         break;
     }
   }
-  if (!imu) {
-    app_->on_event(ev, frame_);  // leaves frame_ as it is
-    return;
+  if (ev.kind != fsw::InputEvent::Kind::kImu || !group_) return;
+  // Lockstep: the correction lands at a fixed frame; wait for the 1 Hz thread before it.
+  if (!cfg_.realtime && app_->ekf_result_due_next_frame()) {
+    const double w = group_->wait_idle();
+    ++group_times_.waits;
+    if (w > group_times_.wait_max_s) group_times_.wait_max_s = w;
   }
-  if (group_) {
-    // Lockstep: the correction lands at a fixed frame; wait for the 1 Hz thread before it.
-    if (!cfg_.realtime && app_->ekf_result_due_next_frame()) {
-      const double w = group_->wait_idle();
-      ++group_times_.waits;
-      if (w > group_times_.wait_max_s) group_times_.wait_max_s = w;
-    }
-    const std::size_t before = group_times_.exec_s.size();
-    group_->take_times(group_times_.exec_s);
-    for (std::size_t k = before; k < group_times_.exec_s.size(); ++k) app_->note_ekf_group_exec_s(group_times_.exec_s[k]);
-  }
-  app_->on_event(ev, frame_);
-  if (group_ && frame_.ekf_released) group_->release();
-  if (frame_.nav_valid) after_frame();
+  const std::size_t before = group_times_.exec_s.size();
+  group_->take_times(group_times_.exec_s);
+  for (std::size_t k = before; k < group_times_.exec_s.size(); ++k) app_->note_ekf_group_exec_s(group_times_.exec_s[k]);
 }
 
-void FswNode::after_frame() {
+void FswNode::after_event(const fsw::InputEvent& ev, const fsw::FrameOutput& out) {
+  if (ev.kind != fsw::InputEvent::Kind::kImu) return;  // out is an IMU event's
+  if (out.frame_closed) ++summary_.minor_frames;
+  if (group_ && out.ekf_released) group_->release();
+  if (out.nav_valid) after_frame(out);
+}
+
+void FswNode::after_frame(const fsw::FrameOutput& out) {
   frame_done_ = true;
-  const fsw::NavState& n = frame_.nav;
+  const fsw::NavState& n = out.nav;
   fsw::nav_digest_add(summary_.digest, n);
-  if (summary_.nav_frames % static_cast<std::uint64_t>(cfg_.nav_decimation) == 0 || frame_.ekf_updated)
-    sink_.write_nav(frame_);
+  if (summary_.nav_frames % static_cast<std::uint64_t>(cfg_.nav_decimation) == 0 || out.ekf_updated)
+    sink_.write_nav(out);
   ++summary_.nav_frames;
   summary_.last_nav = n;
   summary_.initialised = true;
   summary_.init_t_s = app_->health().init_t_s;
-  if (frame_.ekf_ran) {
+  if (out.ekf_ran) {
     app_->nav_sigma(nav_sigma_);
     app_->write_ekf(sink_);
-    app_->write_health(sink_, frame_);
+    app_->write_health(sink_, out);
   }
 }
 
@@ -265,6 +282,10 @@ void FswNode::abort() {
   sink_.close();
 }
 
+const fsw::FrameOutput& FswNode::last_frame() const {
+  static const fsw::FrameOutput none{};
+  return app_ ? app_->frame() : none;
+}
 const fsw::FlightAppHealth& FswNode::app_health() const {
   static const fsw::FlightAppHealth none{};
   return app_ ? app_->health() : none;

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <string>
 
+#include "fsw/driver.hpp"
 #include "fsw/alignment.hpp"
 #include "fsw/ekf.hpp"
 #include "fsw/executive.hpp"
@@ -312,6 +313,43 @@ TEST(NoAlloc, FlightAppOnGnssPvtDoesNotAllocate) {
   EXPECT_EQ(app.health().pvt_rejected, 1u);
   EXPECT_GE(app.executive().health().pos_used, 900u);
   EXPECT_EQ(g_allocs.load(), 0) << "FlightApp::on_gnss_pvt path allocated " << g_allocs.load() << " times";
+}
+
+// The one driver loop (fsw/driver.hpp) as the image and the Monte Carlo run it: a batch of events
+// per minor frame through a FlightDriver with an observer, nothing allocated.
+TEST(NoAlloc, DriverLoopDoesNotAllocate) {
+  const FlightInputs& in = flight_inputs();
+  static fsw::FlightDriver<fsw::Layout24Full> driver;
+  static fsw::EventBatch<16> batch;
+  fsw::FlightAppConfig cfg;
+  cfg.exec.frames_per_ekf = 50;
+  ASSERT_EQ(driver.init(cfg), fsw::Status::kOk);
+  std::uint64_t frames = 0;
+  auto count = fsw::after_each([&frames](const fsw::InputEvent& ev, fsw::Status, const fsw::FrameOutput& out) {
+    if (ev.kind == fsw::InputEvent::Kind::kImu && out.nav_valid) ++frames;  // out is an IMU event's
+  });
+  std::uint64_t delivered = 0;
+  {
+    Armed a;
+    std::size_t next = 0, k = 0;
+    while (k < in.imu.size()) {
+      batch.clear();
+      for (int n = 0; n < 5 && k < in.imu.size(); ++n) {
+        while (next < in.pvt.size() && in.pvt[next].t_s <= in.imu[k].t_s - 0.02 && !batch.full()) {
+          *batch.slot() = fsw::InputEvent::of_pvt(in.pvt[next++]);
+          batch.commit();
+        }
+        *batch.slot() = fsw::InputEvent::of_imu(in.imu[k++]);
+        batch.commit();
+      }
+      delivered += fsw::drive(batch, driver, count);
+    }
+  }
+  EXPECT_TRUE(driver.app().initialised());
+  EXPECT_GE(driver.app().executive().health().pos_used, 900u);
+  EXPECT_EQ(frames, driver.app().executive().health().nav_frames);
+  EXPECT_EQ(delivered, in.imu.size() + driver.app().health().pvt_received);
+  EXPECT_EQ(g_allocs.load(), 0) << "the driver loop allocated " << g_allocs.load() << " times";
 }
 
 // The alignment modes before initialisation: IMU samples into the stationary window and the

@@ -9,6 +9,7 @@
 #include <thread>
 #include <vector>
 
+#include "fsw/driver.hpp"
 #include "hal/can_bus.hpp"
 #include "hal/can_fsw_input.hpp"
 #include "hal/can_protocol.hpp"
@@ -43,7 +44,7 @@ hal::FswNodeSummary in_process(const sim::Scenario& sc) {
   hal::FswNode node;
   std::string err;
   EXPECT_TRUE(node.open(node_config(), err)) << err;
-  hal::CanFswInput in(node);
+  hal::CanFswInput in(node.summary());
   can::CanStepEncoder enc;
   sim::SensorStep step;
   bool first = true;
@@ -53,10 +54,14 @@ hal::FswNodeSummary in_process(const sim::Scenario& sc) {
     out.resize(static_cast<std::size_t>(can::CanStepEncoder::max_frames(static_cast<int>(step.imu.size()), na)));
     const auto r = enc.encode(step.imu.data(), static_cast<int>(step.imu.size()), step.has_epoch ? &step.epoch : nullptr,
                               stream.almanac().data(), na, out.data());
-    for (int i = 0; i < r.n_frames; ++i) in.push(out[static_cast<std::size_t>(i)], 0.0);
+    for (int i = 0; i < r.n_frames; ++i) {
+      in.push(out[static_cast<std::size_t>(i)], 0.0);
+      fsw::drive(in, node);
+    }
     first = false;
   }
   in.finish();
+  fsw::drive(in, node);
   EXPECT_EQ(in.health().rejections(), 0u);
   return node.summary();
 }
@@ -147,7 +152,12 @@ TEST(HilProtocol, CanFswInputTakesControlOutAndIgnoresAcks) {
   hal::FswNode node;
   std::string err;
   ASSERT_TRUE(node.open(node_config(), err)) << err;
-  hal::CanFswInput in(node);
+  hal::CanFswInput in(node.summary());
+  // Every frame as a receiver takes it: pushed, then what it completed delivered to the node.
+  const auto push = [&](const CanFrame& frame) {
+    in.push(frame, 0.0);
+    fsw::drive(in, node);
+  };
   EXPECT_FALSE(in.run_started());
   EXPECT_EQ(in.ack().run_id, 0u);
 
@@ -159,21 +169,21 @@ TEST(HilProtocol, CanFswInputTakesControlOutAndIgnoresAcks) {
   CanFrame f;
   s.t_s = 0.001;
   ASSERT_EQ(imu.encode(s, f), can::CodecStatus::kOk);
-  in.push(f, 0.0);
+  push(f);
 
   ASSERT_EQ(can::encode_sim_control(control(can::SimCommand::kStart, 42), f), can::CodecStatus::kOk);
-  in.push(f, 0.0);
+  push(f);
   EXPECT_TRUE(in.run_started());
   EXPECT_TRUE(in.control_changed());
   EXPECT_EQ(in.run().run_id, 42u);
-  in.push(f, 0.0);  // the simulator repeats its start until answered: not a new run
+  push(f);  // the simulator repeats its start until answered: not a new run
   EXPECT_FALSE(in.control_changed());
 
   for (int i = 2; i <= 11; ++i) {
     s.t_s = 0.001 * i;
     ASSERT_EQ(imu.encode(s, f), can::CodecStatus::kOk);
     if (i == 5) f.data[20] ^= 0xFF;  // corrupted IMU frame: rejected, and not acknowledged as the simulator's
-    in.push(f, 0.0);
+    push(f);
     EXPECT_FALSE(in.control_changed());
   }
   // Another flight software's ack, a corrupted SIM_CONTROL, an end of another run.
@@ -181,14 +191,14 @@ TEST(HilProtocol, CanFswInputTakesControlOutAndIgnoresAcks) {
   other.run_id = 42;
   other.imu_frames = 99999;
   can::encode_fsw_ack(other, f);
-  in.push(f, 0.0);
+  push(f);
   ASSERT_EQ(can::encode_sim_control(control(can::SimCommand::kEnd, 42), f), can::CodecStatus::kOk);
   CanFrame corrupt = f;
   corrupt.data[9] ^= 1;
-  in.push(corrupt, 0.0);
+  push(corrupt);
   EXPECT_FALSE(in.end_received());
   ASSERT_EQ(can::encode_sim_control(control(can::SimCommand::kEnd, 43), f), can::CodecStatus::kOk);
-  in.push(f, 0.0);
+  push(f);
   EXPECT_FALSE(in.end_received());
 
   const can::FswAckFrame a = in.ack();
@@ -207,7 +217,7 @@ TEST(HilProtocol, CanFswInputTakesControlOutAndIgnoresAcks) {
   EXPECT_EQ(in.health().control_frames, 0u);
 
   ASSERT_EQ(can::encode_sim_control(control(can::SimCommand::kEnd, 42), f), can::CodecStatus::kOk);
-  in.push(f, 0.0);
+  push(f);
   EXPECT_TRUE(in.end_received());
   EXPECT_TRUE(in.control_changed());
   EXPECT_EQ(in.end().frames, 91234u);

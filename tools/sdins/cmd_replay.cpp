@@ -79,11 +79,14 @@ int replay_candump(const sim::FilterConfig& filter) {
   hal::FswNode node;
   std::string err;
   if (!node.open(opt.run.node_config(filter), err)) throw std::runtime_error(err);
-  hal::CanFswInput in(node);
+  hal::CanFswInput in(node.summary());
   const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
   hal::CanFrame f;
   std::string iface;
-  while (!tools::interrupted() && reader.next(f, iface)) in.push(f, f.timestamp_s);
+  while (!tools::interrupted() && reader.next(f, iface)) {
+    in.push(f, f.timestamp_s);
+    fsw::drive(in, node);
+  }
   if (!reader.error().empty()) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
   if (reader.frames() == 0)  // docs/faults.md: nothing valid in the input is an error, not an empty success
     throw std::runtime_error(opt.in + ": no valid candump frame in " + std::to_string(reader.lines()) + " lines");
@@ -92,6 +95,7 @@ int replay_candump(const sim::FilterConfig& filter) {
     node.abort();
   } else {
     in.finish();
+    fsw::drive(in, node);
     if (!node.close(err)) throw std::runtime_error(err);
   }
   std::printf("replay: %s (candump), %d lines, %d frames, %d malformed lines; %llu data frames (%u rejected), %llu "
@@ -156,7 +160,6 @@ int run_replay() {
   const bool scoring = !scorer.reference().samples.empty();
   if (!scoring && (!opt.score_json.empty() || !opt.score_csv.empty()))
     throw std::runtime_error(opt.in + " has no usable reference on TRUTH: nothing to score (--score-json/--score-csv)");
-  fsw::InputEvent in;
   std::uint64_t raw_not_used = 0, withheld = 0;
   // GNSS outages: inputs at times within [t0 + k period, t0 + k period + length) are withheld.
   const auto in_outage = [&](double t) {
@@ -165,25 +168,28 @@ int run_replay() {
     if (t < t0) return false;
     return std::fmod(t - t0, opt.outages[1]) < opt.outages[0];
   };
-  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
-  while (reader.next(in) == hal::LcmLogStatus::kOk) {
-    if (tools::interrupted()) break;
+  const auto keep = [&](const fsw::InputEvent& in) {
     const bool gnss = in.kind == fsw::InputEvent::Kind::kGnssRaw || in.kind == fsw::InputEvent::Kind::kGnssPvt;
     if (gnss && in_outage(in.t_s)) {
       ++withheld;
-      continue;
+      return false;
     }
     if (in.kind == fsw::InputEvent::Kind::kGnssRaw && pvt) {
       ++raw_not_used;  // the configuration takes solutions
-      continue;
+      return false;
     }
-    node.on_event(in);
-    // frame_completed() stays set until the next IMU event: score once per frame.
-    if (scoring && in.kind == fsw::InputEvent::Kind::kImu && node.frame_completed()) {
-      scorer.on_frame(node.last_frame().nav, node.summary().init_t_s);
-      if (node.last_frame().ekf_ran) scorer.on_ekf(node.last_frame().nav, node.summary().init_t_s, node.last_ekf_nav_sigma());
-    }
-  }
+    return true;
+  };
+  // The score is an observer of the node's frames: once per completed frame, and at each EKF run.
+  auto score_frames = fsw::after_each([&](const fsw::InputEvent& ev, fsw::Status, const fsw::FrameOutput& out) {
+    if (!scoring || ev.kind != fsw::InputEvent::Kind::kImu || !node.frame_completed()) return;
+    scorer.on_frame(out.nav, node.summary().init_t_s);
+    if (out.ekf_ran) scorer.on_ekf(out.nav, node.summary().init_t_s, node.last_ekf_nav_sigma());
+  });
+  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
+  tools::UntilInterrupted<hal::LcmReplayReader> log{reader};
+  auto inputs = fsw::filtered(log, keep);
+  fsw::drive(inputs, node, score_frames);
   const bool stopped = tools::interrupted();
   if (stopped)
     node.abort();  // an interrupted replay leaves no partial log (the target keeps its old contents)

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "fsw/driver.hpp"
 #include "hal/can_fsw_input.hpp"
 #include "hal/can_protocol.hpp"
 #include "tools/free_inertial.hpp"
@@ -39,7 +40,7 @@ int run_sil() {
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
-  hal::CanFswInput input(node);
+  hal::CanFswInput input(node.summary());
   hal::can::CanStepEncoder enc;
   sim::SensorStep step;
   std::vector<hal::CanFrame> frames;
@@ -55,12 +56,16 @@ int run_sil() {
     first = false;
     // Receive time: the simulation time at the end of the step (the GPS epoch timeout runs on it).
     const double rx_t = stream.truth().t_s;
-    for (int k = 0; k < r.n_frames; ++k) input.push(frames[static_cast<std::size_t>(k)], rx_t);
+    for (int k = 0; k < r.n_frames; ++k) {
+      input.push(frames[static_cast<std::size_t>(k)], rx_t);
+      fsw::drive(input, node);
+    }
     n_frames += static_cast<std::uint64_t>(r.n_frames);
     const sim::TruthSample& t = stream.truth();
     node.on_truth(t.t_s, t.llh, t.vel_enu_mps, t.C_b_n);
   }
   input.finish();
+  fsw::drive(input, node);
   const sim::TruthSample truth = stream.truth();
   if (!node.close(err)) throw std::runtime_error(err);
 

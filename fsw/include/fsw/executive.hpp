@@ -151,6 +151,10 @@ struct FrameInput {
 };
 
 struct FrameOutput {
+  /// The IMU sample closed a minor frame (FlightApp::on_imu): after initialisation the executive
+  /// ticked (the frame builder's frame was complete); before it, every imu_samples_per_frame-th
+  /// sample (levelling, alignment). What a harness that times or counts minor frames reads.
+  bool frame_closed = false;
   bool nav_valid = false;     ///< a navigation frame completed in this tick
   NavState nav{};             ///< solution at the end of the last completed frame (after any correction)
   bool ekf_released = false;  ///< this tick released the 1 Hz group (not inline: run run_ekf_group())
@@ -227,6 +231,8 @@ class Executive {
   const Ekf<Layout>& ekf() const { return ekf_; }
   const Strapdown& ins() const { return ins_; }
   const ImuCompensation& compensation() const { return comp_; }
+  /// IMU samples the next tick needs to complete its minor frame (FrameBuilder: the one grouping).
+  int samples_to_frame_end() const { return builder_.samples_to_frame_end(); }
   const ExecutiveConfig& config() const { return cfg_; }
 
  private:

@@ -1,8 +1,9 @@
 // The flight application's one input type: every harness (SIL, HIL over CAN, replay of an LCM
 // log, the Monte Carlo and the paper run, the timing audit, the diagnosis, the target replay)
-// hands the flight software its inputs as fsw::InputEvent through FlightApp::on_event, the one
-// dispatch (flight_app.hpp). The simulated sensor stream, the LCM log reader and the recording
-// importers produce it; the CAN receive assembler's outputs become one.
+// hands the flight software its inputs as fsw::InputEvent through the one driver loop
+// (fsw/driver.hpp: fsw::drive), whose driver calls FlightApp::on_event, the one dispatch
+// (flight_app.hpp). The event sources hand them out: the simulated sensor stream, the LCM log
+// reader, the recording in memory, the CAN input (the receive assembler's outputs).
 //
 // Statically sized (one slot per payload, no union: the payloads hold Eigen values), no heap.
 // Only the payload named by `kind` is meaningful. A harness that holds a whole recording in

@@ -49,6 +49,9 @@ class FrameBuilder {
   /// Forget the partial frame and the previous-sample memory (e.g. after a data gap).
   void reset();
   int samples_per_frame() const { return n_per_frame_; }
+  /// Accepted samples still needed to complete the current frame (1..samples_per_frame): the one
+  /// grouping of the IMU samples into minor frames; the flight application batches by it.
+  int samples_to_frame_end() const { return n_per_frame_ - n_in_frame_; }
 
  private:
   int n_per_frame_ = 1;

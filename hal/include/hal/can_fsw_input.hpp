@@ -1,8 +1,10 @@
 // CAN frames -> flight-software node, in arrival order: the one path by which bus frames reach
 // the flight software, used by `sdins fsw` (frames from a bus) and `sdins sil` (frames from the
 // in-process encoder), so both deliver the same inputs in the same order. Every frame is pushed
-// into the receive assembler and everything it completes is handed on at once (almanac, GPS
-// epoch, IMU sample). Lockstep control frames (hal/can/sdins.dbc: SIM_CONTROL) are taken out
+// into the receive assembler; what it completes (almanac elements, GPS epochs, IMU samples, in
+// that order) is an event source of the one driver (fsw/driver.hpp): after each push() (and
+// poll(), finish()) the caller drives the node with it, fsw::drive(input, node), until next()
+// has nothing more. Lockstep control frames (hal/can/sdins.dbc: SIM_CONTROL) are taken out
 // before the assembler sees them; FSW_ACK frames (sent by a flight software, possibly another
 // one on the same bus) are ignored and counted. The counts an FSW_ACK reports are kept here.
 #pragma once
@@ -18,13 +20,16 @@ namespace hal {
 
 class CanFswInput {
  public:
-  explicit CanFswInput(FswNode& node, const CanRxConfig& cfg = {}) : node_(node), rx_(cfg) {}
+  /// progress: the summary of the node this input feeds (what FSW_ACK reports of it).
+  explicit CanFswInput(const FswNodeSummary& progress, const CanRxConfig& cfg = {}) : progress_(progress), rx_(cfg) {}
   /// One received frame; returns the codec status of the frame.
   can::CodecStatus push(const CanFrame& f, double rx_time_s);
   /// Time passes without frames (GPS epoch timeout).
   void poll(double now_s);
-  /// End of input: flushes an incomplete epoch to the node.
+  /// End of input: flushes an incomplete epoch.
   void finish();
+  /// The next completed input (an event source, fsw/driver.hpp), or nullptr when none is pending.
+  const fsw::InputEvent* next();
   const CanRxHealth& health() const { return rx_.health(); }
   std::uint64_t imu_delivered() const { return imu_delivered_; }
 
@@ -46,9 +51,9 @@ class CanFswInput {
   std::uint64_t imu_frames() const { return imu_frames_; }              ///< ... IMU_SAMPLE frames among them
 
  private:
-  void drain();
   void on_control(const CanFrame& f);
-  FswNode& node_;
+  const FswNodeSummary& progress_;
+  fsw::InputEvent event_{};  ///< what next() hands out
   CanRxAssembler rx_;
   std::uint64_t imu_delivered_ = 0;
   double last_imu_t_s_ = 0.0;

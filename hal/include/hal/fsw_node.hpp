@@ -1,9 +1,12 @@
 // The flight-software node: the thin glue (PX4 style) that binds fsw::FlightApp to the outside
-// world. Inputs arrive already decoded (from the CAN receive assembler, an LCM log or the
-// in-process simulator); the node logs them (so every run can be replayed), runs the flight app,
-// and publishes the outputs on LCM (NAV_SOLUTION at nav_decimation of the 200 Hz frames;
-// EKF_STATE and FILTER_HEALTH after every 1 Hz EKF run). It also keeps a digest of every
-// navigation frame's solution, so two runs can be compared bit for bit (SIL vs HIL, replay).
+// world, the host's driver of the one driver loop (fsw/driver.hpp: fsw::drive(source, node)).
+// Inputs arrive already decoded from an event source (the CAN receive assembler, an LCM log);
+// the node owns the flight application of the layout the configuration names (an
+// fsw::FlightDriver) and its own observers around it: the input log (so every run can be
+// replayed), the 1 Hz group's thread, the LCM telemetry (NAV_SOLUTION at nav_decimation of the
+// 200 Hz frames; EKF_STATE and FILTER_HEALTH after every 1 Hz EKF run) and a digest of every
+// navigation frame's solution, so two runs can be compared bit for bit (SIL vs HIL, replay). A
+// harness adds its own observer to step() (fsw::drive(source, node, observer)).
 #pragma once
 
 #include <array>
@@ -50,6 +53,9 @@ struct FswNodeSummary {
   bool initialised = false;
   double init_t_s = 0.0;
   std::uint64_t nav_frames = 0;
+  /// Minor frames the flight application closed (FrameOutput::frame_closed: before initialisation
+  /// too, a frame's worth of levelling samples each).
+  std::uint64_t minor_frames = 0;
   std::uint64_t digest = 0;   ///< FNV-1a over every frame's (t, llh, vel, quaternion) bytes
   fsw::NavState last_nav{};
 };
@@ -64,11 +70,20 @@ class FswNode {
   /// kBadConfig for an invalid flight configuration; the log status when the log cannot be opened.
   /// error receives a one-line reason.
   bool open(const FswNodeConfig& cfg, std::string& error);
-  /// One input event, the node's only way in: logged (with log_inputs: IMU with the sensor's
-  /// counter and status, imu_counter -1 lets the sink count; GNSS_RAW; GNSS_PVT; GPS_ALMANAC at
-  /// ev.t_s), then handed to FlightApp::on_event. An IMU event may complete a minor frame
-  /// (frame_completed(), last_frame()), whose outputs the node publishes.
-  void on_event(const fsw::InputEvent& ev);
+  /// One input event, the node's only way in (fsw::drive calls it): logged (with log_inputs: IMU
+  /// with the sensor's counter and status, imu_counter -1 lets the sink count; GNSS_RAW; GNSS_PVT;
+  /// GPS_ALMANAC at ev.t_s), then handed to the flight application. An IMU event may complete a
+  /// minor frame (frame_completed(), last_frame()), whose outputs the node publishes. Before
+  /// open(): ignored (kNotInitialised).
+  fsw::Status step(const fsw::InputEvent& ev);
+  /// The same with a harness' observer around it (fsw/driver.hpp).
+  template <class Observer>
+  fsw::Status step(const fsw::InputEvent& ev, Observer& obs) {
+    obs.before(ev);
+    const fsw::Status st = step(ev);
+    obs.after(ev, st, last_frame());
+    return st;
+  }
   /// Truth (simulator runs only) on the TRUTH channel.
   void on_truth(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, const fsw::Mat3& C_b_n);
   /// Measured execution time of the previous minor frame (real-time mode).
@@ -84,7 +99,7 @@ class FswNode {
   const fsw::ExecutiveHealth& exec_health() const;
   const LcmLogSink& sink() const { return sink_; }
   /// Whether the last IMU event completed a minor frame, and its output.
-  const fsw::FrameOutput& last_frame() const { return frame_; }
+  const fsw::FrameOutput& last_frame() const;
   bool frame_completed() const { return frame_done_; }
   /// The navigation part of the EKF's published 1-sigma after its last run (as on EKF_STATE):
   /// position E, N, U [m], velocity E, N, U [m/s]; NaN before the first run.
@@ -92,11 +107,14 @@ class FswNode {
   /// The 1 Hz thread's execution times (empty with EkfGroup::kInline).
   const EkfGroupTimes& ekf_group_times() const { return group_times_; }
 
-  struct App;  ///< the flight app of the chosen layout (defined in the .cpp)
+  struct App;  ///< the flight driver of the chosen layout (defined in the .cpp)
   struct GroupThread;  ///< the 1 Hz group's thread (defined in the .cpp)
+  struct Observers;    ///< the node's own observers of its driver (defined in the .cpp)
 
  private:
-  void after_frame();
+  void before_event(const fsw::InputEvent& ev);
+  void after_event(const fsw::InputEvent& ev, const fsw::FrameOutput& out);
+  void after_frame(const fsw::FrameOutput& out);
   /// Stops the 1 Hz thread after its current run (close, abort, destructor).
   void stop_group_thread();
   std::unique_ptr<App> app_;
@@ -104,7 +122,6 @@ class FswNode {
   EkfGroupTimes group_times_{};
   FswNodeConfig cfg_{};
   LcmLogSink sink_;
-  fsw::FrameOutput frame_{};
   std::array<double, 6> nav_sigma_{NAN, NAN, NAN, NAN, NAN, NAN};
   bool frame_done_ = false;
   bool closed_ = false;

@@ -150,6 +150,15 @@ class LcmReplayReader {
   LcmLogStatus open(const std::string& path, const LcmReplayConfig& cfg = {});
   /// The next input in time order (kOk) or kEndOfLog.
   LcmLogStatus next(fsw::InputEvent& in);
+  /// The same as an event source of the one driver (fsw/driver.hpp): the next input, held here
+  /// until the following call, or nullptr at the end of the log or on a read error (status() says
+  /// which: kEndOfLog at the end).
+  const fsw::InputEvent* next() {
+    status_ = next(event_);
+    return status_ == LcmLogStatus::kOk ? &event_ : nullptr;
+  }
+  /// The status of the last next(): kOk while inputs come, then kEndOfLog or the read error.
+  LcmLogStatus status() const { return status_; }
 
   const LcmReplayStats& stats() const { return stats_; }
   const LcmLogReadStats& log_stats() const { return log_.stats(); }
@@ -178,6 +187,8 @@ class LcmReplayReader {
   double last_delivered_t_s_ = 0.0;
   bool have_counter_ = false;
   std::int32_t last_counter_ = 0;
+  fsw::InputEvent event_{};  ///< what next() hands out
+  LcmLogStatus status_ = LcmLogStatus::kOk;
 };
 
 }  // namespace hal

@@ -79,6 +79,9 @@ class SensorStream {
   /// and increments (t_s, dt_s, dtheta_rad, dv_mps) are filled; for a GNSS event the full truth of
   /// the epoch (as epoch_truth()).
   bool next(fsw::InputEvent& ev, TruthSample* truth = nullptr);
+  /// The same as an event source of the one driver (fsw/driver.hpp): the next event, held here
+  /// until the following call, or nullptr at the end.
+  const fsw::InputEvent* next() { return next(event_) ? &event_ : nullptr; }
   /// The next GPS interval (one stream is read either by event or by step, not both); false at
   /// the end. The almanac events are skipped: take them from almanac().
   bool next(SensorStep& step);
@@ -117,6 +120,7 @@ class SensorStream {
   bool epoch_due_ = false;   ///< the last IMU sample was at an epoch time
   const TruthSample* epoch_truth_ = nullptr;
   fsw::GnssEpoch epoch_{};
+  fsw::InputEvent event_{};  ///< what next() hands out
 };
 
 }  // namespace sim

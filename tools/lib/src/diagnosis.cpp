@@ -9,6 +9,7 @@
 #include <memory>
 #include <sstream>
 
+#include "fsw/driver.hpp"
 #include "fsw/frames.hpp"
 #include "hal/fsw_node.hpp"
 #include "hal/lcm_channels.hpp"
@@ -394,8 +395,9 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     if (std::find(active.begin(), active.end(), static_cast<int>(i)) == active.end())
       e.frozen_states |= std::uint64_t{1} << cands[i].state;
 
-  auto app = std::make_unique<App>();
-  if (app->init(app_cfg) != fsw::Status::kOk) return run;
+  auto driver = std::make_unique<fsw::FlightDriver<LayoutDiag>>();  // the 56-state application: not on the stack
+  const App& app = driver->app();
+  if (driver->init(app_cfg) != fsw::Status::kOk) return run;
   run.prior_sigma.resize(static_cast<std::size_t>(na));
   for (int a = 0; a < na; ++a)
     run.prior_sigma[static_cast<std::size_t>(a)] = cfg.prior[static_cast<std::size_t>(cands[active[a]].effect)];
@@ -404,7 +406,6 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
   constexpr double kScoreInterval_s = 0.1;
   double next_score_t_s = -1e300;
   double nav_pos_ss = 0.0, nav_vel_ss = 0.0, nav_tilt_ss = 0.0, nav_head_ss = 0.0;
-  fsw::FrameOutput out;
   // GNSS outages (with_outages): window k covers [t0 + k period, t0 + k period + length), GNSS time.
   const auto outage_window = [&](double t) -> long {
     if (!with_outages || !run.initialised) return -1;
@@ -431,42 +432,31 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
   // The likelihood's keys are the GNSS measurement times (the last epoch fed), not the IMU clock:
   // runs on re-timed IMU data (diagnosis_intervals.cpp) compare the same measurements.
   double last_gnss_t_s = 0.0;
-  fsw::InputEvent input;  // what the flight application is fed (FlightApp::on_event), one at a time
-  for (const RecordedData::Event& ev : data.order) {
-    if (ev.kind == RecordedData::Kind::kGnss && cfg.gnss_source == sim::GnssSource::kRaw) last_gnss_t_s = data.gnss[ev.index].t_s;
-    if (ev.kind == RecordedData::Kind::kPvt && cfg.gnss_source == sim::GnssSource::kPvt) last_gnss_t_s = data.pvt[ev.index].t_s;
-    switch (ev.kind) {
-      case RecordedData::Kind::kAlmanac:
-        data.input_event(ev, input);
-        app->on_event(input, out);
-        continue;
-      case RecordedData::Kind::kGnss:
-      case RecordedData::Kind::kPvt: {
-        // The GNSS input the configuration takes (raw epochs or solutions); the other is not fed.
-        const sim::GnssSource source = ev.kind == RecordedData::Kind::kGnss ? sim::GnssSource::kRaw : sim::GnssSource::kPvt;
-        if (cfg.gnss_source != source) continue;
-        data.input_event(ev, input);
-        if (outage_window(input.t_s) >= 0) {
-          ++run.outages.epochs_withheld;
-          in_outage = true;
-          continue;
-        }
-        if (in_outage) await_reacquisition = true;
-        in_outage = false;
-        app->on_event(input, out);
-        continue;
-      }
-      case RecordedData::Kind::kImu: break;
+  // The inputs the configuration takes, in arrival order: the almanac, the IMU samples and the GNSS
+  // input of cfg.gnss_source (raw epochs or solutions; the other is not fed), less the epochs an
+  // outage window withholds.
+  const auto keep = [&](const fsw::InputEvent& in) {
+    const bool raw = in.kind == fsw::InputEvent::Kind::kGnssRaw, pvt = in.kind == fsw::InputEvent::Kind::kGnssPvt;
+    if (!raw && !pvt) return true;
+    if (cfg.gnss_source != (raw ? sim::GnssSource::kRaw : sim::GnssSource::kPvt)) return false;
+    last_gnss_t_s = in.t_s;
+    if (outage_window(in.t_s) >= 0) {
+      ++run.outages.epochs_withheld;
+      in_outage = true;
+      return false;
     }
-    out.nav_valid = false;
-    out.ekf_ran = false;
-    data.input_event(ev, input);
-    if (app->on_event(input, out) != fsw::Status::kOk || !out.nav_valid) continue;
-    if (!run.initialised && app->initialised()) {
+    if (in_outage) await_reacquisition = true;
+    in_outage = false;
+    return true;
+  };
+  // The scoring, after every navigation frame (an observer of the driver, fsw/driver.hpp).
+  const auto score = [&](const fsw::InputEvent& in, fsw::Status st, const fsw::FrameOutput& out) {
+    if (in.kind != fsw::InputEvent::Kind::kImu || st != fsw::Status::kOk || !out.nav_valid) return;
+    if (!run.initialised && app.initialised()) {
       run.initialised = true;
-      run.init_t_s = app->health().init_t_s;
+      run.init_t_s = app.health().init_t_s;
     }
-    const auto& ekf = app->executive().ekf();
+    const auto& ekf = app.executive().ekf();
     // Navigation error against truth; the solution's time tag is on the IMU clock: the model's own
     // offset estimate puts it on GNSS time. A reference without attitude is a GNSS solution (what
     // `sdins import` writes from an RTK .pos): it is of the antenna, so the model's antenna (its
@@ -517,7 +507,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
         }
       }
     }
-    if (!out.ekf_ran || !out.ekf_updated) continue;
+    if (!out.ekf_ran || !out.ekf_updated) return;
     const fsw::EkfUpdateReport& rep = out.report;
     if (await_reacquisition) {
       // The first update after an outage: its position scalars / pseudoranges, used or gated.
@@ -606,12 +596,16 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     for (int a = 0; a < na; ++a) {
       const Candidate& c = cands[static_cast<std::size_t>(active[a])];
       const double u = fsw::effect_info(c.effect).unit_to_si;
-      est[static_cast<std::size_t>(a)] = estimate_si(*app, c) / u;
+      est[static_cast<std::size_t>(a)] = estimate_si(app, c) / u;
       sig[static_cast<std::size_t>(a)] = std::sqrt(ekf.P()(c.state, c.state)) / u;
     }
     run.est_trace.push_back(std::move(est));
     run.sigma_trace.push_back(std::move(sig));
-  }
+  };
+  RecordedSource recording(data);
+  auto inputs = fsw::filtered(recording, keep);
+  auto scoring = fsw::after_each(score);
+  fsw::drive(inputs, *driver, scoring);
   close_window();
   if (run.outages.windows > 0) {
     run.outages.horizontal_rms_m = std::sqrt(out_h_ss / run.outages.windows);
@@ -641,7 +635,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     run.nav.heading_rms_deg = run.nav.attitude_samples > 0 ? std::sqrt(nav_head_ss / n_att) * fsw::kRadToDeg : NAN;
   }
   // Final estimates, Wald statistics and the posterior correlation of the active candidates.
-  const auto& P = app->executive().ekf().P();
+  const auto& P = app.executive().ekf().P();
   run.estimate.resize(static_cast<std::size_t>(na));
   run.sigma.resize(static_cast<std::size_t>(na));
   run.z2.resize(static_cast<std::size_t>(na));
@@ -649,7 +643,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
   for (int a = 0; a < na; ++a) {
     const Candidate& c = cands[static_cast<std::size_t>(active[a])];
     const double u = fsw::effect_info(c.effect).unit_to_si;
-    const double x = estimate_si(*app, c);
+    const double x = estimate_si(app, c);
     const double p = P(c.state, c.state);
     const double p0 = prior_si(cfg, c.effect) * prior_si(cfg, c.effect);
     run.estimate[static_cast<std::size_t>(a)] = x / u;
@@ -661,7 +655,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
       if (a != b) run.correlation(a, b) = d > 0.0 ? P(c.state, sb) / d : 0.0;
     }
   }
-  run.exec_health = app->executive().health();
+  run.exec_health = app.executive().health();
   return run;
 }
 

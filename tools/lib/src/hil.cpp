@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "fsw/driver.hpp"
 #include "hal/can_fsw_input.hpp"
 #include "hal/rt_clock.hpp"
 
@@ -376,7 +377,9 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
     r.error = err;
     return r;
   }
-  hal::CanFswInput in(node);
+  hal::CanFswInput in(node.summary());
+  r.nav_rate_hz = ncfg.app.exec.nav_rate_hz;
+  r.ekf_rate_hz = ncfg.app.exec.nav_rate_hz / ncfg.app.exec.frames_per_ekf;
 
   const double t_begin = hal::mono_now_s();
   double last_frame = t_begin, last_ack_sent = -1e300;
@@ -396,8 +399,6 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
 
   double exec_acc = 0.0, exec_cpu_acc = 0.0, exec_sum = 0.0, late_sum = 0.0;
   const double budget_s = ncfg.app.exec.frame_budget_s;  // the executive's overrun threshold
-  const int spf = std::max(1, ncfg.app.exec.imu_samples_per_frame);
-  int imu_in_frame = 0;
   double imu_t_s = 0.0;  // the last IMU sample's time
   bool have_base = false;
   double base_mono = 0.0, base_t = 0.0;
@@ -415,6 +416,7 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
     const CanBusStatus st = bus.receive(f, std::min(idle_left, cfg.idle_ack_s));
     if (st == CanBusStatus::kTimeout) {
       in.poll(hal::wall_now_s());
+      fsw::drive(in, node);
       // A quiet bus: repeat the ack, in case the simulator missed the last one.
       if (in.run_started() && hal::mono_now_s() - last_ack_sent >= cfg.idle_ack_s) send_ack();
       continue;
@@ -444,18 +446,17 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
         if (late > cfg.late_threshold_s) ++r.imu_late;
       }
     }
-    const std::uint64_t nav_before = node.summary().nav_frames;
+    const std::uint64_t nav_before = node.summary().nav_frames, minor_before = node.summary().minor_frames;
     in.push(f, f.timestamp_s);
+    fsw::drive(in, node);
     if (cfg.realtime) {
-      // A minor frame's execution: the handling of every frame since the previous one completed.
-      // Before initialisation there are no navigation frames: every imu_samples_per_frame IMU
-      // samples (levelling, the initialisation attempts on the GNSS epochs) count as one frame.
+      // A minor frame's execution: the handling of every frame since the previous one completed,
+      // as the flight application closes them (FrameOutput::frame_closed: before initialisation
+      // a frame's worth of levelling samples and the initialisation attempts on the GNSS epochs).
       exec_acc += hal::mono_now_s() - arrival;
       exec_cpu_acc += hal::thread_cpu_now_s() - arrival_cpu;
-      if (!f.extended && f.id == can::kIdImuSample) ++imu_in_frame;
       const bool nav_frame = node.summary().nav_frames != nav_before;
-      const bool pre_init_frame = !node.summary().initialised && imu_in_frame >= spf;
-      if (nav_frame || pre_init_frame) {
+      if (node.summary().minor_frames != minor_before) {
         node.set_prev_tick_exec_s(exec_acc);
         ++r.minor_frames_timed;
         r.frame_exec_s.push_back(exec_acc);
@@ -473,12 +474,12 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
         if (exec_acc > budget_s) ++(exec_cpu_acc > budget_s ? r.overruns_execution : r.overruns_stalled);
         exec_acc = 0.0;
         exec_cpu_acc = 0.0;
-        imu_in_frame = 0;
       }
     }
     if (in.control_changed()) {
       if (in.end_received()) {
         in.finish();
+        fsw::drive(in, node);
         send_ack();
         r.exit = FswExit::kEndOfRun;
         break;
@@ -491,6 +492,7 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
   }
   if (r.exit != FswExit::kEndOfRun) {
     in.finish();
+    fsw::drive(in, node);
     if (in.run_started()) send_ack();
   }
   r.wall_s = hal::mono_now_s() - t_begin;
@@ -537,11 +539,11 @@ static nlohmann::json groups_json(const FswRunResult& r) {
                           {"max_us", t.max_us},   {"slips", slips}};
   };
   // 200 Hz: measured per minor frame in real time only (bus handling included); slips = overruns.
-  nlohmann::json nav = entry("nav_200hz", fsw::kNavRate_hz, r.frame_exec_s, static_cast<long>(r.exec.overruns));
+  nlohmann::json nav = entry("nav_200hz", r.nav_rate_hz, r.frame_exec_s, static_cast<long>(r.exec.overruns));
   nav["measured"] = r.realtime ? "each minor frame's handling (bus decode + the 200 Hz group), steady clock"
                                : "not measured (lockstep: virtual time; sdins fsw --realtime measures it)";
   g.push_back(nav);
-  nlohmann::json ekf = entry("ekf_1hz", fsw::kEkfRate_hz, r.ekf_group.exec_s,
+  nlohmann::json ekf = entry("ekf_1hz", r.ekf_rate_hz, r.ekf_group.exec_s,
                              static_cast<long>(r.exec.ekf_slips + r.exec.ekf_late));
   ekf["overruns"] = r.exec.ekf_overruns;
   ekf["ekf_slips"] = r.exec.ekf_slips;

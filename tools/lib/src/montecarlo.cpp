@@ -17,6 +17,7 @@
 #include "fsw/alignment.hpp"
 #include "fsw/chi_square.hpp"
 #include "fsw/effect_catalogue.hpp"
+#include "fsw/driver.hpp"
 #include "fsw/flight_app.hpp"
 #include "sim/rng.hpp"
 #include "sim/sensor_stream.hpp"
@@ -33,6 +34,15 @@ using Clock = std::chrono::steady_clock;
 
 constexpr std::uint64_t kStreamInitialErrors = 20;
 
+/// One minor frame's events as the simulator delivered them (read before any model runs, so the
+/// clock splits the run's time between the models and the flight software), with the truth of
+/// each GNSS event beside it. Every model's driver runs over the same batch.
+struct FrameEvents {
+  static constexpr int kMaxEvents = 2 * fsw::FrameBuilder::kMaxSamplesPerFrame;
+  fsw::EventBatch<kMaxEvents> events;
+  std::array<sim::TruthSample, kMaxEvents> epoch_truth;  ///< of the GNSS events in events
+};
+
 /// One model's flight application plus what the run records from it. A record is taken at every
 /// GNSS epoch: the navigation error at the epoch's time (the frame that ends at it, before the
 /// epoch's own correction lands) against the filter's covariance after the epoch's update, which
@@ -43,10 +53,9 @@ struct ModelRunner {
   virtual ~ModelRunner() = default;
   virtual fsw::Status init(const fsw::FlightAppConfig& cfg) = 0;
   virtual fsw::Status start(const fsw::NavState& nav) = 0;
-  /// One input event (FlightApp::on_event); returns whether the EKF ran (IMU events only).
-  virtual bool on_event(const fsw::InputEvent& ev) = 0;
-  /// The epoch just delivered: its truth.
-  virtual void epoch(const sim::TruthSample& truth) = 0;
+  /// The batch's events through this model's driver (fsw::drive, the one loop; one virtual call
+  /// per model and frame); returns whether the EKF ran.
+  virtual bool drive(FrameEvents& batch) = 0;
   /// The end of the run: completes the last record.
   virtual void finish() = 0;
   virtual std::vector<SensorResidual> sensors(const sim::ImuErrors& truth, const fsw::ExecutiveConfig& cfg,
@@ -55,27 +64,40 @@ struct ModelRunner {
   std::vector<EpochRecord>* records = nullptr;
 };
 
-/// The flight application of one layout, as SIL/HIL/replay fly it (fsw::FlightApp), started from
-/// the run's given initial state (InitMode::kGiven).
+/// The flight application of one layout, as SIL/HIL/replay fly it (fsw::FlightDriver), started
+/// from the run's given initial state (InitMode::kGiven). The runner is its driver's observer: the
+/// truth scoring of every epoch.
 template <class Layout>
 struct FlightAppRunner final : ModelRunner {
-  fsw::FlightApp<Layout> app;
-  fsw::FrameOutput out;
+  fsw::FlightDriver<Layout> driver;
+  const fsw::FlightApp<Layout>& app = driver.app();
   bool pending = false;  ///< a record waits for its epoch's covariance
   sim::NavErrors pending_err;
+  const FrameEvents* batch = nullptr;  ///< the batch being driven
+  bool ekf_ran = false;                ///< ... in which the EKF ran
 
-  fsw::Status init(const fsw::FlightAppConfig& cfg) override { return app.init(cfg); }
-  fsw::Status start(const fsw::NavState& nav) override { return app.start_given(nav); }
-  bool on_event(const fsw::InputEvent& ev) override {
-    app.on_event(ev, out);  // a rejected input is counted in the health
-    const bool ran = ev.kind == fsw::InputEvent::Kind::kImu && out.ekf_ran;
-    if (ran && pending) complete();
-    return ran;
+  fsw::Status init(const fsw::FlightAppConfig& cfg) override { return driver.init(cfg); }
+  fsw::Status start(const fsw::NavState& nav) override { return driver.start_given(nav); }
+  bool drive(FrameEvents& b) override {
+    batch = &b;
+    ekf_ran = false;
+    b.events.rewind();
+    fsw::drive(b.events, driver, *this);
+    return ekf_ran;
   }
-  void epoch(const sim::TruthSample& truth) override {
-    if (pending) complete();
-    pending_err = nav_errors(out.nav, truth);
-    pending = true;
+  // The observer (fsw/driver.hpp).
+  void before(const fsw::InputEvent&) {}
+  void after(const fsw::InputEvent& ev, fsw::Status, const fsw::FrameOutput& out) {
+    if (ev.kind == fsw::InputEvent::Kind::kImu) {
+      if (out.ekf_ran) {
+        ekf_ran = true;
+        if (pending) complete();
+      }
+    } else if (ev.kind == fsw::InputEvent::Kind::kGnssRaw) {  // the epoch just delivered: its truth
+      if (pending) complete();
+      pending_err = nav_errors(out.nav, batch->epoch_truth[static_cast<std::size_t>(batch->events.current())]);
+      pending = true;
+    }
   }
   void finish() override {
     if (pending) complete();
@@ -300,42 +322,45 @@ RunResult run_one(const sim::Scenario& sc, const sim::TruthTrack& truth, const s
   // Every model reads the one sensor stream's events (sim/sensor_stream.hpp): the almanac, then
   // the IMU samples with each raw epoch right after the sample of its time. The runs start from
   // their given initial state once the almanac is in. The events are read a minor frame's worth
-  // at a time (the sensor models do not depend on the flight software), so the clock that splits
-  // the run's time between the models and the flight software is read three times per frame.
+  // (imu_samples_per_frame IMU samples: the stream's read-ahead; each model's minor frames are its
+  // frame builder's) at a time into a batch (the sensor models do not depend on the flight
+  // software), which every model's driver then runs over, so the clock that splits the run's time
+  // between the models and the flight software is read three times per frame.
   const int spf = cfg.imu_samples_per_frame;
-  constexpr int kMaxEvents = 2 * fsw::FrameBuilder::kMaxSamplesPerFrame;
-  std::array<fsw::InputEvent, kMaxEvents> evs;
-  std::array<sim::TruthSample, kMaxEvents> epoch_truth;  ///< of the GNSS events in evs
+  auto batch = std::make_unique<FrameEvents>();  // 64 events of 864 B: not on the stack
+  fsw::EventBatch<FrameEvents::kMaxEvents>& evs = batch->events;
   Clock::duration d_sim{}, d_mech{}, d_ekf{};
-  bool started = false;
+  for (std::size_t k = 0, n_alm = stream.almanac().size(); k < n_alm;) {  // delivered first, at power-up
+    evs.clear();
+    while (k < n_alm && !evs.full() && stream.next(*evs.slot())) {
+      evs.commit();
+      ++k;
+    }
+    if (evs.size() == 0) break;
+    for (auto& r : runners) r->drive(*batch);
+  }
+  for (auto& r : runners)
+    if (r->start(init) != fsw::Status::kOk) throw std::runtime_error("flight application start failed");
   for (;;) {
     // SIGINT/SIGTERM: a run stops within a frame (run_many then discards it and throws). Under
     // mpirun the launcher kills the ranks 1 s after forwarding the signal, so a rank must not wait
     // for the end of a long run to notice it (docs/faults.md).
     if (interrupted()) break;
     const auto c0 = Clock::now();
-    int n = 0, n_imu = 0;
-    while (n < kMaxEvents && n_imu < spf && stream.next(evs[static_cast<std::size_t>(n)])) {
-      const fsw::InputEvent& ev = evs[static_cast<std::size_t>(n)];
+    evs.clear();
+    int n_imu = 0;
+    while (!evs.full() && n_imu < spf && stream.next(*evs.slot())) {
+      const fsw::InputEvent& ev = *evs.slot();
       if (ev.kind == fsw::InputEvent::Kind::kImu) ++n_imu;
-      if (ev.kind == fsw::InputEvent::Kind::kGnssRaw) epoch_truth[static_cast<std::size_t>(n)] = stream.epoch_truth();
-      ++n;
+      if (ev.kind == fsw::InputEvent::Kind::kGnssRaw)
+        batch->epoch_truth[static_cast<std::size_t>(evs.size())] = stream.epoch_truth();
+      evs.commit();
     }
-    if (n == 0) break;
+    if (evs.size() == 0) break;
     const auto c1 = Clock::now();
     d_sim += c1 - c0;
     bool ekf_ran = false;
-    for (int k = 0; k < n; ++k) {
-      const fsw::InputEvent& ev = evs[static_cast<std::size_t>(k)];
-      if (ev.kind != fsw::InputEvent::Kind::kAlmanac && !started) {
-        for (auto& r : runners)
-          if (r->start(init) != fsw::Status::kOk) throw std::runtime_error("flight application start failed");
-        started = true;
-      }
-      for (auto& r : runners) ekf_ran |= r->on_event(ev);
-      if (ev.kind == fsw::InputEvent::Kind::kGnssRaw)
-        for (auto& r : runners) r->epoch(epoch_truth[static_cast<std::size_t>(k)]);
-    }
+    for (auto& r : runners) ekf_ran |= r->drive(*batch);
     (ekf_ran ? d_ekf : d_mech) += Clock::now() - c1;
   }
   for (auto& r : runners) r->finish();

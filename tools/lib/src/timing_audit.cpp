@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "fsw/driver.hpp"
 #include "fsw/flight_app.hpp"
 #include "sim/almanac.hpp"
 #include "sim/sensor_stream.hpp"
@@ -95,71 +96,57 @@ std::string frame_work(const fsw::FrameOutput& out, bool had_epoch, int epoch_sa
   return w;
 }
 
-/// Flies the scenario through the flight application (the one simulated sensor stream,
-/// sim/sensor_stream.hpp, on the shared truth: raw receiver epochs, IMU samples) with its two rate
-/// groups timed apart: every 200 Hz frame (its on_gnss and on_imu calls) and every run of the 1 Hz group (run_ekf_group, called after the frame that
-/// released it, as a lower-priority task would run). Initialisation as cfg.init_mode: kTrack is what
-/// HIL flies (in-motion initialisation from the first good epoch; the frames before it are the
-/// levelling calls, grouped by the frame's IMU samples), kGiven the Monte Carlo's start.
+/// The timing audit's observer of the flight driver (fsw/driver.hpp): times every 200 Hz group
+/// call (a raw epoch's, an IMU sample's) between before() and after(), sums them per minor frame,
+/// runs (and times) the 1 Hz group after the frame that released it, as a lower-priority task
+/// would, and runs the configured frame stages on each frame's input.
 template <class Layout>
-Pass fly(const sim::Scenario& sc, const sim::TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
-         const MonteCarloConfig& mc, const TimingAuditConfig& cfg, double overhead_s) {
-  const auto w0 = Clock::now();
-  const std::uint64_t seed = sc.seed + static_cast<std::uint64_t>(cfg.run);
-  sim::SensorStream stream(sc, truth, almanac, seed);
-  fsw::FlightAppConfig acfg = flight_app_config(sc, mc);
-  acfg.exec.ekf_group_inline = false;  // the 1 Hz group is run (and timed) apart
-  acfg.init_mode = cfg.init_mode;
-  auto app = std::make_unique<fsw::FlightApp<Layout>>();  // the 56-state executives are ~100 KB
-  fsw::FrameOutput out;
-  fsw::InputEvent ev;  // reused: only the payload changes from one delivery to the next
-  bool more = app->init(acfg) == fsw::Status::kOk;
-  if (!more) throw std::runtime_error("timing audit: flight application init failed");
-  // The almanac (untimed, power-up), then the given start for kGiven.
-  while ((more = stream.next(ev)) && ev.kind == fsw::InputEvent::Kind::kAlmanac) (void)app->on_event(ev, out);
-  if (cfg.init_mode == fsw::InitMode::kGiven &&
-      app->start_given(initial_nav_state(truth, stream.imu_errors(), mc, seed)) != fsw::Status::kOk)
-    throw std::runtime_error("timing audit: flight application start failed");
-
-  Pass p;
-  const int spf = acfg.exec.imu_samples_per_frame;
-  const std::size_t n_frames = truth.imu.size() / static_cast<std::size_t>(spf);
-  for (auto* v : {&p.tick_s, &p.t_s}) v->reserve(n_frames);
-  for (auto* v : {&p.tick_pre, &p.landed, &p.initialised}) v->reserve(n_frames);
-  p.work.reserve(n_frames);
-  p.stage_s.assign(cfg.frame_stages.size(), {});
-  p.stage_pre.assign(cfg.frame_stages.size(), {});
-  for (auto& s : p.stage_s) s.reserve(n_frames);
-  for (auto& s : p.stage_pre) s.reserve(n_frames);
-
+struct FrameTimer {
+  fsw::FlightDriver<Layout>& driver;
+  const sim::SensorStream& stream;
+  const TimingAuditConfig& cfg;
+  const double overhead_s;
+  Pass& p;
   std::array<fsw::ImuSample, 2 * fsw::FrameBuilder::kMaxSamplesPerFrame> frame{};
   int n_in_frame = 0;
-  bool frame_has_epoch = false, frame_init = false;
+  bool frame_has_epoch = false, frame_init = false, was_initialised = false;
   double frame_s = 0.0;
   unsigned char frame_pre = 0;
-  fsw::Status status = fsw::Status::kOk;
-  // The stream's order (sim/sensor_stream.hpp): an epoch arrives after the IMU sample of its time,
-  // so it belongs to the next frame, the one whose end releases its EKF step.
-  for (; more; more = stream.next(ev)) {
-    unsigned char pre = 0;
+  long cs0 = 0;
+  Clock::time_point t0{};
+
+  static bool is_timed(const fsw::InputEvent& ev) {
+    return ev.kind == fsw::InputEvent::Kind::kGnssRaw || ev.kind == fsw::InputEvent::Kind::kImu;
+  }
+  void before(const fsw::InputEvent& ev) {
+    if (!is_timed(ev)) return;
+    was_initialised = driver.app().initialised();
+    cs0 = context_switches();  // read outside the timed interval (as timed())
+    t0 = Clock::now();
+  }
+  void after(const fsw::InputEvent& ev, fsw::Status status, const fsw::FrameOutput& out) {
+    if (!is_timed(ev)) return;
+    const auto t1 = Clock::now();
+    frame_pre |= context_switches() != cs0 ? 1 : 0;
+    frame_s += std::max(0.0, to_s(t1 - t0) - overhead_s);
+    const fsw::FlightApp<Layout>& app = driver.app();
+    // The stream's order (sim/sensor_stream.hpp): an epoch arrives after the IMU sample of its
+    // time, so it belongs to the next frame, the one whose end releases its EKF step.
     if (ev.kind == fsw::InputEvent::Kind::kGnssRaw) {
       frame_has_epoch = true;
-      const bool before = app->initialised();
-      frame_s += timed([&] { status = app->on_event(ev, out); }, overhead_s, pre);
-      frame_pre |= pre;
-      if (!before && app->initialised()) frame_init = true;
+      if (!was_initialised && app.initialised()) frame_init = true;
       if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_gnss failed");
-      continue;
+      return;
     }
-    if (ev.kind != fsw::InputEvent::Kind::kImu) continue;
     const fsw::ImuSample& sample = ev.imu;
     if (n_in_frame < static_cast<int>(frame.size())) frame[static_cast<std::size_t>(n_in_frame++)] = sample;
-    frame_s += timed([&] { status = app->on_event(ev, out); }, overhead_s, pre);
-    frame_pre |= pre;
     if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::on_imu failed");
-    // A frame ends with a navigation frame, or (before initialisation) with a frame's worth of samples.
-    const bool closes = out.nav_valid || (!app->initialised() && n_in_frame >= spf) || n_in_frame >= static_cast<int>(frame.size());
-    if (!closes) continue;
+    // A frame ends where the flight application closes it (FrameOutput::frame_closed: a navigation
+    // frame, or before initialisation a frame's worth of samples).
+    if (out.frame_closed || n_in_frame >= static_cast<int>(frame.size())) close_frame(out, sample);
+  }
+  void close_frame(const fsw::FrameOutput& out, const fsw::ImuSample& sample) {
+    const fsw::FlightApp<Layout>& app = driver.app();
     fsw::FrameInput in;  // the frame's stages see its input (untimed prepare), timed apart
     in.imu = frame.data();
     in.n_imu = n_in_frame;
@@ -175,7 +162,7 @@ Pass fly(const sim::Scenario& sc, const sim::TruthTrack& truth, const std::vecto
     p.tick_s.push_back(frame_s);
     p.tick_pre.push_back(frame_pre);
     p.landed.push_back(out.ekf_ran ? 1 : 0);
-    p.initialised.push_back(app->initialised() ? 1 : 0);
+    p.initialised.push_back(app.initialised() ? 1 : 0);
     p.t_s.push_back(out.nav_valid ? out.nav.t_s : sample.t_s);
     if (frame_init) p.init_frame = static_cast<long>(k);
     p.work.push_back(out.ekf_ran || out.ekf_released || frame_has_epoch
@@ -184,7 +171,8 @@ Pass fly(const sim::Scenario& sc, const sim::TruthTrack& truth, const std::vecto
     if (out.ekf_updated) p.sats.push_back(out.report.n_obs);
     if (out.ekf_released) {  // the 1 Hz group, after the frame that released it
       unsigned char epre = 0;
-      p.ekf_s.push_back(timed([&] { status = app->run_ekf_group(); }, overhead_s, epre));
+      fsw::Status status = fsw::Status::kOk;
+      p.ekf_s.push_back(timed([&] { status = driver.app().run_ekf_group(); }, overhead_s, epre));
       p.ekf_pre.push_back(epre);
       p.ekf_release.push_back(k);
       if (status != fsw::Status::kOk) throw std::runtime_error("timing audit: FlightApp::run_ekf_group failed");
@@ -195,6 +183,51 @@ Pass fly(const sim::Scenario& sc, const sim::TruthTrack& truth, const std::vecto
     frame_s = 0.0;
     frame_pre = 0;
   }
+};
+
+/// Flies the scenario through the flight application (the one simulated sensor stream,
+/// sim/sensor_stream.hpp, on the shared truth: raw receiver epochs, IMU samples) with its two rate
+/// groups timed apart: every 200 Hz frame (its on_gnss and on_imu calls) and every run of the 1 Hz group (run_ekf_group, called after the frame that
+/// released it, as a lower-priority task would run). Initialisation as cfg.init_mode: kTrack is what
+/// HIL flies (in-motion initialisation from the first good epoch; the frames before it are the
+/// levelling calls, grouped by the frame's IMU samples), kGiven the Monte Carlo's start.
+template <class Layout>
+Pass fly(const sim::Scenario& sc, const sim::TruthTrack& truth, const std::vector<sim::AlmanacEntry>& almanac,
+         const MonteCarloConfig& mc, const TimingAuditConfig& cfg, double overhead_s) {
+  const auto w0 = Clock::now();
+  const std::uint64_t seed = sc.seed + static_cast<std::uint64_t>(cfg.run);
+  sim::SensorStream stream(sc, truth, almanac, seed);
+  fsw::FlightAppConfig acfg = flight_app_config(sc, mc);
+  acfg.exec.ekf_group_inline = false;  // the 1 Hz group is run (and timed) apart
+  acfg.init_mode = cfg.init_mode;
+  auto driver = std::make_unique<fsw::FlightDriver<Layout>>();  // the 56-state executives are ~100 KB
+  if (driver->init(acfg) != fsw::Status::kOk) throw std::runtime_error("timing audit: flight application init failed");
+  // The almanac (untimed, power-up), then the given start for kGiven.
+  fsw::NoObserver untimed;
+  const fsw::InputEvent* first = stream.next();
+  for (; first != nullptr && first->kind == fsw::InputEvent::Kind::kAlmanac; first = stream.next())
+    (void)driver->step(*first, untimed);
+  if (cfg.init_mode == fsw::InitMode::kGiven &&
+      driver->start_given(initial_nav_state(truth, stream.imu_errors(), mc, seed)) != fsw::Status::kOk)
+    throw std::runtime_error("timing audit: flight application start failed");
+
+  Pass p;
+  const int spf = acfg.exec.imu_samples_per_frame;
+  const std::size_t n_frames = truth.imu.size() / static_cast<std::size_t>(spf);
+  for (auto* v : {&p.tick_s, &p.t_s}) v->reserve(n_frames);
+  for (auto* v : {&p.tick_pre, &p.landed, &p.initialised}) v->reserve(n_frames);
+  p.work.reserve(n_frames);
+  p.stage_s.assign(cfg.frame_stages.size(), {});
+  p.stage_pre.assign(cfg.frame_stages.size(), {});
+  for (auto& s : p.stage_s) s.reserve(n_frames);
+  for (auto& s : p.stage_pre) s.reserve(n_frames);
+
+  FrameTimer<Layout> timer{*driver, stream, cfg, overhead_s, p};
+  if (first != nullptr) {
+    (void)driver->step(*first, timer);
+    fsw::drive(stream, *driver, timer);
+  }
+  const fsw::FlightApp<Layout>* app = &driver->app();
   if (!app->initialised()) throw std::runtime_error("timing audit: the flight application never initialised");
   const fsw::ExecutiveHealth& h = app->executive().health();
   p.ekf_updates = h.ekf_updates;

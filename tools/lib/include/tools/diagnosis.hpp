@@ -84,6 +84,23 @@ struct RecordedData {
   void push(const fsw::InputEvent& ev);
 };
 
+/// A recording as an event source of the one driver (fsw/driver.hpp): its inputs in arrival order,
+/// one InputEvent filled per delivery (RecordedData::input_event).
+class RecordedSource {
+ public:
+  explicit RecordedSource(const RecordedData& d) : d_(d) {}
+  const fsw::InputEvent* next() {
+    if (k_ >= d_.order.size()) return nullptr;
+    d_.input_event(d_.order[k_++], ev_);
+    return &ev_;
+  }
+
+ private:
+  const RecordedData& d_;
+  std::size_t k_ = 0;
+  fsw::InputEvent ev_{};
+};
+
 /// An IMU hole longer than this is a damaged stretch of a log (lost or rejected events).
 inline constexpr double kDamagedImuGap_s = 0.1;
 /// Keeps the longest stretch of d without an IMU hole longer than kDamagedImuGap_s (and the GNSS

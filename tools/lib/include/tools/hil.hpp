@@ -100,6 +100,8 @@ struct FswRunResult {
   bool lcm_network = false;
   std::uint64_t lcm_published = 0, lcm_send_failures = 0, lcm_logged = 0, lcm_log_failures = 0;
   // timing
+  /// The rate groups' rates the flight configuration sets (exec.nav_rate_hz; / exec.frames_per_ekf)
+  double nav_rate_hz = 0.0, ekf_rate_hz = 0.0;
   double wall_s = 0.0, idle_timeout_s = 0.0;
   bool realtime = false, sched_fifo = false;
   std::string sched_note;

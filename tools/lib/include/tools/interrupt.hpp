@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "fsw/driver.hpp"
+
 namespace tools {
 
 void install_interrupt_handlers();
@@ -43,5 +45,12 @@ class Interrupted : public std::runtime_error {
 };
 /// Throws Interrupted(what) when the flag is set.
 void throw_if_interrupted(const std::string& what);
+
+/// An event source (fsw/driver.hpp) that ends at the first event after SIGINT/SIGTERM.
+template <fsw::EventSource Source>
+struct UntilInterrupted {
+  Source& src;
+  const fsw::InputEvent* next() { return interrupted() ? nullptr : src.next(); }
+};
 
 }  // namespace tools
