@@ -38,9 +38,9 @@ void register_replay(CLI::App& app) {
 }
 
 int run_replay() {
-  tools::require_distinct({opt.run.log, opt.run.json}, {opt.in, opt.run.filter_config});
-  const sim::FilterConfig filter = opt.run.filter();
-  const bool pvt = filter.gnss_source == sim::GnssSource::kPvt;
+  tools::require_distinct({opt.run.log, opt.run.json}, {opt.in, opt.run.flight_config});
+  const cfg::FlightConfig filter = opt.run.flight();
+  const bool pvt = filter.gnss_source == cfg::GnssSource::kPvt;
   hal::LcmReplayConfig rc;
   if (pvt) rc.gnss_pvt_channel = hal::kLcmChannelGnssPvt;
   hal::LcmReplayReader reader;
@@ -109,8 +109,8 @@ int run_replay() {
     j["mode"] = "replay";
     j["model"] = opt.run.model;
     j["input_log"] = opt.in;
-    j["filter_config"] = opt.run.filter_config;
-    j["gnss_source"] = sim::to_string(filter.gnss_source);
+    j["filter_config"] = opt.run.flight_config;
+    j["gnss_source"] = cfg::to_string(filter.gnss_source);
     j["inputs"] = {{"delivered", st.delivered},
                    {"imu_accepted", st.imu.accepted()},
                    {"gnss_accepted", st.gnss.accepted()},

@@ -16,7 +16,7 @@
 #include "hal/lcm_log.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "tools/diagnosis_intervals.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "sim/sensor_stream.hpp"
 
 namespace tools {
@@ -169,11 +169,11 @@ bool set_diagnosis_baseline(DiagnosisConfig& cfg, fsw::FilterModel model) {
 
 DiagnosisConfig default_diagnosis_config() {
   DiagnosisConfig c;
-  apply_filter_config(c, shipped_filter_config());  // config/default.toml sets every prior
+  apply_flight_config(c, cfg::shipped_flight_config());  // config/default.toml sets every prior
   return c;
 }
 
-void apply_filter_config(DiagnosisConfig& cfg, const sim::FilterConfig& f) {
+void apply_flight_config(DiagnosisConfig& cfg, const cfg::FlightConfig& f) {
   cfg.app = f.app;
   cfg.gnss_source = f.gnss_source;
   for (std::size_t e = 0; e < fsw::kEffectCount; ++e)
@@ -394,6 +394,12 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     if (std::find(active.begin(), active.end(), static_cast<int>(i)) == active.end())
       e.frozen_states |= std::uint64_t{1} << cands[i].state;
 
+  // The diagnosis' priors become EKF sigmas on top of the loaded (validated) configuration: the
+  // result is checked against the same rules, so a refusal names the prior instead of reading as
+  // a flight software that never initialised.
+  if (const fsw::ConfigCheck check = fsw::check_config(app_cfg); !check.ok())
+    throw std::runtime_error("the diagnosis' priors on the flight configuration: " +
+                             cfg::describe(check, app_cfg, cfg::FlightConfig{}));
   auto app = std::make_unique<App>();
   if (app->init(app_cfg) != fsw::Status::kOk) return run;
   run.prior_sigma.resize(static_cast<std::size_t>(na));
@@ -433,8 +439,8 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
   double last_gnss_t_s = 0.0;
   fsw::InputEvent input;  // what the flight application is fed (FlightApp::on_event), one at a time
   for (const RecordedData::Event& ev : data.order) {
-    if (ev.kind == RecordedData::Kind::kGnss && cfg.gnss_source == sim::GnssSource::kRaw) last_gnss_t_s = data.gnss[ev.index].t_s;
-    if (ev.kind == RecordedData::Kind::kPvt && cfg.gnss_source == sim::GnssSource::kPvt) last_gnss_t_s = data.pvt[ev.index].t_s;
+    if (ev.kind == RecordedData::Kind::kGnss && cfg.gnss_source == cfg::GnssSource::kRaw) last_gnss_t_s = data.gnss[ev.index].t_s;
+    if (ev.kind == RecordedData::Kind::kPvt && cfg.gnss_source == cfg::GnssSource::kPvt) last_gnss_t_s = data.pvt[ev.index].t_s;
     switch (ev.kind) {
       case RecordedData::Kind::kAlmanac:
         data.input_event(ev, input);
@@ -443,7 +449,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
       case RecordedData::Kind::kGnss:
       case RecordedData::Kind::kPvt: {
         // The GNSS input the configuration takes (raw epochs or solutions); the other is not fed.
-        const sim::GnssSource source = ev.kind == RecordedData::Kind::kGnss ? sim::GnssSource::kRaw : sim::GnssSource::kPvt;
+        const cfg::GnssSource source = ev.kind == RecordedData::Kind::kGnss ? cfg::GnssSource::kRaw : cfg::GnssSource::kPvt;
         if (cfg.gnss_source != source) continue;
         data.input_event(ev, input);
         if (outage_window(input.t_s) >= 0) {
