@@ -1,4 +1,4 @@
-# The product's run-time data (sim/data_dir.hpp): listed once here, staged into the build tree as
+# The product's run-time data (cfg/data_dir.hpp): listed once here, staged into the build tree as
 # ${CMAKE_BINARY_DIR}/share/sdins (so build/<preset>/tools/sdins finds ../share/sdins exactly as an
 # installed PREFIX/bin/sdins finds PREFIX/share/sdins) and installed to ${CMAKE_INSTALL_DATADIR}/sdins.
 include(GNUInstallDirs)
@@ -41,7 +41,7 @@ sdins_data_files(plot ${_plot})
 
 # The marker that names the directory as sdins data (sim::kDataDirMarker).
 set(_marker_src "${CMAKE_BINARY_DIR}/sdins-data.txt")
-file(WRITE ${_marker_src}.in "sdins run-time data, version @PROJECT_VERSION@ (layout: sim/include/sim/data_dir.hpp)\n")
+file(WRITE ${_marker_src}.in "sdins run-time data, version @PROJECT_VERSION@ (layout: cfg/include/cfg/data_dir.hpp)\n")
 configure_file(${_marker_src}.in ${_marker_src} @ONLY)
 sdins_data_files(. ${_marker_src})
 

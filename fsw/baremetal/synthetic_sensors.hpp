@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "default_flight_config.hpp"
 #include "fsw/flight_app.hpp"
 #include "fsw/frames.hpp"
 #include "fsw/gnss.hpp"
@@ -87,12 +88,13 @@ inline void raw_epoch(double t_s, fsw::GnssRawEpoch& e) {
   }
 }
 
-/// The flight configuration of the image: stationary alignment (levelling + gyrocompassing) from
-/// the raw fixes, the default filter tuning.
+/// The flight configuration of the image: config/default.toml's values (generated into
+/// default_flight_config.hpp at build time by the host build, checked by BaremetalConfig.*), with
+/// one departure for this input: stationary alignment (levelling + gyrocompassing) from the raw
+/// fixes, since the synthetic receiver is at rest (the file's "track" needs motion).
 inline fsw::FlightAppConfig flight_config() {
-  fsw::FlightAppConfig c;
+  fsw::FlightAppConfig c = default_flight_config();
   c.init_mode = fsw::InitMode::kStatic;
-  c.alignment_s = 60.0;
   return c;
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "fsw/chi_square.hpp"
+#include "fsw/config_check.hpp"
 #include "fsw/effect_catalogue.hpp"
 
 namespace fsw {
@@ -89,15 +90,7 @@ PvtModel pvt_measurement_model(const GnssPvtMeasurement& m, const NavState& nav,
 
 template <class Layout>
 Status Ekf<Layout>::init(const EkfConfig& cfg) {
-  if (cfg.propagation_substep_frames < 1 || !(cfg.pseudorange_sigma_m > 0.0) ||
-      !(cfg.pseudorange_rate_sigma_mps > 0.0) || !(cfg.gate_chi2 > 0.0) || !cfg.att_sigma_rad.allFinite() ||
-      !cfg.lever_arm_b_m.allFinite() || !(cfg.gyro_g_sens_sigma_radps_per_mps2 >= 0.0) ||
-      !(cfg.time_offset_sigma_s >= 0.0) || !(cfg.time_drift_sigma_sps >= 0.0) || !(cfg.lever_arm_sigma_m >= 0.0) || !(cfg.tropo_scale_sigma >= 0.0) ||
-      !(cfg.iono_scale_sigma >= 0.0) || !(cfg.pvt_pos_sigma_floor_m >= 0.0) || !std::isfinite(cfg.pvt_pos_sigma_floor_m) ||
-      !(cfg.pvt_vel_sigma_floor_mps >= 0.0) || !std::isfinite(cfg.pvt_vel_sigma_floor_mps) ||
-      !(cfg.pvt_sigma_scale > 0.0) || !std::isfinite(cfg.pvt_sigma_scale) || cfg.nis_window < 1 || cfg.nis_window > kMaxNisWindow ||
-      cfg.runaway_epochs < 0)
-    return Status::kBadConfig;
+  if (!check_config(cfg).ok()) return Status::kBadConfig;  // fsw/config_check.hpp
   cfg_ = cfg;
   x_.setZero();
   Vec sig = Vec::Zero();
@@ -123,15 +116,11 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
   fill(Block::kIonoScale, cfg.iono_scale_sigma);
   fill(Block::kRangeError, cfg.range_gm_sigma_m);
   fill(Block::kRangeRateError, cfg.range_rate_gm_sigma_mps);
-  if ((Layout::has(Block::kRangeError) && !(cfg.range_gm_tau_s > 0.0)) ||
-      (Layout::has(Block::kRangeRateError) && !(cfg.range_rate_gm_tau_s > 0.0)))
-    return Status::kBadConfig;
   const int oc = Layout::offset(Block::kClock);
   sig(oc) = cfg.clock_bias_sigma_m;
   sig(oc + 1) = cfg.clock_drift_sigma_mps;
   for (int i = 0; i < N && i < 64; ++i)
     if ((cfg.frozen_states >> i) & 1u) sig(i) = 0.0;
-  if (!sig.allFinite() || (sig.array() < 0.0).any()) return Status::kBadConfig;
   init_var_ = sig.array().square().matrix();
   P_ = init_var_.asDiagonal();
   health_ = EkfHealth{};

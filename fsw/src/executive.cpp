@@ -3,14 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fsw/config_check.hpp"
+
 namespace fsw {
 
 template <class Layout>
 Status Executive<Layout>::init(const ExecutiveConfig& cfg, const NavState& initial) {
-  if (cfg.imu_samples_per_frame < 1 || cfg.imu_samples_per_frame > FrameBuilder::kMaxSamplesPerFrame ||
-      cfg.frames_per_ekf < 1 || cfg.gnss_wait_frames < 0 || !(cfg.nav_rate_hz > 0.0) || !(cfg.max_gnss_age_s >= 0.0) ||
-      !(cfg.frame_budget_s > 0.0) || cfg.ekf_latency_frames < 1 || cfg.ekf_latency_frames >= cfg.frames_per_ekf)
-    return Status::kBadConfig;
+  if (!check_config(cfg).ok()) return Status::kBadConfig;  // fsw/config_check.hpp
   if (group_state_.load(std::memory_order_acquire) == kReleased) return Status::kBadConfig;  // 1 Hz group running
   cfg_ = cfg;
   Status st = builder_.configure(cfg.imu_samples_per_frame);

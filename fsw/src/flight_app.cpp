@@ -8,22 +8,8 @@ namespace fsw {
 
 template <class Layout>
 Status FlightApp<Layout>::init(const FlightAppConfig& cfg) {
-  if (cfg.min_satellites_for_init < 4 || cfg.min_satellites_for_init > kMaxGnssChannels ||
-      !(cfg.max_init_pdop > 0.0) || !(cfg.min_init_speed_mps >= 0.0) || cfg.levelling_samples < 1 ||
-      cfg.levelling_samples > kMaxLevelling || !(cfg.init_pos_sigma_m > 0.0) || !(cfg.init_vel_sigma_mps > 0.0) ||
-      !cfg.init_att_sigma_rad.allFinite() || !(cfg.init_att_sigma_rad.array() > 0.0).all() ||
-      cfg.exec.imu_samples_per_frame < 1 || cfg.exec.imu_samples_per_frame > FrameBuilder::kMaxSamplesPerFrame ||
-      !std::isfinite(cfg.init_heading_offset_rad) || cfg.pvt_max_quality < 1 || cfg.exec.frames_per_ekf < 1 ||
-      cfg.exec.ekf_latency_frames < 1 || cfg.exec.ekf_latency_frames >= cfg.exec.frames_per_ekf)
-    return Status::kBadConfig;
-  const bool mode_ok = cfg.init_mode == InitMode::kTrack || cfg.init_mode == InitMode::kStatic ||
-                       cfg.init_mode == InitMode::kVelocityMatching || cfg.init_mode == InitMode::kGiven;
-  if (!mode_ok || !(cfg.alignment_s > 0.0) || !std::isfinite(cfg.alignment_s) || !(cfg.static_max_speed_mps >= 0.0) ||
-      !std::isfinite(cfg.static_max_speed_mps) || !(cfg.static_max_rate_dev_radps > 0.0) ||
-      !(cfg.static_max_accel_dev_mps2 > 0.0) || !(cfg.vm_min_s >= 0.0) || !(cfg.vm_max_s > cfg.vm_min_s) ||
-      !std::isfinite(cfg.vm_max_s) || !(cfg.vm_max_heading_sigma_rad > 0.0) ||
-      !(cfg.vm_max_heading_sigma_rad <= kPi) || !(cfg.vm_rest_min_s >= 0.0) || !std::isfinite(cfg.vm_rest_min_s))
-    return Status::kBadConfig;
+  // The one rule table (fsw/config_check.hpp); the host checked the same at load.
+  if (!check_config(cfg).ok()) return Status::kBadConfig;
   cfg_ = cfg;
   cfg_.exec.ekf.pos_sigma_m = cfg.init_pos_sigma_m;
   cfg_.exec.ekf.vel_sigma_mps = cfg.init_vel_sigma_mps;

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <mutex>
 #include <thread>
@@ -176,7 +177,13 @@ bool FswNode::open(const FswNodeConfig& cfg, std::string& error) {
   app_cfg.exec.ekf_group_inline = cfg.ekf_group == FswNodeConfig::EkfGroup::kInline;
   const fsw::Status st = app_->init(app_cfg);
   if (st != fsw::Status::kOk) {
-    error = std::string("flight application configuration rejected: ") + fsw::to_string(st);
+    // The commands refuse such a configuration at load with its file and TOML key (cfg::validate);
+    // a program that built its own still learns which field broke which rule (fsw/config_check.hpp).
+    const fsw::ConfigCheck check = fsw::check_config(app_cfg);
+    char text[160];
+    std::snprintf(text, sizeof text, "%s = %g breaks the rule '%s' (limit %g)", fsw::to_string(check.field),
+                  check.value, fsw::to_string(check.rule), check.limit);
+    error = std::string("flight application configuration rejected: ") + text;
     app_.reset();
     return false;
   }

@@ -1,7 +1,7 @@
 // YUMA almanac reader and visibility (the orbit computation is fsw/gps_orbit.cpp).
 #include "sim/almanac.hpp"
 #include "fsw/gps_orbit.hpp"
-#include "sim/text_file.hpp"
+#include "cfg/text_file.hpp"
 
 #include <algorithm>
 #include <array>
@@ -204,8 +204,8 @@ AlmanacParseResult parse_yuma_text(const std::string& text, const std::string& s
 
 AlmanacParseResult parse_yuma_file(const std::string& path) {
   try {
-    const std::optional<std::string> text = read_text_file(path);
-    if (!text) return {std::nullopt, path + ":0: cannot open almanac file: " + text_file_problem(path)};
+    const std::optional<std::string> text = cfg::read_text_file(path);
+    if (!text) return {std::nullopt, path + ":0: cannot open almanac file: " + cfg::text_file_problem(path)};
     return parse_yuma_text(*text, path);
   } catch (const std::exception& e) {
     return {std::nullopt, path + ":0: " + e.what()};

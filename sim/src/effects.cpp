@@ -16,25 +16,12 @@ std::string_view trim(std::string_view s) {
 
 }  // namespace
 
-std::optional<Effect> effect_from_name(const std::string& name) {
-  for (const fsw::EffectInfo& info : fsw::kEffectCatalogue) {
-    if (name == info.name) return info.effect;
-  }
-  return std::nullopt;
-}
-
 std::optional<std::size_t> component_from_name(Effect e, const std::string& component) {
   const fsw::EffectInfo& info = fsw::effect_info(e);
   for (std::size_t k = 0; k < info.n_components; ++k) {
     if (component == info.components[k]) return k;
   }
   return std::nullopt;
-}
-
-std::string effect_names() {
-  std::string names;
-  for (const fsw::EffectInfo& info : fsw::kEffectCatalogue) names += (names.empty() ? "" : ", ") + std::string(info.name);
-  return names;
 }
 
 std::string component_names(Effect e) {

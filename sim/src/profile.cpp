@@ -1,5 +1,5 @@
 #include "sim/profile.hpp"
-#include "sim/text_file.hpp"
+#include "cfg/text_file.hpp"
 
 #include <algorithm>
 #include <array>
@@ -113,10 +113,10 @@ ProfileLoadResult parse_profile_text(const std::string& text, const std::string&
 }
 
 ProfileLoadResult load_profile(const std::string& path) {
-  const std::optional<std::string> text = read_text_file(path);
+  const std::optional<std::string> text = cfg::read_text_file(path);
   if (!text) {
     ProfileLoadResult result;
-    result.error = path + ": cannot open file: " + text_file_problem(path);
+    result.error = path + ": cannot open file: " + cfg::text_file_problem(path);
     return result;
   }
   return parse_profile_text(*text, path);

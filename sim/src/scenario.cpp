@@ -3,8 +3,8 @@
 // documented in sim/scenarios/README.md.
 #include "sim/scenario.hpp"
 
-#include "sim/data_dir.hpp"
-#include "sim/text_file.hpp"
+#include "cfg/data_dir.hpp"
+#include "cfg/text_file.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -19,7 +19,7 @@
 #include <string_view>
 #include <utility>
 
-#include "toml_schema.hpp"
+#include "cfg/toml_schema.hpp"
 
 #include "fsw/gnss.hpp"
 
@@ -47,21 +47,21 @@ const char* to_string(SegmentType t) {
   return "?";
 }
 
-std::string default_almanac_path() { return data_file("almanac/yuma-week431.alm"); }
+std::string default_almanac_path() { return cfg::data_file("almanac/yuma-week431.alm"); }
 
 std::string almanac_path(const GpsConfig& cfg) { return cfg.almanac.empty() ? default_almanac_path() : cfg.almanac; }
 
 namespace {
 
-using toml_schema::closed;
-using toml_schema::got;
-using toml_schema::left_open;
-using toml_schema::non_negative;
-using toml_schema::positive;
-using toml_schema::Range;
-using toml_schema::right_open;
+using cfg::toml_schema::closed;
+using cfg::toml_schema::got;
+using cfg::toml_schema::left_open;
+using cfg::toml_schema::non_negative;
+using cfg::toml_schema::positive;
+using cfg::toml_schema::Range;
+using cfg::toml_schema::right_open;
 
-class Parser : public toml_schema::Reader {
+class Parser : public cfg::toml_schema::Reader {
  public:
   using Reader::Reader;
 
@@ -294,7 +294,7 @@ class Parser : public toml_schema::Reader {
 ScenarioParseResult parse_scenario_text(const std::string& toml_text, const std::string& source_name) {
   toml::table root;
   std::string error;
-  if (!toml_schema::parse_document(toml_text, source_name, root, error)) return {std::nullopt, error};
+  if (!cfg::toml_schema::parse_document(toml_text, source_name, root, error)) return {std::nullopt, error};
   Scenario scenario;
   Parser parser(source_name);
   if (!parser.scenario(root, scenario)) return {std::nullopt, parser.error()};
@@ -302,8 +302,8 @@ ScenarioParseResult parse_scenario_text(const std::string& toml_text, const std:
 }
 
 ScenarioParseResult parse_scenario_file(const std::string& path) {
-  const std::optional<std::string> text = read_text_file(path);
-  if (!text) return {std::nullopt, path + ": cannot open scenario file: " + text_file_problem(path)};
+  const std::optional<std::string> text = cfg::read_text_file(path);
+  if (!text) return {std::nullopt, path + ": cannot open scenario file: " + cfg::text_file_problem(path)};
   ScenarioParseResult r = parse_scenario_text(*text, path);
   if (r.scenario && !r.scenario->gps.almanac.empty()) {
     try {

@@ -1,4 +1,4 @@
-// The product's run-time data directory (sim/data_dir.hpp): found beside the executable in the
+// The product's run-time data directory (cfg/data_dir.hpp): found beside the executable in the
 // build tree as in an install, overridden by SDINS_DATA_DIR and --data-dir, refused when a named
 // directory is not sdins data; the staged copy is the source's, and the shipped almanac is the
 // documented file (data/almanac/README.md).
@@ -14,7 +14,7 @@
 #include <unistd.h>
 
 #include "sim/almanac.hpp"
-#include "sim/data_dir.hpp"
+#include "cfg/data_dir.hpp"
 #include "sim/scenario.hpp"
 
 namespace {
@@ -34,13 +34,13 @@ class DataDir : public ::testing::Test {
   void SetUp() override {
     if (const char* e = std::getenv("SDINS_DATA_DIR")) saved_ = e, had_ = true;
     ::unsetenv("SDINS_DATA_DIR");
-    sim::set_data_dir_override("");
+    cfg::set_data_dir_override("");
     tmp_ = fs::temp_directory_path() / ("sdins_data_dir_" + std::to_string(::getpid()));
     fs::remove_all(tmp_);
     fs::create_directories(tmp_);
   }
   void TearDown() override {
-    sim::set_data_dir_override("");
+    cfg::set_data_dir_override("");
     if (had_) ::setenv("SDINS_DATA_DIR", saved_.c_str(), 1);
     else ::unsetenv("SDINS_DATA_DIR");
     fs::remove_all(tmp_);
@@ -48,7 +48,7 @@ class DataDir : public ::testing::Test {
   fs::path make_data_dir(const std::string& name) {
     const fs::path d = tmp_ / name;
     fs::create_directories(d);
-    std::ofstream(d / sim::kDataDirMarker) << "test\n";
+    std::ofstream(d / cfg::kDataDirMarker) << "test\n";
     return d;
   }
   fs::path tmp_;
@@ -57,12 +57,12 @@ class DataDir : public ::testing::Test {
 };
 
 TEST_F(DataDir, FoundBesideTheExecutableInTheBuildTree) {
-  const sim::DataDirLookup d = sim::find_data_dir();
+  const cfg::DataDirLookup d = cfg::find_data_dir();
   ASSERT_TRUE(d.ok()) << d.error;
-  EXPECT_EQ(d.source, sim::DataDirSource::kExecutable);
+  EXPECT_EQ(d.source, cfg::DataDirSource::kExecutable);
   EXPECT_EQ(fs::path(d.path).filename(), "sdins");
   EXPECT_EQ(fs::path(d.path).parent_path().filename(), "share");
-  EXPECT_TRUE(fs::is_regular_file(fs::path(d.path) / sim::kDataDirMarker));
+  EXPECT_TRUE(fs::is_regular_file(fs::path(d.path) / cfg::kDataDirMarker));
   EXPECT_EQ(sim::default_almanac_path(), d.path + "/almanac/yuma-week431.alm");
 }
 
@@ -71,15 +71,15 @@ TEST_F(DataDir, InstallLayoutFromAnyPrefix) {
   const fs::path prefix = tmp_ / "some where" / "prefix";
   fs::create_directories(prefix / "bin");
   fs::create_directories(prefix / "share" / "sdins");
-  std::ofstream(prefix / "share" / "sdins" / sim::kDataDirMarker) << "test\n";
+  std::ofstream(prefix / "share" / "sdins" / cfg::kDataDirMarker) << "test\n";
   std::ofstream(prefix / "bin" / "sdins") << "";
-  const sim::DataDirLookup d = sim::find_data_dir((prefix / "bin" / "sdins").string());
+  const cfg::DataDirLookup d = cfg::find_data_dir((prefix / "bin" / "sdins").string());
   ASSERT_TRUE(d.ok()) << d.error;
   EXPECT_EQ(d.path, fs::canonical(prefix / "share" / "sdins").string());
 }
 
 TEST_F(DataDir, NothingBesideTheExecutableIsAnErrorThatSaysWhereItLooked) {
-  const sim::DataDirLookup d = sim::find_data_dir("/nonexistent/bin/sdins");
+  const cfg::DataDirLookup d = cfg::find_data_dir("/nonexistent/bin/sdins");
   EXPECT_FALSE(d.ok());
   EXPECT_NE(d.error.find("/nonexistent/bin/../share/sdins/sdins-data.txt"), std::string::npos) << d.error;
   EXPECT_NE(d.error.find("SDINS_DATA_DIR"), std::string::npos) << d.error;
@@ -88,16 +88,16 @@ TEST_F(DataDir, NothingBesideTheExecutableIsAnErrorThatSaysWhereItLooked) {
 TEST_F(DataDir, EnvironmentOverridesTheExecutablesAndMustBeSdinsData) {
   const fs::path good = make_data_dir("good");
   ::setenv("SDINS_DATA_DIR", good.c_str(), 1);
-  sim::DataDirLookup d = sim::find_data_dir();
+  cfg::DataDirLookup d = cfg::find_data_dir();
   ASSERT_TRUE(d.ok()) << d.error;
-  EXPECT_EQ(d.source, sim::DataDirSource::kEnvironment);
+  EXPECT_EQ(d.source, cfg::DataDirSource::kEnvironment);
   EXPECT_EQ(d.path, fs::canonical(good).string());
-  EXPECT_EQ(sim::data_file("almanac/x.alm"), fs::canonical(good).string() + "/almanac/x.alm");
+  EXPECT_EQ(cfg::data_file("almanac/x.alm"), fs::canonical(good).string() + "/almanac/x.alm");
 
   const fs::path plain = tmp_ / "plain";
   fs::create_directories(plain);
   ::setenv("SDINS_DATA_DIR", plain.c_str(), 1);
-  d = sim::find_data_dir();
+  d = cfg::find_data_dir();
   EXPECT_FALSE(d.ok());  // no silent fall-through to the executable's copy
   EXPECT_NE(d.error.find("SDINS_DATA_DIR names '" + plain.string() + "'"), std::string::npos) << d.error;
   EXPECT_NE(d.error.find("sdins-data.txt"), std::string::npos) << d.error;
@@ -107,7 +107,7 @@ TEST_F(DataDir, EnvironmentOverridesTheExecutablesAndMustBeSdinsData) {
   EXPECT_NE(a.error.find("not an sdins data directory"), std::string::npos) << a.error;
 
   ::setenv("SDINS_DATA_DIR", (tmp_ / "missing").c_str(), 1);
-  d = sim::find_data_dir();
+  d = cfg::find_data_dir();
   EXPECT_FALSE(d.ok());
   EXPECT_NE(d.error.find("not a directory"), std::string::npos) << d.error;
 }
@@ -116,18 +116,18 @@ TEST_F(DataDir, DataDirOptionOverridesTheEnvironment) {
   const fs::path env_dir = make_data_dir("env");
   const fs::path opt_dir = make_data_dir("opt");
   ::setenv("SDINS_DATA_DIR", env_dir.c_str(), 1);
-  sim::set_data_dir_override(opt_dir.string());
-  const sim::DataDirLookup d = sim::find_data_dir();
+  cfg::set_data_dir_override(opt_dir.string());
+  const cfg::DataDirLookup d = cfg::find_data_dir();
   ASSERT_TRUE(d.ok()) << d.error;
-  EXPECT_EQ(d.source, sim::DataDirSource::kOverride);
+  EXPECT_EQ(d.source, cfg::DataDirSource::kOverride);
   EXPECT_EQ(d.path, fs::canonical(opt_dir).string());
-  sim::set_data_dir_override((tmp_ / "nope").string());
-  EXPECT_FALSE(sim::find_data_dir().ok());
-  EXPECT_NE(sim::find_data_dir().error.find("--data-dir names"), std::string::npos);
+  cfg::set_data_dir_override((tmp_ / "nope").string());
+  EXPECT_FALSE(cfg::find_data_dir().ok());
+  EXPECT_NE(cfg::find_data_dir().error.find("--data-dir names"), std::string::npos);
 }
 
 TEST_F(DataDir, StagedDataIsTheSourcesAndComplete) {
-  const sim::DataDirLookup d = sim::find_data_dir();
+  const cfg::DataDirLookup d = cfg::find_data_dir();
   ASSERT_TRUE(d.ok()) << d.error;
   const fs::path data(d.path), src(SDINS_TEST_SOURCE_DIR);
   const std::pair<const char*, const char*> pieces[] = {

@@ -14,7 +14,7 @@
 #include "sim/effects.hpp"
 #include "tools/diagnosis.hpp"
 #include "tools/diagnosis_intervals.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 
 namespace {
 
@@ -393,7 +393,7 @@ TEST(DiagnosisIntervals, TimeOffsetProfileWithLateImuTagsIsUnbiasedInEitherInput
   std::remove(path.c_str());
   ASSERT_EQ(logged.imu.size(), stream.imu.size());
   tools::DiagnosisConfig cfg;
-  tools::apply_filter_config(cfg, tools::filter_config(src + "/config/coverage/mems_aircraft_filter.toml"));
+  tools::apply_flight_config(cfg, cfg::flight_config(src + "/config/coverage/mems_aircraft_filter.toml"));
   const int cand = tools::candidate_index("imu_gnss_time_offset");
   ASSERT_GE(cand, 0);
   tools::ProfileInterval pi[2];

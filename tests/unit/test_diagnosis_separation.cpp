@@ -11,7 +11,7 @@
 #include <fstream>
 #include <limits>
 
-#include "sim/data_dir.hpp"
+#include "cfg/data_dir.hpp"
 #include "sim/effects.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
@@ -40,7 +40,7 @@ Scenario read_back(const Scenario& sc) {
 
 TEST(ScenarioWriter, TheDefaultAndTheShippedFileReadBackEqual) {
   EXPECT_EQ(read_back(Scenario{}), Scenario{});
-  const sim::ScenarioParseResult shipped = sim::parse_scenario_file(sim::data_file("scenarios/bank_to_turn.toml"));
+  const sim::ScenarioParseResult shipped = sim::parse_scenario_file(cfg::data_file("scenarios/bank_to_turn.toml"));
   ASSERT_TRUE(shipped.ok()) << shipped.error;
   EXPECT_EQ(read_back(*shipped.scenario), *shipped.scenario);
 }

@@ -1,5 +1,5 @@
 // The fault mechanisms of docs/faults.md: output-file discipline (hal::OutputFile,
-// hal::check_outputs), bounded readers (hal::check_input_file, sim::read_text_file), time-tag
+// hal::check_outputs), bounded readers (hal::check_input_file, cfg::read_text_file), time-tag
 // sanity (hal::TimeTagGate, in the replay reader and the importers), the one almanac validation.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -24,7 +24,7 @@
 #include "hal/time_tag_gate.hpp"
 #include "lcm_test_util.hpp"
 #include "sim/almanac.hpp"
-#include "sim/text_file.hpp"
+#include "cfg/text_file.hpp"
 #include "tools/importers.hpp"
 
 namespace fs = std::filesystem;
@@ -228,9 +228,9 @@ TEST(InputFile, EndlessAndNonRegularInputsAreRefused) {
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   EXPECT_NE(hal::check_input_file(fifo, 100).find("FIFO"), std::string::npos);
   // The simulator's text reader (scenario, almanac, profile, filter configuration).
-  EXPECT_FALSE(sim::read_text_file("/dev/zero").has_value());
-  EXPECT_FALSE(sim::read_text_file(fifo).has_value());  // would block for ever if opened
-  EXPECT_NE(sim::text_file_problem("/dev/zero").find("not a regular file"), std::string::npos);
+  EXPECT_FALSE(cfg::read_text_file("/dev/zero").has_value());
+  EXPECT_FALSE(cfg::read_text_file(fifo).has_value());  // would block for ever if opened
+  EXPECT_NE(cfg::text_file_problem("/dev/zero").find("not a regular file"), std::string::npos);
   const sim::AlmanacParseResult a = sim::parse_yuma_file("/dev/zero");
   EXPECT_FALSE(a.ok());
   EXPECT_NE(a.error.find("not a regular file"), std::string::npos) << a.error;

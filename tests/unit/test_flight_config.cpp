@@ -10,52 +10,20 @@
 
 #include "fsw/filter_model.hpp"
 #include "hal/fsw_node.hpp"
-#include "sim/data_dir.hpp"
-#include "sim/filter_config.hpp"
+#include "cfg/data_dir.hpp"
+#include "cfg/flight_config.hpp"
+#include "cfg/flight_config_fields.hpp"
 #include "tools/diagnosis.hpp"
-#include "tools/flight_config.hpp"
 #include "tools/montecarlo.hpp"
 
 namespace {
 
 const std::filesystem::path kSourceFile = std::filesystem::path(SDINS_TEST_SOURCE_DIR) / "config/default.toml";
 
-// Every field of the flight configuration: X(path, in_schema). in_schema false: set by the flight
-// application or a harness, not by a file (FlightApp replaces the EKF's initial sigmas by init_*;
-// the diagnosis sets the extension sigmas per run).
-#define FLIGHT_CONFIG_FIELDS(X)                                                                       \
-  X(exec.imu_samples_per_frame, true) X(exec.nav_rate_hz, true) X(exec.frames_per_ekf, true)          \
-  X(exec.gnss_wait_frames, true) X(exec.max_gnss_age_s, true) X(exec.frame_budget_s, true)            \
-  X(exec.ekf_latency_frames, true) X(exec.ekf_group_inline, false)                                    \
-  X(exec.ekf.pos_sigma_m, false) X(exec.ekf.vel_sigma_mps, false) X(exec.ekf.att_sigma_rad, false)    \
-  X(exec.ekf.accel_bias_sigma_mps2, true) X(exec.ekf.gyro_bias_sigma_radps, true)                    \
-  X(exec.ekf.accel_misalign_sigma_rad, true) X(exec.ekf.gyro_misalign_sigma_rad, true)               \
-  X(exec.ekf.accel_scale_sigma, true) X(exec.ekf.gyro_scale_sigma, true)                             \
-  X(exec.ekf.gyro_g_sens_sigma_radps_per_mps2, false) X(exec.ekf.time_offset_sigma_s, false)         \
-  X(exec.ekf.time_drift_sigma_sps, false) X(exec.ekf.lever_arm_sigma_m, false)                       \
-  X(exec.ekf.tropo_scale_sigma, false) X(exec.ekf.iono_scale_sigma, false)                           \
-  X(exec.ekf.frozen_states, false) X(exec.ekf.clock_bias_sigma_m, true)                              \
-  X(exec.ekf.clock_drift_sigma_mps, true) X(exec.ekf.vrw_mps_per_rts, true)                          \
-  X(exec.ekf.arw_rad_per_rts, true) X(exec.ekf.accel_bias_rw_mps2_per_rts, true)                     \
-  X(exec.ekf.gyro_bias_rw_radps_per_rts, true) X(exec.ekf.clock_bias_psd_m2ps, true)                 \
-  X(exec.ekf.clock_drift_psd_m2ps3, true) X(exec.ekf.pseudorange_sigma_m, true)                      \
-  X(exec.ekf.pseudorange_rate_sigma_mps, true) X(exec.ekf.range_gm_sigma_m, true)                    \
-  X(exec.ekf.range_gm_tau_s, true) X(exec.ekf.range_rate_gm_sigma_mps, true)                         \
-  X(exec.ekf.range_rate_gm_tau_s, true) X(exec.ekf.use_pseudorange_rate, true)                       \
-  X(exec.ekf.gate_chi2, true) X(exec.ekf.pvt_pos_sigma_floor_m, true)                                \
-  X(exec.ekf.pvt_vel_sigma_floor_mps, true) X(exec.ekf.pvt_sigma_scale, true)                        \
-  X(exec.ekf.lever_arm_b_m, true) X(exec.ekf.propagation_substep_frames, true)                       \
-  X(exec.ekf.nis_window, true) X(exec.ekf.runaway_epochs, true) X(min_satellites_for_init, true)     \
-  X(max_init_pdop, true) X(min_init_speed_mps, true) X(levelling_samples, true)                      \
-  X(init_pos_sigma_m, true) X(init_vel_sigma_mps, true) X(init_att_sigma_rad, true)                  \
-  X(init_heading_offset_rad, true) X(pvt_max_quality, true) X(init_mode, true) X(alignment_s, true)  \
-  X(static_max_speed_mps, true) X(static_max_rate_dev_radps, true) X(static_max_accel_dev_mps2, true) \
-  X(vm_min_s, true) X(vm_max_s, true) X(vm_max_heading_sigma_rad, true) X(vm_rest_gyro_bias, true)   \
-  X(vm_rest_min_s, true)
-
-// A new field must be listed above (and, if a file should set it, get a key in sim/src/
-// filter_config.cpp and config/default.toml): the sizes are those of the structs the list describes
-// (x86-64), so a field added without it stops this test from compiling.
+// A new field must be listed in FLIGHT_CONFIG_FIELDS (cfg/flight_config_fields.hpp; and, if a file
+// should set it, get a key in cfg/src/flight_config.cpp and config/default.toml): the sizes are
+// those of the structs the list describes (x86-64), so a field added without it stops this test
+// from compiling.
 static_assert(sizeof(fsw::EkfConfig) == 336, "fsw::EkfConfig changed: update FLIGHT_CONFIG_FIELDS");
 static_assert(sizeof(fsw::ExecutiveConfig) == 384, "fsw::ExecutiveConfig changed: update FLIGHT_CONFIG_FIELDS");
 static_assert(sizeof(fsw::FlightAppConfig) == 544, "fsw::FlightAppConfig changed: update FLIGHT_CONFIG_FIELDS");
@@ -86,9 +54,9 @@ fsw::InitMode other(fsw::InitMode m) {
   return m == fsw::InitMode::kStatic ? fsw::InitMode::kTrack : fsw::InitMode::kStatic;
 }
 
-sim::FilterConfig parse_source_file(const sim::FilterConfig& base) {
-  sim::FilterConfig f = base;
-  const sim::FilterConfigParseResult r = sim::parse_filter_config_file(kSourceFile.string(), f);
+cfg::FlightConfig parse_source_file(const cfg::FlightConfig& base) {
+  cfg::FlightConfig f = base;
+  const cfg::FlightConfigResult r = cfg::parse_flight_config_file(kSourceFile.string(), f);
   EXPECT_TRUE(r.ok) << r.error;
   return f;
 }
@@ -105,18 +73,18 @@ std::string read(const std::filesystem::path& p) {
 TEST(FlightConfig, ShippedFileIsTheRepositorysAndSetsEveryKey) {
   // The copy the commands read (staged beside the build's executables, installed with them) is
   // the repository's file, byte for byte.
-  ASSERT_TRUE(std::filesystem::is_regular_file(sim::default_filter_config_path())) << sim::default_filter_config_path();
-  EXPECT_EQ(read(sim::default_filter_config_path()), read(kSourceFile));
+  ASSERT_TRUE(std::filesystem::is_regular_file(cfg::default_flight_config_path())) << cfg::default_flight_config_path();
+  EXPECT_EQ(read(cfg::default_flight_config_path()), read(kSourceFile));
   // Every schema key is set: the file read onto the field defaults and onto a base in which every
   // field differs gives the same configuration in every field a file can set.
-  sim::FilterConfig poisoned;
+  cfg::FlightConfig poisoned;
 #define POISON(path, in_schema) \
   if (in_schema) poisoned.app.path = other(poisoned.app.path);
   FLIGHT_CONFIG_FIELDS(POISON)
 #undef POISON
-  poisoned.gnss_source = sim::GnssSource::kPvt;
-  const sim::FilterConfig a = parse_source_file(sim::FilterConfig{});
-  const sim::FilterConfig b = parse_source_file(poisoned);
+  poisoned.gnss_source = cfg::GnssSource::kPvt;
+  const cfg::FlightConfig a = parse_source_file(cfg::FlightConfig{});
+  const cfg::FlightConfig b = parse_source_file(poisoned);
   std::string unset;
 #define UNSET(path, in_schema) \
   if (in_schema && !same(a.app.path, b.app.path)) unset += std::string(" ") + #path;
@@ -131,13 +99,13 @@ TEST(FlightConfig, ShippedFileIsTheRepositorysAndSetsEveryKey) {
 }
 
 TEST(FlightConfig, EveryCommandFliesTheShippedFile) {
-  const sim::FilterConfig ref = parse_source_file(sim::FilterConfig{});
+  const cfg::FlightConfig ref = parse_source_file(cfg::FlightConfig{});
   // sil, fsw, replay (FswRunOptions::filter, and HIL's node in test_hil_lockstep), sdins_target
-  // record: tools::filter_config / sim::load_filter_config with no data-set file.
-  EXPECT_EQ(differences(tools::shipped_filter_config().app, ref.app), "");
-  EXPECT_EQ(differences(tools::filter_config("").app, ref.app), "");
-  sim::FilterConfig loaded;
-  ASSERT_TRUE(sim::load_filter_config("", loaded).ok);
+  // record: cfg::flight_config / cfg::load_flight_config with no data-set file.
+  EXPECT_EQ(differences(cfg::shipped_flight_config().app, ref.app), "");
+  EXPECT_EQ(differences(cfg::flight_config("").app, ref.app), "");
+  cfg::FlightConfig loaded;
+  ASSERT_TRUE(cfg::load_flight_config("", loaded).ok);
   EXPECT_EQ(differences(loaded.app, ref.app), "");
   // diagnose: the filter, its GNSS input, the priors and the outage pattern.
   const tools::DiagnosisConfig d = tools::default_diagnosis_config();
@@ -191,7 +159,7 @@ TEST(FlightConfig, EveryCommandFliesTheShippedFile) {
 }
 
 TEST(FlightConfig, ShippedValuesInTheirUnits) {
-  const fsw::FlightAppConfig& a = tools::shipped_filter_config().app;
+  const fsw::FlightAppConfig& a = cfg::shipped_flight_config().app;
   EXPECT_EQ(a.exec.nav_rate_hz, fsw::kNavRate_hz);  // the schema's field default is the file's value
   EXPECT_EQ(a.exec.frames_per_ekf, 200);            // 200 Hz / 1 Hz
   EXPECT_EQ(a.exec.gnss_wait_frames, 40);           // 0.2 s at 200 Hz
@@ -204,16 +172,16 @@ TEST(FlightConfig, ShippedValuesInTheirUnits) {
 }
 
 TEST(FlightConfig, RenamedAndDoublyGivenKeysAreRefused) {
-  sim::FilterConfig f;
-  sim::FilterConfigParseResult r =
-      sim::parse_filter_config_text("[imu]\narw_deg_per_rthr = 0.1\narw_rad_per_rts = 2e-7\n", "x.toml", f);
+  cfg::FlightConfig f;
+  cfg::FlightConfigResult r =
+      cfg::parse_flight_config_text("[imu]\narw_deg_per_rthr = 0.1\narw_rad_per_rts = 2e-7\n", "x.toml", f);
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("'imu.arw_deg_per_rthr' and 'imu.arw_rad_per_rts' set the same value"), std::string::npos)
       << r.error;
-  r = sim::parse_filter_config_text("[imu]\nvrw_mps_per_rthr = 0.1\nvrw_mps_per_rts = 1e-4\n", "x.toml", f);
+  r = cfg::parse_flight_config_text("[imu]\nvrw_mps_per_rthr = 0.1\nvrw_mps_per_rts = 1e-4\n", "x.toml", f);
   EXPECT_FALSE(r.ok) << "vrw given twice";
   // The clock process noise goes through fsw's one formula.
-  r = sim::parse_filter_config_text("[gnss]\nclock_h0_s = 1e-19\nclock_h_minus2_per_s = 0\n", "x.toml", f);
+  r = cfg::parse_flight_config_text("[gnss]\nclock_h0_s = 1e-19\nclock_h_minus2_per_s = 0\n", "x.toml", f);
   ASSERT_TRUE(r.ok) << r.error;
   EXPECT_EQ(f.app.exec.ekf.clock_bias_psd_m2ps, fsw::clock_bias_psd_m2ps(1e-19));
   EXPECT_EQ(f.app.exec.ekf.clock_drift_psd_m2ps3, 0.0);
@@ -234,7 +202,7 @@ TEST(FilterModelSelector, OneListOfNames) {
   // The flight-software node flies 15 and 24 only, and says so.
   hal::FswNodeConfig c;
   c.model = fsw::FilterModel::k15c;
-  c.app = tools::shipped_filter_config().app;
+  c.app = cfg::shipped_flight_config().app;
   c.telemetry.lcm_url = "none";
   hal::FswNode node;
   std::string err;

@@ -15,7 +15,7 @@
 #include "hal/can_protocol.hpp"
 #include "hal/can_rx_assembler.hpp"
 #include "hal/fsw_node.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/hil.hpp"
 #include "sim/sensor_stream.hpp"
 
@@ -26,7 +26,7 @@ namespace can = hal::can;
 
 hal::FswNodeConfig node_config() {
   hal::FswNodeConfig c;
-  c.app = tools::shipped_filter_config().app;  // config/default.toml, as `sdins sil` / `fsw` fly
+  c.app = cfg::shipped_flight_config().app;  // config/default.toml, as `sdins sil` / `fsw` fly
   c.telemetry.lcm_url = "none";
   return c;
 }

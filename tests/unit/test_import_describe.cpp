@@ -14,7 +14,7 @@
 #include "fsw/frames.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "lcm_test_util.hpp"
-#include "sim/filter_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/import_describe.hpp"
 
 namespace {
@@ -278,15 +278,15 @@ TEST(ImportDescribe, ANewUsersTablesComeBackAsTheyWereMeant) {
   // The IMU's second sample (the first increment ends there) on GPS time through the fit.
   EXPECT_NEAR(first_imu_t, Flight::kTow0 + 0.02, 5e-6);
   // The starting configuration: 50 Hz IMU, 5 Hz GNSS -> 10 frames per EKF step, latency below.
-  sim::FilterConfig cfg;
-  const auto pr = sim::load_filter_config(s["filter_config"].get<std::string>(), cfg);
+  cfg::FlightConfig cfg;
+  const auto pr = cfg::load_flight_config(s["filter_config"].get<std::string>(), cfg);
   ASSERT_TRUE(pr.ok) << pr.error;
   EXPECT_EQ(cfg.app.exec.imu_samples_per_frame, 1);
   EXPECT_DOUBLE_EQ(cfg.app.exec.nav_rate_hz, 50.0);
   EXPECT_EQ(cfg.app.exec.frames_per_ekf, 10);
   EXPECT_GE(cfg.app.exec.ekf_latency_frames, 1);
   EXPECT_LT(cfg.app.exec.ekf_latency_frames, 10);
-  EXPECT_EQ(cfg.gnss_source, sim::GnssSource::kPvt);
+  EXPECT_EQ(cfg.gnss_source, cfg::GnssSource::kPvt);
   EXPECT_EQ(cfg.app.pvt_max_quality, 5);
   // The sidecar beside the log carries the reference's label.
   std::ifstream side(dir.path / "out.lcmlog.json");
@@ -378,10 +378,10 @@ time = { column = 1, unit = "ms", base = "gps_seconds" }
 
 namespace {
 
-sim::FilterConfig config_from(const nlohmann::json& summary) {
+cfg::FlightConfig config_from(const nlohmann::json& summary) {
   const std::string text = tools::starting_filter_config(summary, "t");
-  sim::FilterConfig cfg;
-  const auto pr = sim::parse_filter_config_text(text, "t.toml", cfg);
+  cfg::FlightConfig cfg;
+  const auto pr = cfg::parse_flight_config_text(text, "t.toml", cfg);
   EXPECT_TRUE(pr.ok) << pr.error << "\n" << text;
   return cfg;
 }
@@ -390,20 +390,20 @@ TEST(ImportDescribe, StartingConfigurationFromAMinimalSummary) {
   // What another importer (a ULog reader) may have: rates and qualities only.
   const nlohmann::json s = {{"imu", {{"samples", {{"count", 1001}, {"rate_hz", 250.0}}}}},
                             {"gnss_pvt", {{"samples", {{"count", 51}, {"rate_hz", 5.0}}}, {"by_quality", {{"5", 51}}}}}};
-  const sim::FilterConfig cfg = config_from(s);
+  const cfg::FlightConfig cfg = config_from(s);
   EXPECT_EQ(cfg.app.exec.imu_samples_per_frame, 2);  // 250 Hz -> 125 Hz frames
   EXPECT_DOUBLE_EQ(cfg.app.exec.nav_rate_hz, 125.0);
   EXPECT_EQ(cfg.app.exec.frames_per_ekf, 25);
   EXPECT_EQ(cfg.app.exec.ekf_latency_frames, 6);
   EXPECT_EQ(cfg.app.pvt_max_quality, 5);
   // Nothing known: the flight software's rates, a valid latency.
-  const sim::FilterConfig none = config_from(nlohmann::json::object());
+  const cfg::FlightConfig none = config_from(nlohmann::json::object());
   EXPECT_LT(none.app.exec.ekf_latency_frames, none.app.exec.frames_per_ekf);
   // A 10 Hz IMU with 5 Hz GNSS: 2 frames per EKF step, the latency 1.
   nlohmann::json slow_summary;
   slow_summary["imu"]["samples"] = {{"count", 100}, {"rate_hz", 10.0}};
   slow_summary["gnss_pvt"]["samples"] = {{"count", 50}, {"rate_hz", 5.0}};
-  const sim::FilterConfig slow = config_from(slow_summary);
+  const cfg::FlightConfig slow = config_from(slow_summary);
   EXPECT_EQ(slow.app.exec.frames_per_ekf, 2);
   EXPECT_EQ(slow.app.exec.ekf_latency_frames, 1);
 }

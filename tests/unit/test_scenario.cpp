@@ -7,7 +7,7 @@
 
 #include "fsw/frames.hpp"
 #include "sim/effects.hpp"
-#include "sim/data_dir.hpp"
+#include "cfg/data_dir.hpp"
 #include "sim/scenario.hpp"
 
 namespace {
@@ -110,7 +110,7 @@ TEST(ScenarioDefaults, DefaultSegmentsAreTheBankToTurnPattern) {
 }
 
 TEST(ScenarioParse, ShippedFileEqualsDefaults) {
-  const sim::ScenarioParseResult r = sim::parse_scenario_file(sim::data_file("scenarios/bank_to_turn.toml"));
+  const sim::ScenarioParseResult r = sim::parse_scenario_file(cfg::data_file("scenarios/bank_to_turn.toml"));
   ASSERT_TRUE(r.ok()) << r.error;
   expect_same(*r.scenario, Scenario{});
 }
@@ -222,7 +222,7 @@ max_channels = 16
 TEST(ScenarioParse, GpsDefaultAlmanacIsTheShippedFile) {
   const Scenario s;
   EXPECT_EQ(s.gps.almanac, "");
-  EXPECT_EQ(sim::almanac_path(s.gps), sim::data_file("almanac/yuma-week431.alm"));
+  EXPECT_EQ(sim::almanac_path(s.gps), cfg::data_file("almanac/yuma-week431.alm"));
   EXPECT_EQ(sim::default_almanac_path(), sim::almanac_path(s.gps));
   sim::GpsConfig other;
   other.almanac = "/x/y.alm";
@@ -404,7 +404,7 @@ TEST(ScenarioReject, TomlSyntaxError) {
 }
 
 TEST(ScenarioReject, NonexistentFile) {
-  const std::string path = sim::data_file("scenarios/does_not_exist.toml");
+  const std::string path = cfg::data_file("scenarios/does_not_exist.toml");
   const sim::ScenarioParseResult r = sim::parse_scenario_file(path);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error, path + ": cannot open scenario file: No such file or directory");

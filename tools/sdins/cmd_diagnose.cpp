@@ -13,7 +13,7 @@
 #include "tools/output_file.hpp"
 #include "tools/diagnosis.hpp"
 #include "tools/fsw_report.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/diagnosis_intervals.hpp"
 #include "tools/diagnosis_separation.hpp"
 #include <chrono>
@@ -26,7 +26,7 @@ struct Options {
   std::string report;
   std::string baseline = "15";
   double alpha = 0.05;
-  std::string filter_config;
+  std::string flight_config;
   std::string intervals = "profile";
   std::vector<std::string> profile;
   bool profile_only = false;
@@ -218,22 +218,23 @@ void register_diagnose(CLI::App& app) {
   sub->add_flag("--profile-only", opt.profile_only,
                "no search: only the baseline run and the --profile components on top of it, each with the filter's "
                "and the profile-likelihood interval (the coverage study, docs/diagnosis-intervals.md)");
-  sub->add_option("--filter-config", opt.filter_config,
-                  "filter configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
+  sub->add_option("--flight-config,--filter-config", opt.flight_config,
+                  "flight configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
                   "(raw or solutions), initialisation, priors and outage pattern of the diagnosis, applied on top of the "
                   "shipped flight configuration <data dir>/config/default.toml (default: none, the shipped file alone)");
 }
 
 int run_diagnose() {
-  tools::require_distinct({opt.json, opt.report}, {opt.log, opt.filter_config});
+  tools::require_distinct({opt.json, opt.report}, {opt.log, opt.flight_config});
   const tools::InterruptPolling polling;
+  // The shipped config/default.toml with --flight-config on top, validated before the log is read:
+  // filter, GNSS input, priors, outages.
+  tools::DiagnosisConfig cfg;
+  tools::apply_flight_config(cfg, cfg::flight_config(opt.flight_config));
   tools::RecordedData data;
   std::string err, load_report;
   if (!tools::load_recorded_data(opt.log, data, err, load_report)) throw std::runtime_error(err);
   std::printf("diagnose: %s: %s\n", opt.log.c_str(), load_report.c_str());
-  // The shipped config/default.toml with --filter-config on top: filter, GNSS input, priors, outages.
-  tools::DiagnosisConfig cfg;
-  tools::apply_filter_config(cfg, tools::filter_config(opt.filter_config));
   cfg.alpha = opt.alpha;
   cfg.profile_intervals = opt.intervals == "profile";
   if (!tools::set_diagnosis_baseline(cfg, parse_model(opt.baseline, "--baseline", kFlightModels)))
@@ -298,8 +299,8 @@ int run_diagnose() {
   nlohmann::json j;
   j["baseline"] = opt.baseline;
   j["log"] = opt.log;
-  j["filter_config"] = opt.filter_config;
-  j["gnss_source"] = sim::to_string(cfg.gnss_source);
+  j["filter_config"] = opt.flight_config;
+  j["gnss_source"] = cfg::to_string(cfg.gnss_source);
   j["data"] = {{"imu_samples", data.imu.size()},
                {"gnss_epochs", data.gnss.size()},
                {"gnss_solutions", data.pvt.size()},
@@ -399,7 +400,7 @@ int run_diagnose() {
   j["gain"] = gain;
   tools::write_json_file(opt.json, j);
 
-  const bool pvt = cfg.gnss_source == sim::GnssSource::kPvt;
+  const bool pvt = cfg.gnss_source == cfg::GnssSource::kPvt;
   const auto heading_text = [](const tools::NavErrorStats& n) {
     char b[64] = "";
     if (n.attitude_samples > 0) std::snprintf(b, sizeof b, ", heading %.4f deg", n.heading_rms_deg);

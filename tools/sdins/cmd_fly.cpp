@@ -8,7 +8,7 @@
 #include "commands.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/trajectory.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/free_inertial.hpp"
 #include "tools/output_file.hpp"
 
@@ -50,7 +50,7 @@ int run_fly() {
   tools::FreeInertialConfig cfg;
   cfg.duration_s = sc.duration_s;
   cfg.imu_rate_hz = sc.imu.rate_hz;
-  cfg.nav_rate_hz = tools::shipped_filter_config().app.exec.nav_rate_hz;  // config/default.toml
+  cfg.nav_rate_hz = cfg::shipped_flight_config().app.exec.nav_rate_hz;  // config/default.toml
   const int frames_per_s = static_cast<int>(std::lround(cfg.nav_rate_hz));
   std::printf("%8s %10s %10s %12s %12s %12s\n", "t [s]", "horiz [m]", "vert [m]", "phi_E [\"]", "phi_N [\"]",
               "phi_U [\"]");

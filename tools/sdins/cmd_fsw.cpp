@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "hal/can_bus.hpp"
 #include "tools/hil.hpp"
 #include "tools/fsw_report.hpp"
@@ -47,11 +47,11 @@ void register_fsw(CLI::App& app) {
 }
 
 int run_fsw() {
-  tools::require_distinct({opt.run.log, opt.run.json}, {opt.run.filter_config});
+  tools::require_distinct({opt.run.log, opt.run.json}, {opt.run.flight_config});
   tools::FswRunConfig cfg;
-  const sim::FilterConfig filter = opt.run.filter();  // the shipped config/default.toml, --filter-config on top
-  tools::require_raw_gnss(filter, "--filter-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
-  cfg.node = opt.run.node_config(filter);
+  const cfg::FlightConfig flight = opt.run.flight();  // the shipped config/default.toml, --flight-config on top
+  cfg::require_raw_gnss(flight, "--flight-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
+  cfg.node = opt.run.node_config(flight);
   cfg.realtime = opt.realtime;
   cfg.fifo_priority = opt.fifo_priority;
   cfg.idle_timeout_s = opt.idle_timeout_s;

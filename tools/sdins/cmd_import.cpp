@@ -45,8 +45,8 @@ void register_import(CLI::App& app) {
   sub->add_option("--data", opt.data_dir,
                   "describe: the directory that the description's relative file names are in (default: the "
                   "description's own directory)");
-  sub->add_option("--filter-config-out", opt.filter_config,
-                  "where to write the starting filter configuration (default: the log's name with .filter.toml)");
+  sub->add_option("--flight-config-out,--filter-config-out", opt.filter_config,
+                  "where to write the starting flight configuration (default: the log's name with .filter.toml)");
   sub->add_option("--log", opt.imp.log_path, "the LCM log to write")->required();
   sub->add_option("--json", opt.json, "write the summary as JSON");
   sub->add_option("--axes", opt.imp.axes,

@@ -21,7 +21,7 @@ struct Options {
   std::string models = "15,24";
   int threads = 0;
   std::string out = "out/montecarlo";
-  std::string filter_config;
+  std::string flight_config;
 } opt;
 
 }  // namespace
@@ -52,7 +52,7 @@ void register_montecarlo(CLI::App& app) {
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
   sub->add_option("--out", opt.out, "output directory")->capture_default_str();
-  add_mc_filter_config_option(sub, opt.filter_config);
+  add_mc_flight_config_option(sub, opt.flight_config);
 }
 
 int run_montecarlo() {
@@ -63,9 +63,10 @@ int run_montecarlo() {
     mc.runs = opt.runs;
     mc.models = parse_models(opt.models);
     mc.threads = opt.threads;
-    mc.flight = tools::monte_carlo_flight_config(opt.filter_config);
+    mc.flight = tools::monte_carlo_flight_config(opt.flight_config);
+    tools::validate_overlay(sc, mc);  // before any output: the overlaid configuration meets the rules
     // docs/faults.md: summary.json marks a complete run; removed now, written last.
-    tools::require_distinct({opt.out}, {opt.scenario.file, opt.filter_config});
+    tools::require_distinct({opt.out}, {opt.scenario.file, opt.flight_config});
     std::optional<tools::RunDirectory> dir;
     if (mpi_world().rank == 0) dir.emplace(opt.out);
     const tools::InterruptPolling polling;
@@ -75,7 +76,7 @@ int run_montecarlo() {
     j["scenario"] = sc.name;
     j["duration_s"] = sc.duration_s;
     j["runs"] = mc.runs;
-    j["filter_config"] = opt.filter_config.empty() ? std::string("shipped") : opt.filter_config;
+    j["filter_config"] = opt.flight_config.empty() ? std::string("shipped") : opt.flight_config;
     j["models"] = r.models;
     j["timing"] = r.timing;
     // docs/faults.md: a run in which no pseudorange was used (e.g. every satellite unhealthy) has a

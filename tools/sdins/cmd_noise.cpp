@@ -9,7 +9,7 @@
 
 #include "commands.hpp"
 #include "fsw/frames.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/noise.hpp"
 #include "tools/output_file.hpp"
 
@@ -27,7 +27,7 @@ struct Options {
 } opt;
 
 /// The configured filter values beside the data's (config/README.md units).
-nlohmann::json configured_json(const sim::FilterConfig& f) {
+nlohmann::json configured_json(const cfg::FlightConfig& f) {
   const fsw::EkfConfig& e = f.app.exec.ekf;
   return {{"name", f.name},
           {"arw_deg_per_rthr", e.arw_rad_per_rts * 60.0 / fsw::kDegToRad},
@@ -79,8 +79,8 @@ void register_noise(CLI::App& app) {
                   "analyse only rest segment K (0-based, in time order; default: all segments pooled)")
       ->check(CLI::Range(0, 1000));
   add_scenario_options(sub, opt.scenario);
-  sub->add_option("--filter-config", opt.filter_config,
-                  "filter configuration to compare with (e.g. config/datasets/gnss-imu-drive.toml), applied on top of the "
+  sub->add_option("--flight-config,--filter-config", opt.filter_config,
+                  "flight configuration to compare with (e.g. config/datasets/gnss-imu-drive.toml), applied on top of the "
                   "shipped config/default.toml (default: the shipped file alone)");
   sub->add_flag("!--no-plots", opt.plots, "do not draw allan.png");
 }
@@ -88,7 +88,7 @@ void register_noise(CLI::App& app) {
 int run_noise() {
   tools::require_distinct({opt.out}, {opt.log, opt.scenario.file, opt.filter_config});
   const sim::Scenario sc = opt.scenario.load();
-  const sim::FilterConfig configured = tools::filter_config(opt.filter_config);
+  const cfg::FlightConfig configured = cfg::flight_config(opt.filter_config);
   const tools::NoiseInput in = tools::read_noise_input(opt.log);
   opt.rest.use_gnss = !opt.no_gnss;
   const tools::RestDetection rest = tools::detect_rest(in, opt.rest);

@@ -16,7 +16,7 @@
 
 #include "commands.hpp"
 #include "montecarlo_case.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/interrupt.hpp"
 #include "tools/output_file.hpp"
 #include "fsw/effect_catalogue.hpp"
@@ -51,12 +51,12 @@ struct Options {
   double pattern_level = 15.0;
   bool tune15t = false;
   int tune_first = 0, tune_step = 1;
-  std::string filter_config;
+  std::string flight_config;
 } opt;
 
 /// A case's Monte Carlo configuration: --runs, --threads, --filter-config (read once per process).
 tools::MonteCarloConfig case_config() {
-  static const std::optional<fsw::FlightAppConfig> flight = tools::monte_carlo_flight_config(opt.filter_config);
+  static const std::optional<cfg::FlightConfig> flight = tools::monte_carlo_flight_config(opt.flight_config);
   tools::MonteCarloConfig mc;
   mc.runs = opt.runs;
   mc.threads = opt.threads;
@@ -239,7 +239,7 @@ void register_paper(CLI::App& app) {
   sub->add_option("--levels", opt.levels, "gyro misalignment 1-sigma levels [arcsec]")->delimiter(',')->capture_default_str();
   sub->add_option("--threads", opt.threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   sub->add_option("--out", opt.out, "output directory")->capture_default_str();
-  add_mc_filter_config_option(sub, opt.filter_config);
+  add_mc_flight_config_option(sub, opt.flight_config);
   sub->add_flag("!--no-plots", opt.plots, "skip the PNG figures (matplotlib)");
   sub->add_flag("!--no-analysis", opt.analysis, "skip the section-II analysis");
   auto* pat = sub->add_flag("--patterns", opt.patterns,
@@ -269,7 +269,7 @@ int run_paper_body() {
   const sim::Scenario base = opt.scenario.load();
   const fs::path out(opt.out);
   const bool root_rank = mpi_world().rank == 0;
-  tools::require_distinct({opt.out}, {opt.scenario.file, opt.filter_config});
+  tools::require_distinct({opt.out}, {opt.scenario.file, opt.flight_config});
   std::optional<tools::RunDirectory> run_dir;  // docs/faults.md: summary.json removed now, written last
   if (root_rank) run_dir.emplace(opt.out);
   const tools::InterruptPolling polling;
@@ -277,7 +277,7 @@ int run_paper_body() {
   bool root = true;
   double wall_total = 0.0;
   const tools::MonteCarloConfig defaults;
-  const double paper_arw = tools::shipped_filter_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
+  const double paper_arw = cfg::shipped_flight_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
   std::vector<tools::paper::LevelSummary> levels;
   const std::vector<tools::paper::TurnKick> kicks = root_rank ? kicks_of(base) : std::vector<tools::paper::TurnKick>{};
   for (double level : opt.levels) {
@@ -320,7 +320,7 @@ int run_paper_body() {
   summary["scenario"] = base.name;
   summary["duration_s"] = base.duration_s;
   summary["runs"] = opt.runs;
-  summary["filter_config"] = opt.filter_config.empty() ? std::string("shipped") : opt.filter_config;
+  summary["filter_config"] = opt.flight_config.empty() ? std::string("shipped") : opt.flight_config;
   summary["seed"] = base.seed;
   summary["cases"] = cases;
   {
@@ -464,7 +464,7 @@ int run_tune_body() {
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(base.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
   const sim::TruthTrack truth = sim::TruthTrack::generate(base);
-  const double paper_arw = tools::shipped_filter_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
+  const double paper_arw = cfg::shipped_flight_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
   json levels = json::array();
   bool all_found = true;
   // Per misalignment level (the IMU's specification), grid: the paper's ARW times 2^(k/2) for

@@ -15,7 +15,7 @@
 #include "hal/can_log.hpp"
 #include "hal/fsw_node.hpp"
 #include "hal/lcm_log_sink.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/fsw_report.hpp"
 #include "tools/interrupt.hpp"
 #include "tools/output_file.hpp"
@@ -68,12 +68,12 @@ void register_replay(CLI::App& app) {
 
 namespace {
 /// --candump: the bus recording's frames into hal::CanFswInput as `sdins fsw` receives them.
-int replay_candump(const sim::FilterConfig& filter) {
+int replay_candump(const cfg::FlightConfig& filter) {
   if (!opt.outages.empty()) throw std::runtime_error("--outages: not with --candump (it withholds LCM-log inputs)");
   if (!opt.score_json.empty() || !opt.score_csv.empty() || !opt.score_plot.empty())
     throw std::runtime_error("--score-json/--score-csv/--score-plot: not with --candump (a bus recording carries no "
                              "reference trajectory to score against)");
-  tools::require_raw_gnss(filter, "--filter-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
+  cfg::require_raw_gnss(filter, "--filter-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
   hal::CandumpReader reader;
   if (!reader.open(opt.in)) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
   hal::FswNode node;
@@ -115,7 +115,7 @@ int replay_candump(const sim::FilterConfig& filter) {
     j["model"] = opt.run.model;
     j["input_log"] = opt.in;
     j["input_format"] = "candump";
-    j["filter_config"] = opt.run.filter_config;
+    j["filter_config"] = opt.run.flight_config;
     j["candump"] = {{"lines", reader.lines()}, {"frames", reader.frames()}, {"malformed_lines", reader.bad_lines()}};
     j["frames"] = {{"data", in.data_frames()},
                    {"imu", in.imu_frames()},
@@ -132,12 +132,12 @@ int replay_candump(const sim::FilterConfig& filter) {
 
 int run_replay() {
   tools::require_distinct({opt.run.log, opt.run.json, opt.score_json, opt.score_csv, opt.score_plot},
-                          {opt.in, opt.run.filter_config});
+                          {opt.in, opt.run.flight_config});
   if (!opt.score_plot.empty() && (opt.score_json.empty() || opt.outages.size() != 3))
     throw std::runtime_error("--score-plot needs --outages and --score-json (the plot reads the score JSON)");
-  const sim::FilterConfig filter = opt.run.filter();
+  const cfg::FlightConfig filter = opt.run.flight();
   if (opt.candump) return replay_candump(filter);
-  const bool pvt = filter.gnss_source == sim::GnssSource::kPvt;
+  const bool pvt = filter.gnss_source == cfg::GnssSource::kPvt;
   hal::LcmReplayConfig rc;
   if (pvt) rc.gnss_pvt_channel = hal::kLcmChannelGnssPvt;
   hal::LcmReplayReader reader;
@@ -228,8 +228,8 @@ int run_replay() {
     j["mode"] = "replay";
     j["model"] = opt.run.model;
     j["input_log"] = opt.in;
-    j["filter_config"] = opt.run.filter_config;
-    j["gnss_source"] = sim::to_string(filter.gnss_source);
+    j["filter_config"] = opt.run.flight_config;
+    j["gnss_source"] = cfg::to_string(filter.gnss_source);
     j["inputs"] = {{"delivered", st.delivered},
                    {"imu_accepted", st.imu.accepted()},
                    {"gnss_accepted", st.gnss.accepted()},

@@ -33,10 +33,10 @@ void register_sil(CLI::App& app) {
 }
 
 int run_sil() {
-  tools::require_distinct({opt.run.log, opt.run.json}, {opt.scenario.file, opt.run.filter_config});
+  tools::require_distinct({opt.run.log, opt.run.json}, {opt.scenario.file, opt.run.flight_config});
   const sim::Scenario sc = opt.scenario.load();
+  const hal::FswNodeConfig cfg = opt.run.node_config();  // validated at load, before the flight is simulated
   sim::SensorStream stream(sc);
-  const hal::FswNodeConfig cfg = opt.run.node_config();
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);

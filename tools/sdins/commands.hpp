@@ -8,7 +8,7 @@
 
 #include "fsw/filter_model.hpp"
 #include "hal/fsw_node.hpp"
-#include "sim/filter_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "sim/scenario.hpp"
 
 namespace sdins {
@@ -75,24 +75,24 @@ std::string model_help(const ModelSet& accepted);
 fsw::FilterModel parse_model(const std::string& name, const std::string& option, const ModelSet& accepted);
 
 /// The options of every command that runs the flight software (sil, replay, fsw): --model,
-/// --log, --lcm-url, --nav-decimation, --json, --filter-config.
+/// --log, --lcm-url, --nav-decimation, --json, --flight-config.
 struct FswRunOptions {
   std::string model = "24";
   std::string log;
   std::string lcm_url;  ///< "": $LCM_DEFAULT_URL or LCM's default group; "none": no network
   std::string json;
   int nav_decimation = 10;
-  std::string filter_config;  ///< --filter-config FILE: applied on top of the shipped config/default.toml
-  /// The filter configuration: the shipped config/default.toml with --filter-config applied
-  /// (tools::filter_config); throws with the file's error.
-  sim::FilterConfig filter() const;
+  std::string flight_config;  ///< --flight-config FILE: applied on top of the shipped config/default.toml
+  /// The flight configuration: the shipped config/default.toml with --flight-config applied and
+  /// validated (cfg::flight_config); throws with the file's error.
+  cfg::FlightConfig flight() const;
   /// The flight-software node's configuration (filter()); throws on a bad model or configuration.
-  hal::FswNodeConfig node_config() const { return node_config(filter()); }
+  hal::FswNodeConfig node_config() const { return node_config(flight()); }
   /// The same with a filter configuration already read (one parse per run).
-  hal::FswNodeConfig node_config(const sim::FilterConfig& f) const;
+  hal::FswNodeConfig node_config(const cfg::FlightConfig& f) const;
 };
-/// --filter-config of montecarlo and paper (tools::monte_carlo_flight_config reads it).
-void add_mc_filter_config_option(CLI::App* sub, std::string& path);
+/// --flight-config of montecarlo and paper (tools::monte_carlo_flight_config reads it).
+void add_mc_flight_config_option(CLI::App* sub, std::string& path);
 void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& default_lcm_url);
 
 /// s quoted for a POSIX shell.

@@ -6,8 +6,8 @@
 #include <stdexcept>
 
 #include "commands.hpp"
-#include "sim/data_dir.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/data_dir.hpp"
+#include "cfg/flight_config.hpp"
 
 namespace sdins {
 
@@ -54,9 +54,9 @@ fsw::FilterModel parse_model(const std::string& name, const std::string& option,
   throw std::runtime_error(option + ": unknown model '" + name + "' (use " + names + ")");
 }
 
-sim::FilterConfig FswRunOptions::filter() const { return tools::filter_config(filter_config); }
+cfg::FlightConfig FswRunOptions::flight() const { return cfg::flight_config(flight_config); }
 
-hal::FswNodeConfig FswRunOptions::node_config(const sim::FilterConfig& f) const {
+hal::FswNodeConfig FswRunOptions::node_config(const cfg::FlightConfig& f) const {
   hal::FswNodeConfig cfg;
   cfg.model = parse_model(model, "--model", kFlightModels);
   cfg.app = f.app;
@@ -80,15 +80,15 @@ void add_fsw_run_options(CLI::App* sub, FswRunOptions& opt, const std::string& d
       ->check(CLI::Range(1, 200))
       ->capture_default_str();
   sub->add_option("--json", opt.json, "write the end-of-run summary as JSON");
-  sub->add_option("--filter-config", opt.filter_config,
-                  "filter configuration TOML (config/README.md; e.g. config/datasets/gnss-imu-drive.toml) applied on "
+  sub->add_option("--flight-config,--filter-config", opt.flight_config,
+                  "flight configuration TOML (config/README.md; e.g. config/datasets/gnss-imu-drive.toml) applied on "
                   "top of the shipped flight configuration <data dir>/config/default.toml (default: none, the "
                   "shipped file alone)");
 }
 
-void add_mc_filter_config_option(CLI::App* sub, std::string& path) {
-  sub->add_option("--filter-config", path,
-                  "filter configuration TOML (config/README.md) applied on top of the shipped flight configuration "
+void add_mc_flight_config_option(CLI::App* sub, std::string& path) {
+  sub->add_option("--flight-config,--filter-config", path,
+                  "flight configuration TOML (config/README.md) applied on top of the shipped flight configuration "
                   "<data dir>/config/default.toml, under the scenario overlay the Monte Carlo applies (config/README.md; "
                   "gnss.source must be \"raw\"; default: none, the shipped file alone)");
 }
@@ -100,7 +100,7 @@ std::string shell_quote(const std::string& s) {
 }
 
 int run_plot_script(const std::string& script, const std::string& args) {
-  const std::string path = sim::data_file("plot/" + script);
+  const std::string path = cfg::data_file("plot/" + script);
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     std::fprintf(stderr, "sdins: plot script %s not found\n", path.c_str());

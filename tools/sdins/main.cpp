@@ -4,7 +4,7 @@
 #include <exception>
 
 #include "commands.hpp"
-#include "sim/data_dir.hpp"
+#include "cfg/data_dir.hpp"
 #include "tools/interrupt.hpp"
 #include "numeric_options.hpp"
 
@@ -17,12 +17,12 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "sdins " SDINS_VERSION);
   // Set while parsing (before --help prints the footer that names the data directory).
   app.add_option_function<std::string>(
-      "--data-dir", [](const std::string& dir) { sim::set_data_dir_override(dir); },
+      "--data-dir", [](const std::string& dir) { cfg::set_data_dir_override(dir); },
                  "the product's data directory (almanac, scenarios, filter configurations, DBC, LCM definitions, "
                  "plot scripts; default: $SDINS_DATA_DIR, else ../share/sdins beside the executable)");
   app.footer([] {
-    const sim::DataDirLookup d = sim::find_data_dir();
-    return d.ok() ? "Data directory: " + d.path + " (" + sim::to_string(d.source) + ")"
+    const cfg::DataDirLookup d = cfg::find_data_dir();
+    return d.ok() ? "Data directory: " + d.path + " (" + cfg::to_string(d.source) + ")"
                   : "Data directory: " + d.error;
   });
   sdins::register_analyze(app);

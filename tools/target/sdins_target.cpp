@@ -3,7 +3,7 @@
 //                                   an LCM log's inputs (IMU, GNSS_RAW, GPS_ALMANAC in time order,
 //                                   as `sdins replay` reads them) and the flight configuration HIL
 //                                   uses (the shipped config/default.toml of the data directory,
-//                                   sim/data_dir.hpp, with FILTER_CONFIG on top as `sdins replay
+//                                   cfg/data_dir.hpp, with FILTER_CONFIG on top as `sdins replay
 //                                   --filter-config` applies it) into the target replay's input
 //                                   (fsw/baremetal/replay.hpp)
 //   sdins_target replay INPUT OUT   the host replay of that input: fsw/baremetal/replay.cpp, the
@@ -16,7 +16,7 @@
 #include "hal/fsw_node.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "replay.hpp"
-#include "sim/filter_config.hpp"
+#include "cfg/flight_config.hpp"
 
 namespace {
 
@@ -38,8 +38,8 @@ bool put_event(std::FILE* f, std::uint32_t tag, const T& obj) {
 }
 
 int record(const std::string& log, const std::string& path, const std::string& filter_config) {
-  sim::FilterConfig filter;
-  const sim::FilterConfigParseResult fr = sim::load_filter_config(filter_config, filter);
+  cfg::FlightConfig filter;
+  const cfg::FlightConfigResult fr = cfg::load_flight_config(filter_config, filter);
   if (!fr.ok) {
     std::fprintf(stderr, "sdins_target: %s\n", fr.error.c_str());
     return 1;

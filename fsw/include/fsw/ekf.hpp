@@ -81,6 +81,9 @@
 
 namespace fsw {
 
+/// The longest NIS window (EkfConfig::nis_window) [epochs].
+inline constexpr int kMaxNisWindow = 64;
+
 struct EkfConfig {
   // Initial 1-sigma uncertainty of each block (used when the layout has it).
   double pos_sigma_m = 10.0;
@@ -386,7 +389,7 @@ class Ekf {
   Mat work_ = Mat::Zero();     ///< scratch (Phi P, Cholesky): a member, so it is not on the task's stack
   EkfTransition<Layout> trans_{};  ///< accumulate() / propagate() on one thread
   EkfHealth health_{};
-  static constexpr int kMaxNisWindow = 64;
+  static constexpr int kMaxNisWindow = fsw::kMaxNisWindow;
   std::array<double, kMaxNisWindow> nis_hist_{};
   std::array<int, kMaxNisWindow> dof_hist_{};
   int nis_head_ = 0;

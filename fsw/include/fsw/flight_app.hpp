@@ -101,6 +101,7 @@
 #include <cstdint>
 
 #include "fsw/alignment.hpp"
+#include "fsw/config_check.hpp"
 #include "fsw/executive.hpp"
 #include "fsw/gnss_pvt.hpp"
 #include "fsw/gps_orbit.hpp"
@@ -116,6 +117,9 @@ enum class InitMode : std::uint8_t {
   kGiven,             ///< the harness gives the initial state: start_given() (see the file header)
 };
 const char* to_string(InitMode m);
+
+/// The most IMU samples the levelling averages (FlightAppConfig::levelling_samples).
+inline constexpr int kMaxLevellingSamples = 1024;
 
 struct FlightAppConfig {
   ExecutiveConfig exec{};  ///< exec.ekf's pos/vel/att sigmas are replaced by the init_* below
@@ -239,7 +243,7 @@ class FlightApp {
   /// Roll and pitch [rad] from the mean specific force of the levelling samples.
   void levelled_roll_pitch(double& roll, double& pitch) const;
 
-  static constexpr int kMaxLevelling = 1024;
+  static constexpr int kMaxLevelling = kMaxLevellingSamples;
   static constexpr int kVmHistory = 128;
   static constexpr double kVmMaxExtrapolation_s = 0.1;
   FlightAppConfig cfg_{};

@@ -25,7 +25,7 @@ namespace hal {
 struct FswNodeConfig {
   /// 15 or 24 (fsw/filter_model.hpp), flown as Layout15Full / Layout24Full; open() refuses others.
   fsw::FilterModel model = fsw::FilterModel::k24;
-  /// The flight configuration: what sim::load_filter_config reads (config/default.toml and a data
+  /// The flight configuration: what cfg::load_flight_config reads (config/default.toml and a data
   /// set's file on top); the initialiser is only the schema's field defaults.
   fsw::FlightAppConfig app{};
   LcmTelemetryConfig telemetry{};  ///< network URL ("none": off) and the log path ("": no log)

@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include "cfg/effect_names.hpp"
 #include "fsw/effect_catalogue.hpp"
 
 namespace sim {
@@ -29,12 +30,11 @@ struct EffectSet {
   bool operator==(const EffectSet&) const = default;
 };
 
-/// Looks up an effect by catalogue name ("gyro_misalignment"); nullopt when unknown.
-std::optional<Effect> effect_from_name(const std::string& name);
+/// The catalogue's names (cfg/effect_names.hpp: the files' spelling, shared with the flight configuration).
+using cfg::effect_from_name;
+using cfg::effect_names;
 /// Looks up a component index by name ("xy"; "" for scalar effects); nullopt when unknown.
 std::optional<std::size_t> component_from_name(Effect e, const std::string& component);
-/// The catalogue names, comma-separated (for error messages).
-std::string effect_names();
 /// The component names of effect e, comma-separated (for error messages).
 std::string component_names(Effect e);
 /// Parses "NAME[.COMPONENT]=VALUE" (the --effect syntax) into the set; returns an error message or "".

@@ -113,7 +113,7 @@ struct GpsConfig {
   bool operator==(const GpsConfig&) const = default;
 };
 
-/// The almanac shipped with the product: "<data directory>/almanac/yuma-week431.alm" (sim/data_dir.hpp).
+/// The almanac shipped with the product: "<data directory>/almanac/yuma-week431.alm" (cfg/data_dir.hpp).
 std::string default_almanac_path();
 /// The almanac file a GpsConfig names: cfg.almanac, or default_almanac_path() when it is empty.
 std::string almanac_path(const GpsConfig& cfg);

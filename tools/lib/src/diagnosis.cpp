@@ -17,7 +17,7 @@
 #include "hal/lcm_log.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "tools/diagnosis_intervals.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "sim/sensor_stream.hpp"
 
 namespace tools {
@@ -170,11 +170,11 @@ bool set_diagnosis_baseline(DiagnosisConfig& cfg, fsw::FilterModel model) {
 
 DiagnosisConfig default_diagnosis_config() {
   DiagnosisConfig c;
-  apply_filter_config(c, shipped_filter_config());  // config/default.toml sets every prior
+  apply_flight_config(c, cfg::shipped_flight_config());  // config/default.toml sets every prior
   return c;
 }
 
-void apply_filter_config(DiagnosisConfig& cfg, const sim::FilterConfig& f) {
+void apply_flight_config(DiagnosisConfig& cfg, const cfg::FlightConfig& f) {
   cfg.app = f.app;
   cfg.gnss_source = f.gnss_source;
   for (std::size_t e = 0; e < fsw::kEffectCount; ++e)
@@ -395,6 +395,12 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     if (std::find(active.begin(), active.end(), static_cast<int>(i)) == active.end())
       e.frozen_states |= std::uint64_t{1} << cands[i].state;
 
+  // The diagnosis' priors become EKF sigmas on top of the loaded (validated) configuration: the
+  // result is checked against the same rules, so a refusal names the prior instead of reading as
+  // a flight software that never initialised.
+  if (const fsw::ConfigCheck check = fsw::check_config(app_cfg); !check.ok())
+    throw std::runtime_error("the diagnosis' priors on the flight configuration: " +
+                             cfg::describe(check, app_cfg, cfg::FlightConfig{}));
   auto driver = std::make_unique<fsw::FlightDriver<LayoutDiag>>();  // the 56-state application: not on the stack
   const App& app = driver->app();
   if (driver->init(app_cfg) != fsw::Status::kOk) return run;
@@ -438,7 +444,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
   const auto keep = [&](const fsw::InputEvent& in) {
     const bool raw = in.kind == fsw::InputEvent::Kind::kGnssRaw, pvt = in.kind == fsw::InputEvent::Kind::kGnssPvt;
     if (!raw && !pvt) return true;
-    if (cfg.gnss_source != (raw ? sim::GnssSource::kRaw : sim::GnssSource::kPvt)) return false;
+    if (cfg.gnss_source != (raw ? cfg::GnssSource::kRaw : cfg::GnssSource::kPvt)) return false;
     last_gnss_t_s = in.t_s;
     if (outage_window(in.t_s) >= 0) {
       ++run.outages.epochs_withheld;

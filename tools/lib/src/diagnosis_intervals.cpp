@@ -215,11 +215,11 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
   // offset, when in the model, absorbs the difference).
   double t_ref_s = data.imu.empty() ? 0.0 : data.imu.front().t_s;
   for (const RecordedData::Event& ev : data.order) {
-    if (ev.kind == RecordedData::Kind::kGnss && cfg.gnss_source == sim::GnssSource::kRaw) {
+    if (ev.kind == RecordedData::Kind::kGnss && cfg.gnss_source == cfg::GnssSource::kRaw) {
       t_ref_s = data.gnss[ev.index].t_s;
       break;
     }
-    if (ev.kind == RecordedData::Kind::kPvt && cfg.gnss_source == sim::GnssSource::kPvt) {
+    if (ev.kind == RecordedData::Kind::kPvt && cfg.gnss_source == cfg::GnssSource::kPvt) {
       t_ref_s = data.pvt[ev.index].t_s;
       break;
     }

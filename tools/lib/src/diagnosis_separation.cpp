@@ -282,7 +282,7 @@ std::vector<Separation> suggest_separations(const DiagnosisResult& r, const Diag
 
   std::string why_not;
   if (!flown.known) why_not = flown.note;
-  else if (cfg.gnss_source != sim::GnssSource::kRaw)
+  else if (cfg.gnss_source != cfg::GnssSource::kRaw)
     why_not = "the diagnosis took GNSS solutions, which the simulator does not make: segments without a prediction";
   if (!why_not.empty()) {
     // Segments only: every candidate, one after the other (a test flight that flies them all).

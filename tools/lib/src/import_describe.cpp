@@ -15,7 +15,7 @@
 #include "fsw/frames.hpp"
 #include "import_common.hpp"
 #include "import_util.hpp"
-#include "sim/filter_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/import_describe.hpp"
 #include "tools/output_file.hpp"
 
@@ -1230,8 +1230,8 @@ void finish_import_outputs(nlohmann::json& sum, const std::string& log_path, con
                            const std::string& name, const std::string& importer, bool write_sidecar) {
   if (!filter_path.empty()) {
     const std::string text = starting_filter_config(sum, name);
-    sim::FilterConfig check;
-    const sim::FilterConfigParseResult pr = sim::parse_filter_config_text(text, filter_path, check);
+    cfg::FlightConfig check;
+    const cfg::FlightConfigResult pr = cfg::parse_flight_config_text(text, filter_path, check);
     if (!pr.ok) throw std::runtime_error("the starting filter configuration does not parse (a bug): " + pr.error);
     write_text_file(filter_path, text);
     sum["filter_config"] = filter_path;

@@ -9,13 +9,13 @@
 
 #include "fsw/frames.hpp"
 #include "hal/input_file.hpp"
-#include "toml_schema.hpp"
+#include "cfg/toml_schema.hpp"
 #include "tools/import_describe.hpp"
 
 namespace tools {
 namespace {
 
-namespace ts = sim::toml_schema;
+namespace ts = cfg::toml_schema;
 using ts::got;
 
 /// Units a column may carry, by quantity: name -> SI per unit.

@@ -22,7 +22,7 @@
 #include "sim/rng.hpp"
 #include "sim/sensor_stream.hpp"
 #include "sim/truth.hpp"
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/free_inertial.hpp"
 
 namespace tools {
@@ -187,23 +187,27 @@ struct FlightAppRunner final : ModelRunner {
 }  // namespace
 
 namespace {
-/// The flight configuration the overlay goes on: --filter-config's, else the shipped file's.
-const fsw::FlightAppConfig& base_flight_config(const MonteCarloConfig& mc) {
-  return mc.flight ? *mc.flight : shipped_filter_config().app;
+/// The flight configuration the overlay goes on: --flight-config's, else the shipped file's.
+const cfg::FlightConfig& base_flight_config(const MonteCarloConfig& mc) {
+  return mc.flight ? *mc.flight : cfg::shipped_flight_config();
+}
+
+std::string overlay_name(const sim::Scenario& sc, fsw::FilterModel model) {
+  return "the Monte Carlo's scenario overlay (scenario " + sc.name + ", model " + fsw::to_string(model) + ")";
 }
 }  // namespace
 
-std::optional<fsw::FlightAppConfig> monte_carlo_flight_config(const std::string& path) {
+std::optional<cfg::FlightConfig> monte_carlo_flight_config(const std::string& path) {
   if (path.empty()) return std::nullopt;
-  const sim::FilterConfig f = filter_config(path);
-  require_raw_gnss(f, path, "the Monte Carlo simulates raw receiver epochs");
-  return f.app;
+  cfg::FlightConfig f = cfg::flight_config(path);
+  cfg::require_raw_gnss(f, path, "the Monte Carlo simulates raw receiver epochs");
+  return f;
 }
 
 fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloConfig& mc) {
   // The flight configuration (shipped, or --filter-config), then the scenario overlay (the header
   // says what it sets).
-  fsw::ExecutiveConfig cfg = base_flight_config(mc).exec;
+  fsw::ExecutiveConfig cfg = base_flight_config(mc).app.exec;
   cfg.imu_samples_per_frame = static_cast<int>(sc.imu.rate_hz / cfg.nav_rate_hz);
   cfg.frames_per_ekf = static_cast<int>(std::lround(cfg.nav_rate_hz / sc.gps.rate_hz));
   const sim::ImuErrorSigmas& s = sc.imu.sigmas;
@@ -230,7 +234,7 @@ fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloC
   if (mc.model_gps_errors) {
     // Correlated part as channel states; the white part as measurement noise, at least the shipped
     // file's white noise (which keeps P well conditioned when the simulator adds none).
-    const fsw::EkfConfig& shipped = base_flight_config(mc).exec.ekf;
+    const fsw::EkfConfig& shipped = base_flight_config(mc).app.exec.ekf;
     e.range_gm_sigma_m = std::max(sc.gps.pseudorange_gm_sigma_m, 0.01);
     e.range_gm_tau_s = sc.gps.pseudorange_gm_tau_s;
     e.range_rate_gm_sigma_mps = std::max(sc.gps.pseudorange_rate_gm_sigma_mps, 0.001);
@@ -247,7 +251,7 @@ fsw::ExecutiveConfig executive_config(const sim::Scenario& sc, const MonteCarloC
 }
 
 fsw::FlightAppConfig flight_app_config(const sim::Scenario& sc, const MonteCarloConfig& mc) {
-  fsw::FlightAppConfig c = base_flight_config(mc);
+  fsw::FlightAppConfig c = base_flight_config(mc).app;
   c.exec = executive_config(sc, mc);
   c.init_mode = fsw::InitMode::kGiven;
   c.init_pos_sigma_m = c.exec.ekf.pos_sigma_m;
@@ -265,6 +269,15 @@ fsw::FlightAppConfig model_config(const fsw::FlightAppConfig& base, const MonteC
     cfg.exec.ekf.gyro_bias_rw_radps_per_rts = mc.tuned15t_gyro_bias_rw_radps_per_rts;
   }
   return cfg;
+}
+
+void validate_overlay(const sim::Scenario& sc, const MonteCarloConfig& mc) {
+  const fsw::FlightAppConfig app_cfg = flight_app_config(sc, mc);
+  for (const fsw::FilterModel model : mc.models) {
+    const cfg::FlightConfigResult r = cfg::validate(model_config(app_cfg, mc, model), base_flight_config(mc),
+                                                    overlay_name(sc, model));
+    if (!r.ok) throw std::runtime_error(r.error);
+  }
 }
 
 fsw::NavState initial_nav_state(const sim::TruthTrack& truth, const sim::ImuErrors& errors, const MonteCarloConfig& mc,
@@ -315,8 +328,9 @@ RunResult run_one(const sim::Scenario& sc, const sim::TruthTrack& truth, const s
                              : std::unique_ptr<ModelRunner>(new FlightAppRunner<fsw::Layout24>));
     res.epochs[m].reserve(truth.epochs.size());
     runners[m]->records = &res.epochs[m];
-    if (runners[m]->init(model_config(app_cfg, mc, mc.models[m])) != fsw::Status::kOk)
-      throw std::runtime_error(std::string("flight application init failed for model ") + fsw::to_string(mc.models[m]));
+    const fsw::FlightAppConfig model_cfg = model_config(app_cfg, mc, mc.models[m]);
+    if (runners[m]->init(model_cfg) != fsw::Status::kOk)  // validate_overlay() refused this before the runs
+      throw std::runtime_error(cfg::validate(model_cfg, base_flight_config(mc), overlay_name(sc, mc.models[m])).error);
   }
 
   // Every model reads the one sensor stream's events (sim/sensor_stream.hpp): the almanac, then
@@ -383,6 +397,7 @@ RunResult run_one(const sim::Scenario& sc, const sim::TruthTrack& truth, const s
 
 std::vector<RunResult> run_many(const sim::Scenario& sc, const sim::TruthTrack& truth,
                                 const std::vector<sim::AlmanacEntry>& almanac, const MonteCarloConfig& mc) {
+  validate_overlay(sc, mc);  // the overlaid configuration meets the flight software's rules, or no run starts
   std::vector<RunResult> results(static_cast<std::size_t>(std::max(mc.runs, 0)));
   int threads = mc.threads > 0 ? mc.threads : static_cast<int>(std::thread::hardware_concurrency());
   threads = std::max(1, std::min(threads, mc.runs));

@@ -1,4 +1,4 @@
-#include "tools/flight_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "tools/paper_verdict.hpp"
 
 #include <algorithm>
@@ -585,7 +585,7 @@ double tuned15t_arw_rad_per_rts(double misalignment_arcsec) {
   const Tuned* best = &kTuned[0];
   for (const Tuned& t : kTuned)
     if (std::abs(t.level_arcsec - misalignment_arcsec) < std::abs(best->level_arcsec - misalignment_arcsec)) best = &t;
-  return shipped_filter_config().app.exec.ekf.arw_rad_per_rts * std::pow(2.0, 0.5 * best->k);
+  return cfg::shipped_flight_config().app.exec.ekf.arw_rad_per_rts * std::pow(2.0, 0.5 * best->k);
 }
 
 }  // namespace tools::paper

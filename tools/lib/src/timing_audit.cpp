@@ -344,6 +344,7 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
     MonteCarloConfig mc;
     mc.model_gps_errors = l == "Layout15Full" || l == "Layout24Full";
     mc.models = {l == "Layout15" || l == "Layout15Full" ? fsw::FilterModel::k15 : fsw::FilterModel::k24};
+    validate_overlay(sc, mc);  // refused with the overlay, file, key, value and rule before the flight
     const fsw::ExecutiveConfig ecfg = flight_app_config(sc, mc).exec;
     Pass p;
     if (l == "Layout15") p = fly<fsw::Layout15>(sc, truth, *alm.almanac, mc, cfg, overhead_s);

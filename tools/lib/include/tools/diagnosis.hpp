@@ -48,7 +48,7 @@
 #include "fsw/gps_orbit.hpp"
 #include "fsw/input_event.hpp"
 #include "fsw/strapdown.hpp"
-#include "sim/filter_config.hpp"
+#include "cfg/flight_config.hpp"
 #include "sim/scenario.hpp"
 #include "sim/truth.hpp"
 
@@ -130,7 +130,7 @@ std::string candidate_name(const Candidate& c);
 struct DiagnosisConfig {
   fsw::FlightAppConfig app{};  ///< the baseline model's configuration (the extension sigmas are set per run)
   /// Which GNSS input the filter takes: raw pseudoranges/rates or position/velocity solutions.
-  sim::GnssSource gnss_source = sim::GnssSource::kRaw;
+  cfg::GnssSource gnss_source = cfg::GnssSource::kRaw;
   /// Prior 1-sigma of each effect in catalogue units (index fsw::Effect).
   std::array<double, fsw::kEffectCount> prior{};
   double alpha = 0.05;               ///< family-wise false-alarm rate of one diagnosis
@@ -158,9 +158,9 @@ bool set_diagnosis_baseline(DiagnosisConfig& cfg, fsw::FilterModel model);
 /// IMU of the project, priors that cover the realistic range of each effect, the outage pattern).
 DiagnosisConfig default_diagnosis_config();
 
-/// A data set's filter configuration (sim::FilterConfig, config/README.md): the filter, its GNSS
+/// A data set's flight configuration (cfg::FlightConfig, config/README.md): the filter, its GNSS
 /// input, and the priors and outage pattern the file sets.
-void apply_filter_config(DiagnosisConfig& cfg, const sim::FilterConfig& f);
+void apply_flight_config(DiagnosisConfig& cfg, const cfg::FlightConfig& f);
 
 /// Innovation statistics of one run.
 struct InnovationStats {

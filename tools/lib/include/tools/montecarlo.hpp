@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "cfg/flight_config.hpp"
 #include "fsw/executive.hpp"
 #include "fsw/filter_model.hpp"
 #include "fsw/flight_app.hpp"
@@ -49,19 +50,19 @@ struct MonteCarloConfig {
   /// the paper's plain layouts with the total error as white measurement noise.
   bool model_gps_errors = true;
   /// The flight configuration under the scenario overlay (executive_config): empty, the shipped
-  /// config/default.toml (tools::shipped_filter_config); set by `--filter-config FILE` of
+  /// config/default.toml (cfg::shipped_flight_config); set by `--flight-config FILE` of
   /// `sdins montecarlo` / `sdins paper` (tools::monte_carlo_flight_config).
-  std::optional<fsw::FlightAppConfig> flight;
+  std::optional<cfg::FlightConfig> flight;
 };
 
 /// The flight configuration of `--filter-config FILE` for the Monte Carlo (the shipped file with
 /// FILE on top; empty path: nullopt, the shipped file). Throws std::runtime_error with the file's
 /// error, or when the file asks for a GNSS input the simulation does not produce (gnss.source
 /// other than "raw": the Monte Carlo flies raw receiver epochs).
-std::optional<fsw::FlightAppConfig> monte_carlo_flight_config(const std::string& path);
+std::optional<cfg::FlightConfig> monte_carlo_flight_config(const std::string& path);
 
 /// The executive configuration the Monte Carlo flies for a scenario: the shipped flight
-/// configuration (config/default.toml, tools::shipped_filter_config) with the scenario overlay on
+/// configuration (config/default.toml, cfg::shipped_flight_config) with the scenario overlay on
 /// top, the one place where a harness departs from that file (listed in config/README.md). The
 /// overlay is what follows from the scenario the runs draw their sensors from: the IMU samples per
 /// frame and the EKF rate (the scenario's IMU and GPS rates), the initial sigmas (the drawn initial
@@ -79,6 +80,10 @@ fsw::FlightAppConfig flight_app_config(const sim::Scenario& sc, const MonteCarlo
 /// The configuration of one model: `base` (flight_app_config), with the k15t tuning
 /// (MonteCarloConfig::tuned15t_*) for FilterModel::k15t.
 fsw::FlightAppConfig model_config(const fsw::FlightAppConfig& base, const MonteCarloConfig& mc, fsw::FilterModel model);
+/// The overlaid configuration of every model (model_config of flight_app_config) checked against
+/// the flight software's rules (cfg::validate): throws std::runtime_error naming the overlay, the
+/// file under it, the key, the value and the rule. run_many calls it before the first run.
+void validate_overlay(const sim::Scenario& sc, const MonteCarloConfig& mc);
 
 /// The executive's initial solution for a run: truth at t = 0 with the attitude error that
 /// self-alignment leaves for the run's IMU biases and drawn position / velocity errors (seed: the

@@ -1,16 +1,17 @@
-// Filter configuration TOML reader (filter_config.hpp; schema in config/README.md).
-#include "sim/filter_config.hpp"
+// Flight configuration TOML reader (flight_config.hpp; schema in config/README.md; validation in
+// validate.cpp, the loader in load.cpp, the keys and their unit conversion in keys.cpp).
+#include "cfg/flight_config.hpp"
 
 #include <cmath>
 #include <tuple>
 
+#include "cfg/effect_names.hpp"
+#include "cfg/text_file.hpp"
+#include "cfg/toml_schema.hpp"
 #include "fsw/gnss.hpp"
-#include "sim/data_dir.hpp"
-#include "sim/effects.hpp"
-#include "sim/text_file.hpp"
-#include "toml_schema.hpp"
+#include "keys.hpp"
 
-namespace sim {
+namespace cfg {
 
 const char* to_string(GnssSource s) { return s == GnssSource::kPvt ? "pvt" : "raw"; }
 
@@ -34,11 +35,29 @@ struct Units {
   std::optional<double> static_max_rate_dev_dps, vm_max_heading_sigma_deg;
 };
 
+
+using F = fsw::ConfigField;
+using keys::alt_to_si;
+using keys::to_si;
+
+/// Records the file as the setter of every key of the table (arrays are values).
+void note_keys(const toml::table& t, const std::string& prefix, const std::string& file,
+               std::map<std::string, std::string>& out) {
+  for (auto&& [key, node] : t) {
+    const std::string path = prefix + std::string(key.str());
+    if (const toml::table* sub = node.as_table())
+      note_keys(*sub, path + ".", file, out);
+    else
+      out[path] = file;
+  }
+}
+
+
 class Parser : public toml_schema::Reader {
  public:
   using Reader::Reader;
 
-  bool file(const toml::table& root, FilterConfig& c, Units& u) {
+  bool file(const toml::table& root, FlightConfig& c, Units& u) {
     fsw::FlightAppConfig& a = c.app;
     fsw::ExecutiveConfig& x = a.exec;
     fsw::EkfConfig& e = a.exec.ekf;
@@ -148,7 +167,7 @@ class Parser : public toml_schema::Reader {
     };
   }
 
-  bool diagnosis(const toml::node& n, const std::string& path, FilterConfig& c) {
+  bool diagnosis(const toml::node& n, const std::string& path, FlightConfig& c) {
     const toml::table* t = table(n, path);
     return t && fields(*t, path + ".", {
         {"outage_length_s", opt(c.outage_length_s, non_negative())},
@@ -174,12 +193,12 @@ class Parser : public toml_schema::Reader {
 
 }  // namespace
 
-FilterConfigParseResult parse_filter_config_text(const std::string& toml_text, const std::string& source_name,
-                                                 FilterConfig& cfg) {
+FlightConfigResult parse_flight_config_text(const std::string& toml_text, const std::string& source_name,
+                                            FlightConfig& cfg) {
   toml::table root;
   std::string error;
   if (!toml_schema::parse_document(toml_text, source_name, root, error)) return {false, error};
-  FilterConfig c = cfg;
+  FlightConfig c = cfg;
   Units u;
   Parser parser(source_name);
   if (!parser.file(root, c, u)) return {false, parser.error()};
@@ -189,6 +208,7 @@ FilterConfigParseResult parse_filter_config_text(const std::string& toml_text, c
   fsw::EkfConfig& e = a.exec.ekf;
   if (u.nav_rate_hz) x.nav_rate_hz = *u.nav_rate_hz;
   if (u.ekf_rate_hz) {
+    // The one conversion of a rate into the whole navigation frames the executive counts.
     const double frames = x.nav_rate_hz / *u.ekf_rate_hz;
     if (std::abs(frames - std::round(frames)) > 1e-6 || std::round(frames) < 1.0) {
       return {false, source_name + ": 'executive.ekf_rate_hz' (" + toml_schema::format_number(*u.ekf_rate_hz) +
@@ -206,59 +226,37 @@ FilterConfigParseResult parse_filter_config_text(const std::string& toml_text, c
     if (per_rthr && per_rts)
       return {false, source_name + ": '" + rthr_key + "' and '" + rts_key + "' set the same value; give one of them"};
   }
-  constexpr double kRth = 60.0;  // sqrt(3600 s / h)
-  if (u.vrw_mps_per_rthr) e.vrw_mps_per_rts = *u.vrw_mps_per_rthr / kRth;
-  if (u.arw_deg_per_rthr) e.arw_rad_per_rts = *u.arw_deg_per_rthr * fsw::kDegToRad / kRth;
+  if (u.vrw_mps_per_rthr) e.vrw_mps_per_rts = alt_to_si(F::kVrw, *u.vrw_mps_per_rthr);
+  if (u.arw_deg_per_rthr) e.arw_rad_per_rts = alt_to_si(F::kArw, *u.arw_deg_per_rthr);
   if (u.vrw_mps_per_rts) e.vrw_mps_per_rts = *u.vrw_mps_per_rts;
   if (u.arw_rad_per_rts) e.arw_rad_per_rts = *u.arw_rad_per_rts;
-  // The clock's Allan-variance coefficients become the filter's process noise through the one
-  // formula the simulated receiver draws with (fsw/gnss.hpp).
-  if (u.clock_h0_s) e.clock_bias_psd_m2ps = fsw::clock_bias_psd_m2ps(*u.clock_h0_s);
-  if (u.clock_h_minus2_per_s) e.clock_drift_psd_m2ps3 = fsw::clock_drift_psd_m2ps3(*u.clock_h_minus2_per_s);
-  if (u.accel_bias_sigma_mg) e.accel_bias_sigma_mps2 = *u.accel_bias_sigma_mg * 1e3 * fsw::kMicroG_mps2;
-  if (u.gyro_bias_sigma_degph) e.gyro_bias_sigma_radps = *u.gyro_bias_sigma_degph * fsw::kDegPerHourToRadps;
-  // Divided, not multiplied by 1e-6: 100 ppm is exactly the double 1e-4.
-  if (u.accel_scale_ppm) e.accel_scale_sigma = *u.accel_scale_ppm / 1e6;
-  if (u.gyro_scale_ppm) e.gyro_scale_sigma = *u.gyro_scale_ppm / 1e6;
-  if (u.accel_mis_arcsec) e.accel_misalign_sigma_rad = *u.accel_mis_arcsec * fsw::kArcsecToRad;
-  if (u.gyro_mis_arcsec) e.gyro_misalign_sigma_rad = *u.gyro_mis_arcsec * fsw::kArcsecToRad;
-  if (u.heading_offset_deg) a.init_heading_offset_rad = *u.heading_offset_deg * fsw::kDegToRad;
+  if (u.clock_h0_s) e.clock_bias_psd_m2ps = to_si(F::kClockBiasPsd, *u.clock_h0_s);
+  if (u.clock_h_minus2_per_s) e.clock_drift_psd_m2ps3 = to_si(F::kClockDriftPsd, *u.clock_h_minus2_per_s);
+  if (u.accel_bias_sigma_mg) e.accel_bias_sigma_mps2 = to_si(F::kAccelBiasSigma, *u.accel_bias_sigma_mg);
+  if (u.gyro_bias_sigma_degph) e.gyro_bias_sigma_radps = to_si(F::kGyroBiasSigma, *u.gyro_bias_sigma_degph);
+  if (u.accel_scale_ppm) e.accel_scale_sigma = to_si(F::kAccelScaleSigma, *u.accel_scale_ppm);
+  if (u.gyro_scale_ppm) e.gyro_scale_sigma = to_si(F::kGyroScaleSigma, *u.gyro_scale_ppm);
+  if (u.accel_mis_arcsec) e.accel_misalign_sigma_rad = to_si(F::kAccelMisalignSigma, *u.accel_mis_arcsec);
+  if (u.gyro_mis_arcsec) e.gyro_misalign_sigma_rad = to_si(F::kGyroMisalignSigma, *u.gyro_mis_arcsec);
+  if (u.heading_offset_deg) a.init_heading_offset_rad = to_si(F::kInitHeadingOffset, *u.heading_offset_deg);
   if (u.roll_pitch_sigma_deg) {
-    a.init_att_sigma_rad.x() = *u.roll_pitch_sigma_deg * fsw::kDegToRad;
-    a.init_att_sigma_rad.y() = *u.roll_pitch_sigma_deg * fsw::kDegToRad;
+    a.init_att_sigma_rad.x() = to_si(F::kInitRollSigma, *u.roll_pitch_sigma_deg);
+    a.init_att_sigma_rad.y() = to_si(F::kInitPitchSigma, *u.roll_pitch_sigma_deg);
   }
-  if (u.heading_sigma_deg) a.init_att_sigma_rad.z() = *u.heading_sigma_deg * fsw::kDegToRad;
-  if (u.static_max_rate_dev_dps) a.static_max_rate_dev_radps = *u.static_max_rate_dev_dps * fsw::kDegToRad;
-  if (u.vm_max_heading_sigma_deg) a.vm_max_heading_sigma_rad = *u.vm_max_heading_sigma_deg * fsw::kDegToRad;
-  if (!(a.vm_max_s > a.vm_min_s)) {
-    return {false, source_name + ": 'init.vm_max_s' (" + toml_schema::format_number(a.vm_max_s) +
-                       ") must be greater than 'init.vm_min_s' (" + toml_schema::format_number(a.vm_min_s) + ")"};
-  }
+  if (u.heading_sigma_deg) a.init_att_sigma_rad.z() = to_si(F::kInitHeadingSigma, *u.heading_sigma_deg);
+  if (u.static_max_rate_dev_dps) a.static_max_rate_dev_radps = to_si(F::kStaticMaxRateDev, *u.static_max_rate_dev_dps);
+  if (u.vm_max_heading_sigma_deg)
+    a.vm_max_heading_sigma_rad = to_si(F::kVmMaxHeadingSigma, *u.vm_max_heading_sigma_deg);
+  note_keys(root, "", source_name, c.key_file);
+  c.files.push_back(source_name);
   cfg = std::move(c);
   return {true, ""};
 }
 
-FilterConfigParseResult parse_filter_config_file(const std::string& path, FilterConfig& cfg) {
+FlightConfigResult parse_flight_config_file(const std::string& path, FlightConfig& cfg) {
   const std::optional<std::string> text = read_text_file(path);
-  if (!text) return {false, path + ": cannot open filter configuration: " + text_file_problem(path)};
-  return parse_filter_config_text(*text, path, cfg);
+  if (!text) return {false, path + ": cannot open flight configuration: " + text_file_problem(path)};
+  return parse_flight_config_text(*text, path, cfg);
 }
 
-std::string default_filter_config_path() { return data_file("config/default.toml"); }
-
-FilterConfigParseResult load_filter_config(const std::string& path, FilterConfig& out) {
-  FilterConfig c;  // the schema's field defaults, then the shipped file, then the data set's
-  FilterConfigParseResult r = parse_filter_config_file(default_filter_config_path(), c);
-  if (!r.ok) {
-    r.error = "the shipped flight configuration: " + r.error;
-    return r;
-  }
-  if (!path.empty()) {
-    r = parse_filter_config_file(path, c);
-    if (!r.ok) return r;
-  }
-  out = std::move(c);
-  return r;
-}
-
-}  // namespace sim
+}  // namespace cfg

@@ -1,4 +1,4 @@
-#include "sim/text_file.hpp"
+#include "cfg/text_file.hpp"
 
 #include <sys/stat.h>
 
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <iterator>
 
-namespace sim {
+namespace cfg {
 
 std::optional<std::string> read_text_file(const std::string& path) {
   // Bounded (docs/faults.md): only a regular file of at most kMaxTextFileBytes is read, so a
@@ -38,4 +38,4 @@ std::string text_file_problem(const std::string& path) {
   return "cannot read";
 }
 
-}  // namespace sim
+}  // namespace cfg

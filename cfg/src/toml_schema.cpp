@@ -1,12 +1,12 @@
 // The TOML schema reader's non-template parts and the toml++ 3.3.0 defences (toml_schema.hpp).
-#include "toml_schema.hpp"
+#include "cfg/toml_schema.hpp"
 
 #include <cstdint>
 #include <cstring>
 #include <optional>
 #include <sstream>
 
-namespace sim::toml_schema {
+namespace cfg::toml_schema {
 namespace {
 
 // toml++ 3.3.0 (Debian 12) runs into __builtin_unreachable() (undefined behaviour) in
@@ -170,4 +170,4 @@ bool parse_document(const std::string& text, const std::string& source, toml::ta
   return true;
 }
 
-}  // namespace sim::toml_schema
+}  // namespace cfg::toml_schema

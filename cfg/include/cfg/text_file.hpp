@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-namespace sim {
+namespace cfg {
 
 inline constexpr unsigned long long kMaxTextFileBytes = 64ull << 20;  ///< 64 MiB
 
@@ -18,4 +18,4 @@ std::optional<std::string> read_text_file(const std::string& path);
 /// Why read_text_file(path) failed, in a few words ("not a regular file ...", "cannot open").
 std::string text_file_problem(const std::string& path);
 
-}  // namespace sim
+}  // namespace cfg

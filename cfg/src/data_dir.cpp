@@ -1,4 +1,4 @@
-#include "sim/data_dir.hpp"
+#include "cfg/data_dir.hpp"
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <mutex>
 
-namespace sim {
+namespace cfg {
 namespace {
 
 std::mutex g_mutex;
@@ -108,4 +108,4 @@ std::string data_file(const std::string& relative) {
   return d.path + "/" + relative;
 }
 
-}  // namespace sim
+}  // namespace cfg

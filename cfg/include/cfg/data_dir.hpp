@@ -21,7 +21,7 @@
 
 #include <string>
 
-namespace sim {
+namespace cfg {
 
 enum class DataDirSource { kOverride, kEnvironment, kExecutable, kNotFound };
 const char* to_string(DataDirSource s);
@@ -48,4 +48,4 @@ DataDirLookup find_data_dir(const std::string& exe_path = "");
 /// says why.
 std::string data_file(const std::string& relative);
 
-}  // namespace sim
+}  // namespace cfg

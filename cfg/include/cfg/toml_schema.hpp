@@ -1,8 +1,8 @@
-// The project's TOML schema reader (private to sim): the toml++ 3.3.0 defences, value ranges, and a
-// reader base whose subclasses describe a schema as tables of keys with handlers. Every key is
-// optional, unknown keys are rejected, and each error reads "<source>:<line>:<col>: <message naming
-// the dotted key path>". Used by the scenario files (scenario.cpp) and the filter configuration
-// files (filter_config.cpp), so both speak the same rules and error format.
+// The project's TOML schema reader: the toml++ 3.3.0 defences, value ranges, and a reader base
+// whose subclasses describe a schema as tables of keys with handlers. Every key is optional,
+// unknown keys are rejected, and each error reads "<source>:<line>:<col>: <message naming the
+// dotted key path>". Used by the flight configuration files (cfg/src/flight_config.cpp) and the
+// scenario files (sim/src/scenario.cpp), so both speak the same rules and error format.
 #pragma once
 
 #include <algorithm>
@@ -17,7 +17,7 @@
 
 #include <toml++/toml.h>
 
-namespace sim::toml_schema {
+namespace cfg::toml_schema {
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -182,4 +182,4 @@ class Reader {
   std::string error_;
 };
 
-}  // namespace sim::toml_schema
+}  // namespace cfg::toml_schema
