@@ -9,6 +9,10 @@ source "$here/lib.sh"
 "$sdins" can encode --duration 1 --out "$out/enc.log" > /dev/null 2>&1 || fail "can encode failed"
 frames=$(grep -c '^(' "$out/enc.log")
 port=$((36000 + $$ % 2000))
+if ! "$sdins" can dump --can "udp:$port" --timeout 0.1 > "$out/probe.log" 2>&1; then
+  echo "skipped: the udp: bus cannot be opened here ($(tail -1 "$out/probe.log"))"
+  exit 77
+fi
 # 1. SIGINT to a recorder waiting out a 60 s timeout after it received the frames.
 "$sdins" can record --can "udp:$port" --out "$out/rec.log" --timeout 60 > "$out/rec.out" 2> "$out/rec.err" &
 pid=$!
