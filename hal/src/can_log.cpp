@@ -208,7 +208,7 @@ int CandumpReader::bad_lines() const {
 
 // ---- writer ----
 
-CandumpWriter::~CandumpWriter() { close(); }
+CandumpWriter::~CandumpWriter() { abort(); }  // docs/faults.md: only close() puts a log in place
 
 bool CandumpWriter::open(const std::string& path) {
   close();
@@ -228,6 +228,13 @@ bool CandumpWriter::write(const CanFrame& frame, std::string_view iface) {
   }
   if (!can_frame_valid(frame)) {
     error_ = "invalid frame (identifier or length)";
+    return false;
+  }
+  // docs/faults.md: a name the reader would not read back (empty, blanks, '#', '(') is refused,
+  // instead of a log of which every line is malformed.
+  if (iface.empty() || iface.size() > 64 || iface.find_first_of(" \t\r\n#()") != std::string_view::npos) {
+    error_ = f_.path() + ": interface name '" + std::string(iface) + "' cannot be written to a candump log (1 to 64 characters, "
+             "no blanks, '#' or parentheses)";
     return false;
   }
   line_ = format_candump_line(frame, iface);

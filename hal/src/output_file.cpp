@@ -146,7 +146,12 @@ bool OutputFile::open(const std::string& path) {
   fs::path target = path;
   if (fs::is_symlink(target, ec)) {
     const fs::path c = fs::weakly_canonical(target, ec);
-    if (!ec) target = c;
+    if (ec) {  // a loop of links: refused (it used to replace the link itself with a regular file)
+      target_ = path;
+      fail("is a symbolic link that does not resolve", ec.value());
+      return false;
+    }
+    target = c;
   }
   target_ = target.string();
   struct stat st {};

@@ -53,6 +53,14 @@ run nonzero bus_sim_speed -- "$sdins" bus-sim --can loop:x --lockstep --speed 2
 says bus_sim_speed "--realtime"
 run nonzero fsw_prio -- "$sdins" fsw --can loop:x --fifo-priority 10
 says fsw_prio "--realtime"
+# Duplicates and unreadable-back values (found by the hostile pass, docs/faults.md).
+run nonzero models_twice -- "$sdins" montecarlo --runs 2 --duration 5 --models 15,15 --out "$out/mm"
+says models_twice "given twice"
+absent "$out/mm"
+run nonzero iface_blank -- "$sdins" can encode --duration 1 --out "$out/e.log" --iface "a b"
+says iface_blank "interface name 'a b'"
+run nonzero iface_empty -- "$sdins" can encode --duration 1 --out "$out/e.log" --iface ""
+absent "$out/e.log"
 # Text: a file name that is not UTF-8 ended in a JSON library's exception after the log was
 # written, leaving it without its sidecar. Refused at parse time naming the option; nothing written.
 bad=$(printf 'caf\xe9.lcmlog')

@@ -25,6 +25,22 @@ echo "{not json" > "$mc/.sdins-outputs.json"
 run 1 manifest_bad -- "$sdins" montecarlo --runs 2 --duration 65 --models 15 --out "$mc"
 says manifest_bad ".sdins-outputs.json"
 [ -f "$mc/stats_24.csv" ] || fail "manifest_bad: a file was removed"
-# An interrupted run names nothing: no summary.json.
+# Two runs into one directory would remove each other's outputs: the second is refused while the
+# first holds the directory's lock (held here by flock(1), as a running sdins holds it).
+rm -f "$mc/.sdins-outputs.json"
+flock "$mc" sleep 5 &
+holder=$!
+sleep 0.5
+run 1 concurrent -- "$sdins" montecarlo --runs 2 --duration 65 --models 15 --out "$mc"
+says concurrent "another sdins run is writing into this directory"
+kill "$holder" 2> /dev/null; wait "$holder" 2> /dev/null
+[ -f "$mc/stats_24.csv" ] || fail "concurrent: a file was removed"
+# An output that is a loop of symbolic links is refused; the links stay (it used to replace one of
+# them with a regular file).
+ln -s "$out/lb" "$out/la"
+ln -s "$out/la" "$out/lb"
+run 1 link_loop -- "$sdins" fly --duration 1 --csv "$out/la"
+says link_loop "Too many levels of symbolic links"
+[ -L "$out/la" ] && [ -L "$out/lb" ] || fail "link_loop: a link was replaced"
 no_temporaries "$mc"
 done_ok

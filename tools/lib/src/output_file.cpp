@@ -1,5 +1,7 @@
 #include "tools/output_file.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -59,21 +61,41 @@ RunDirectory::RunDirectory(const std::string& dir) : dir_(dir), first_output_(ha
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create the directory " + dir + ": " + ec.message());
   if (!fs::is_directory(dir, ec)) throw std::runtime_error(dir + ": not a directory");
-  const std::string manifest = path(kManifest);
-  if (fs::exists(fs::symlink_status(manifest, ec))) {
-    try {
-      std::ifstream in(manifest);
-      const nlohmann::json j = nlohmann::json::parse(in);
-      for (const auto& f : j.at("files"))
-        if (f.is_string() && safe_entry(f.get<std::string>())) previous_.push_back(f.get<std::string>());
-    } catch (const std::exception& e) {
-      throw std::runtime_error(manifest + ": not a readable sdins output manifest (" + e.what() +
-                               "); remove it (the files it listed are then left alone) or use another directory");
-    }
+  // docs/faults.md: two runs into one directory would remove each other's outputs as stale.
+  lock_fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (lock_fd_ < 0) throw std::runtime_error("cannot open the directory " + dir + ": " + std::strerror(errno));
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int e = errno;
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw std::runtime_error(e == EWOULDBLOCK ? dir + ": another sdins run is writing into this directory; wait for it "
+                                                      "or use another directory"
+                                              : "cannot lock the directory " + dir + ": " + std::strerror(e));
   }
-  const std::string marker = path(kMarker);
-  if (std::remove(marker.c_str()) != 0 && errno != ENOENT)
-    throw std::runtime_error("cannot remove the previous run's " + marker + ": " + std::strerror(errno));
+  try {
+    const std::string manifest = path(kManifest);
+    if (fs::exists(fs::symlink_status(manifest, ec))) {
+      try {
+        std::ifstream in(manifest);
+        const nlohmann::json j = nlohmann::json::parse(in);
+        for (const auto& f : j.at("files"))
+          if (f.is_string() && safe_entry(f.get<std::string>())) previous_.push_back(f.get<std::string>());
+      } catch (const std::exception& e) {
+        throw std::runtime_error(manifest + ": not a readable sdins output manifest (" + e.what() +
+                                 "); remove it (the files it listed are then left alone) or use another directory");
+      }
+    }
+    const std::string marker = path(kMarker);
+    if (std::remove(marker.c_str()) != 0 && errno != ENOENT)
+      throw std::runtime_error("cannot remove the previous run's " + marker + ": " + std::strerror(errno));
+  } catch (...) {
+    ::close(lock_fd_);  // the destructor does not run for a constructor that throws
+    throw;
+  }
+}
+
+RunDirectory::~RunDirectory() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
 std::string RunDirectory::path(const std::string& name) const { return (fs::path(dir_) / name).string(); }

@@ -52,7 +52,12 @@ class RunDirectory {
  public:
   /// Creates the directory, reads the previous run's manifest and removes its summary.json (the
   /// completion marker).
+  /// Takes an exclusive lock on the directory (flock): a second run into the same directory while
+  /// this one is alive is refused, naming it.
   explicit RunDirectory(const std::string& dir);
+  ~RunDirectory();
+  RunDirectory(const RunDirectory&) = delete;
+  RunDirectory& operator=(const RunDirectory&) = delete;
   std::string path(const std::string& name) const;
   /// Removes the previous run's outputs this run did not write, writes the manifest, then
   /// summary.json last, atomically (with "outputs" added): the run is complete. May be called again
@@ -71,6 +76,7 @@ class RunDirectory {
   std::size_t first_output_ = 0;       ///< index into hal::committed_outputs() at creation
   std::vector<std::string> previous_;  ///< the previous manifest's files
   std::vector<std::string> removed_;
+  int lock_fd_ = -1;  ///< the directory, flock()ed while the run lasts
 };
 
 }  // namespace tools
