@@ -61,6 +61,8 @@ run nonzero iface_blank -- "$sdins" can encode --duration 1 --out "$out/e.log" -
 says iface_blank "interface name 'a b'"
 run nonzero iface_empty -- "$sdins" can encode --duration 1 --out "$out/e.log" --iface ""
 absent "$out/e.log"
+run nonzero import_fit_neg -- "$sdins" import psins "$out" --log "$out/../imp.lcmlog" --max-fit-error -1
+says import_fit_neg "--max-fit-error"
 # Text: a file name that is not UTF-8 ended in a JSON library's exception after the log was
 # written, leaving it without its sidecar. Refused at parse time naming the option; nothing written.
 bad=$(printf 'caf\xe9.lcmlog')
