@@ -31,7 +31,7 @@ void register_bus_sim(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "bus-sim", "Play a scenario's simulated IMU and GPS receiver onto a CAN bus for `sdins fsw`: in lockstep "
                  "(as fast as the flight software acknowledges, no frame dropped) or in real time.");
-  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT")->required();
+  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; append ?scope=lan to reach the network)")->required();
   add_scenario_options(sub, opt.scenario);
   auto* mode = sub->add_option_group("mode");
   CLI::Option* lockstep = mode->add_flag("--lockstep", opt.lockstep, "wait for FSW_ACK: never more than --window IMU samples ahead");

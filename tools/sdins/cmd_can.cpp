@@ -385,7 +385,7 @@ int run_play() {
 
 void register_can(CLI::App& app) {
   CLI::App* can = app.add_subcommand("can", "CAN bus tools for the sdins IMU/GPS protocol (hal/can/sdins.dbc). Buses: "
-                                            "socketcan:IFACE, udp:PORT, udp:GROUP:PORT, loop:NAME.");
+                                            "socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; ?scope=lan: the network), loop:NAME.");
   can->require_subcommand(1);
 
   g_encode = can->add_subcommand("encode", "Fly a scenario's IMU and GPS receiver models and write the protocol frames "

@@ -34,7 +34,7 @@ void register_fsw(CLI::App& app) {
       "fsw", "Run the flight software fed by a CAN bus (IMU and GPS frames of hal/can/sdins.dbc), with LCM "
              "telemetry and log; answers `sdins bus-sim` with FSW_ACK. Exit 0: end of run; 2: silent bus; 130/143: "
              "stopped by SIGINT/SIGTERM (summary, log and --json complete).");
-  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT")->required();
+  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; append ?scope=lan to reach the network)")->required();
   add_fsw_run_options(sub, opt.run, "");
   CLI::Option* realtime = sub->add_flag("--realtime", opt.realtime,
                 "real-time mode: SCHED_FIFO when permitted, minor-frame execution times (overruns), IMU lateness");
