@@ -19,17 +19,18 @@ grep -q 'IMU' "$out/closed_info.txt" || fail "the log written with closed stream
 cases=$((cases + 2))
 # stdout on a full disk: exit 1, message on stderr, the outputs still complete.
 run 1 full_info -- sh -c "\"$sdins\" log info \"$out/in.lcmlog\" > /dev/full"
-says full_info "writing standard output failed"
+says full_info "writing standard output failed: No space left on device"
 run 1 full_help -- sh -c "\"$sdins\" --help > /dev/full"
 says full_help "writing standard output failed"
 run 1 full_sim -- sh -c "\"$sdins\" sim --seed 3 --duration 2 --log \"$out/full.lcmlog\" > /dev/full"
+says full_sim "No space left on device"
 [ -f "$out/full.lcmlog" ] && [ -f "$out/full.lcmlog.json" ] || fail "full_sim: the log or its sidecar missing"
 # stdout is a pipe closed early: SIGPIPE (141) or, with SIGPIPE ignored, exit 1 naming the error.
 "$sdins" can encode --duration 5 --out "$out/enc.log" > /dev/null 2>&1 || fail "can encode failed"
 ( "$sdins" can dump --log "$out/enc.log" | head -1 > /dev/null ); cases=$((cases + 1))
 rc=$(bash -c "trap '' PIPE; \"$sdins\" can dump --log \"$out/enc.log\" 2> \"$out/pipe.err\" | head -1 > /dev/null; echo \${PIPESTATUS[0]}")
 [ "$rc" = 1 ] || fail "SIGPIPE ignored: exit $rc, expected 1"
-grep -q "writing standard output failed" "$out/pipe.err" || { cat "$out/pipe.err" >&2; fail "SIGPIPE ignored: no message on stderr"; }
+grep -q "writing standard output failed: Broken pipe" "$out/pipe.err" || { cat "$out/pipe.err" >&2; fail "SIGPIPE ignored: no message on stderr"; }
 cases=$((cases + 1))
 no_temporaries "$out"
 done_ok

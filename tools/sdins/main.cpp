@@ -1,6 +1,8 @@
 // sdins: the one user-facing command line of the project.
 #include <CLI/CLI.hpp>
 #include <fcntl.h>
+#include <poll.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -31,13 +33,26 @@ void open_missing_std_streams() {
   }
 }
 
+/// stdout on a file or a device (not a terminal, not a pipe: their readers expect the usual
+/// buffering) gets a 1 MiB buffer, so that a write error on it usually happens in finish_stdout()'s
+/// flush, where its errno is known ("No space left on device"), rather than in an earlier flush.
+void buffer_stdout_for_files() {
+  struct stat st {};
+  if (::isatty(1) || ::fstat(1, &st) != 0 || !(S_ISREG(st.st_mode) || S_ISCHR(st.st_mode))) return;
+  (void)std::setvbuf(stdout, nullptr, _IOFBF, 1 << 20);
+}
+
 /// Flushes stdout and reports a write error on it (a full disk behind a redirect, a closed pipe
 /// when SIGPIPE is ignored): the command's exit code becomes 1 when it was 0.
 int finish_stdout(int rc) {
-  std::cout.flush();
   errno = 0;
-  const bool flush_failed = std::fflush(stdout) != 0;
-  const int e = flush_failed ? errno : 0;
+  const bool flush_failed = std::fflush(stdout) != 0;  // first: std::cout's flush is this fflush too
+  int e = flush_failed ? errno : 0;
+  std::cout.flush();
+  if (e == 0) {  // the error came from an earlier flush; a closed pipe still says so
+    pollfd p{1, POLLOUT, 0};
+    if (::poll(&p, 1, 0) == 1 && (p.revents & POLLERR) != 0) e = EPIPE;
+  }
   if (!flush_failed && !std::cout.bad() && std::ferror(stdout) == 0) return rc;
   std::fprintf(stderr, "sdins: error: writing standard output failed: %s\n",
                e != 0 ? std::strerror(e) : "an earlier write failed (output incomplete)");
@@ -98,5 +113,6 @@ int run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   open_missing_std_streams();
+  buffer_stdout_for_files();
   return finish_stdout(run(argc, argv));
 }
