@@ -541,6 +541,20 @@ TEST(RunDirectory, AReRunRemovesItsStaleOutputsAndNothingElse) {
   }
   EXPECT_EQ(slurp(d / "outside.txt"), "keep\n");
   EXPECT_FALSE(fs::exists(dir + "/b.csv"));  // listed, not written again: stale
+  // A run that does not finish (an error, SIGINT) lists what it wrote; the next complete run
+  // removes it when it does not write it again.
+  {
+    tools::RunDirectory r(dir);
+    tools::write_text_file(r.path("c.csv"), "c\n");
+  }
+  EXPECT_FALSE(fs::exists(dir + "/summary.json"));
+  {
+    tools::RunDirectory r(dir);
+    r.finish({{"command", "test"}});
+    EXPECT_EQ(r.removed(), (std::vector<std::string>{"c.csv"}));
+  }
+  EXPECT_FALSE(fs::exists(dir + "/c.csv"));
+  EXPECT_EQ(slurp(dir + "/mine.txt"), "the user's\n");
 }
 
 TEST(LcmInputCheck, NanPseudorangesAreCountedByTheTypeTable) {

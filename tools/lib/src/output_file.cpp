@@ -95,7 +95,28 @@ RunDirectory::RunDirectory(const std::string& dir) : dir_(dir), first_output_(ha
 }
 
 RunDirectory::~RunDirectory() {
+  // A run that did not finish (an error, SIGINT) names no outputs, but what it wrote is the tool's:
+  // listed with the previous run's, so that the next complete run removes what it does not rewrite.
+  if (!finished_) {
+    std::vector<std::string> files = previous_;
+    for (const std::string& f : outputs())
+      if (std::find(files.begin(), files.end(), f) == files.end()) files.push_back(f);
+    if (files != previous_) {
+      try {
+        write_manifest(files);
+      } catch (const std::exception&) {
+        // the manifest stays as it was: those files are then left alone, never removed on a guess
+      }
+    }
+  }
   if (lock_fd_ >= 0) ::close(lock_fd_);
+}
+
+void RunDirectory::write_manifest(const std::vector<std::string>& files) const {
+  write_json_file(path(kManifest), {{"format", "sdins-run-outputs"},
+                                    {"note", "files sdins runs wrote into this directory; the next complete run "
+                                             "removes those it does not write again"},
+                                    {"files", files}});
 }
 
 std::string RunDirectory::path(const std::string& name) const { return (fs::path(dir_) / name).string(); }
@@ -129,11 +150,9 @@ void RunDirectory::finish(nlohmann::json summary) {
   std::vector<std::string> listed = mine;
   listed.insert(listed.end(), kept_stale.begin(), kept_stale.end());
   listed.push_back(kMarker);
-  write_json_file(path(kManifest), {{"format", "sdins-run-outputs"},
-                                    {"note", "files the last complete sdins run wrote into this directory; the next "
-                                             "run removes those it does not write again"},
-                                    {"files", listed}});
+  write_manifest(listed);
   previous_ = listed;
+  finished_ = true;
   summary["outputs"] = mine;
   write_json_file(path(kMarker), summary);
 }

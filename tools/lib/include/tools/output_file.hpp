@@ -77,6 +77,8 @@ class RunDirectory {
   std::vector<std::string> previous_;  ///< the previous manifest's files
   std::vector<std::string> removed_;
   int lock_fd_ = -1;  ///< the directory, flock()ed while the run lasts
+  bool finished_ = false;
+  void write_manifest(const std::vector<std::string>& files) const;
 };
 
 }  // namespace tools
