@@ -75,5 +75,10 @@ absent "$out/$bad"
 good=$(printf 'caf\xc3\xa9.lcmlog')
 run 0 name_utf8 -- "$sdins" sim --seed 1 --duration 1 --log "$out/$good"
 [ -f "$out/$good" ] && [ -f "$out/$good.json" ] || fail "name_utf8: the log and its sidecar are not both there"
+# The log and its sidecar, both or neither: a sidecar that cannot be written leaves no log.
+mkdir -p "$out/side.lcmlog.json"
+run 1 sidecar_dir -- "$sdins" sim --seed 1 --duration 2 --log "$out/side.lcmlog"
+says sidecar_dir "side.lcmlog.json: is a directory"
+absent "$out/side.lcmlog"
 no_temporaries "$out"
 done_ok
