@@ -5,6 +5,7 @@
 #include <sys/eventfd.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -28,8 +29,16 @@ const char* to_string(CanBusStatus s) {
     case CanBusStatus::kBadFrame: return "bad_frame";
     case CanBusStatus::kTxBusy: return "tx_busy";
     case CanBusStatus::kIoError: return "io_error";
+    case CanBusStatus::kStopped: return "stopped";
   }
   return "unknown";
+}
+
+std::string to_string(const CanBusStats& s) {
+  return "sent=" + std::to_string(s.sent) + " received=" + std::to_string(s.received) +
+         " own_dropped=" + std::to_string(s.own_dropped) + " foreign_dropped=" + std::to_string(s.foreign_dropped) +
+         " malformed=" + std::to_string(s.malformed) + " unsupported=" + std::to_string(s.unsupported) +
+         " queue_dropped=" + std::to_string(s.queue_dropped);
 }
 
 double can_wall_time_s() {
@@ -52,7 +61,8 @@ CanBusStatus CanBus::open(const std::string& name) {
   errno_ = 0;
   const std::size_t colon = name.find(':');
   if (colon == std::string::npos || colon + 1 >= name.size()) {
-    error_ = "bus name '" + name + "': expected socketcan:IFACE, udp:PORT, udp:GROUP:PORT or loop:NAME";
+    error_ = "bus name '" + name + "': expected socketcan:IFACE, udp:PORT, udp:GROUP:PORT (optionally ?scope=lan"
+             "&iface=IFACE) or loop:NAME";
     return CanBusStatus::kBadName;
   }
   const std::string kind = name.substr(0, colon), arg = name.substr(colon + 1);
@@ -89,6 +99,20 @@ CanBusStatus CanBus::send(const CanFrame& f) {
 CanBusStatus CanBus::receive(CanFrame& f, double timeout_s) {
   if (!t_) return CanBusStatus::kNotOpen;
   return t_->receive(f, timeout_s);
+}
+
+CanBusStatus CanBus::receive(CanFrame& f, double timeout_s, const std::atomic<bool>& stop) {
+  if (!t_) return CanBusStatus::kNotOpen;
+  // Slices of at most kCanStopCheck_s (a signal does not end a poll() that is restarted after EINTR).
+  const double deadline = timeout_s < 0.0 ? 0.0 : can_wall_time_s() + timeout_s;
+  for (;;) {
+    if (stop.load(std::memory_order_relaxed)) return CanBusStatus::kStopped;
+    double slice = kCanStopCheck_s;
+    if (timeout_s >= 0.0) slice = std::max(0.0, std::min(slice, deadline - can_wall_time_s()));
+    const CanBusStatus st = t_->receive(f, slice);
+    if (st != CanBusStatus::kTimeout) return st;
+    if (timeout_s >= 0.0 && can_wall_time_s() >= deadline) return CanBusStatus::kTimeout;
+  }
 }
 
 int CanBus::fd() const { return t_ ? t_->fd() : -1; }

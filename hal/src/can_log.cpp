@@ -208,7 +208,7 @@ int CandumpReader::bad_lines() const {
 
 // ---- writer ----
 
-CandumpWriter::~CandumpWriter() { close(); }
+CandumpWriter::~CandumpWriter() { abort(); }  // docs/faults.md: only close() puts a log in place
 
 bool CandumpWriter::open(const std::string& path) {
   close();
@@ -228,6 +228,13 @@ bool CandumpWriter::write(const CanFrame& frame, std::string_view iface) {
   }
   if (!can_frame_valid(frame)) {
     error_ = "invalid frame (identifier or length)";
+    return false;
+  }
+  // docs/faults.md: a name the reader would not read back (empty, blanks, '#', '(') is refused,
+  // instead of a log of which every line is malformed.
+  if (iface.empty() || iface.size() > 64 || iface.find_first_of(" \t\r\n#()") != std::string_view::npos) {
+    error_ = f_.path() + ": interface name '" + std::string(iface) + "' cannot be written to a candump log (1 to 64 characters, "
+             "no blanks, '#' or parentheses)";
     return false;
   }
   line_ = format_candump_line(frame, iface);
@@ -250,5 +257,47 @@ bool CandumpWriter::close() {
 }
 
 void CandumpWriter::abort() { f_.abort(); }
+
+// ---- CandumpPacer ---------------------------------------------------------------------------------
+
+namespace {
+TimeTagGateConfig pacer_gate() {
+  TimeTagGateConfig g;  // the replay reader's band (hal::LcmReplayReader): 2 s ahead, 1 s behind
+  g.max_forward_s = 2.0;
+  g.max_backward_s = 1.0;
+  return g;
+}
+}  // namespace
+
+CandumpPacer::CandumpPacer() : filter_(pacer_gate()) {}
+
+void CandumpPacer::release(CanFrame&& f) {
+  if (have_last_) {
+    const double step = f.timestamp_s - last_t_s_;
+    if (step > 0.0 && step <= filter_.gate().config().max_forward_s) play_s_ += step;
+  }
+  have_last_ = true;
+  last_t_s_ = f.timestamp_s;
+  ready_.emplace_back(f, play_s_);
+}
+
+void CandumpPacer::push(const CanFrame& frame) {
+  filter_.push(
+      frame.timestamp_s, frame, [this](CanFrame&& f) { release(std::move(f)); },
+      [this](CanFrame&& f, TimeTagRejection) { ready_.emplace_back(f, play_s_); });  // sent, unpaced
+}
+
+void CandumpPacer::finish() {
+  filter_.finish([this](CanFrame&& f) { release(std::move(f)); },
+                 [this](CanFrame&& f, TimeTagRejection) { ready_.emplace_back(f, play_s_); });
+}
+
+bool CandumpPacer::pop(CanFrame& frame, double& play_s) {
+  if (ready_.empty()) return false;
+  frame = ready_.front().first;
+  play_s = ready_.front().second;
+  ready_.pop_front();
+  return true;
+}
 
 }  // namespace hal

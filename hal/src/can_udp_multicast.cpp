@@ -1,7 +1,16 @@
 // UDP multicast transport speaking python-can 4.1's udp_multicast wire format
 // (can/interfaces/udp_multicast: one msgpack map per datagram, default group
-// ff15:7079:7468:6f6e:6465:6d6f:6d63:6173, hop limit 1, SO_REUSEADDR, bound to the port on any
-// address, group joined on the default interface, receive timestamps from SO_TIMESTAMPNS).
+// ff15:7079:7468:6f6e:6465:6d6f:6d63:6173, SO_REUSEADDR, bound to the port on any address, receive
+// timestamps from SO_TIMESTAMPNS).
+//
+// Scope (docs/can.md, "Who can talk to the bus"). By default the bus is local to this host: hop
+// limit / TTL 0 (the kernel loops each datagram back to this host's group members and never
+// transmits it), IPv4 groups joined and sent on the loopback interface, and every datagram whose
+// source address is not one of this host's counted (stats.foreign_dropped) and dropped. IPv6 groups
+// are joined on the default multicast interface even then: Linux does not deliver IPv6 multicast on
+// lo (measured: a datagram sent with IPV6_MULTICAST_IF = lo never arrives), so the hop limit 0 and
+// the source check are what keep the LAN out. "?scope=lan[&iface=IFACE]" is python-can's behaviour:
+// hop limit 1, the group joined on IFACE (default: the default multicast interface), every sender.
 //
 // Own frames: multicast loops every datagram back to all members on the host, including the
 // sender. python-can sends from its receiving socket (source port = the bus port), so its own
@@ -9,11 +18,14 @@
 // from an ephemeral port, whose local address + port is unique on the host, and datagrams from
 // exactly that source are dropped (counted in stats.own_dropped).
 #include <arpa/inet.h>
+#include <ifaddrs.h>
+#include <net/if.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -217,7 +229,57 @@ UdpUnpack udp_unpack(const std::uint8_t* data, std::size_t n, CanFrame& f, doubl
   }
 }
 
-bool parse_udp_address(const std::string& arg, UdpAddress& out, std::string& why) {
+namespace {
+/// "scope=lan&iface=eth0" -> out.lan / out.iface; false with why for an unknown key or value.
+bool parse_udp_query(const std::string& query, UdpAddress& out, std::string& why) {
+  std::string scope = "local";
+  bool have_iface = false;
+  std::size_t at = 0;
+  while (at <= query.size()) {
+    const std::size_t amp = std::min(query.find('&', at), query.size());
+    const std::string kv = query.substr(at, amp - at);
+    at = amp + 1;
+    const std::size_t eq = kv.find('=');
+    const std::string key = kv.substr(0, eq), value = eq == std::string::npos ? "" : kv.substr(eq + 1);
+    if (key == "scope") {
+      if (value != "local" && value != "lan") {
+        why = "scope '" + value + "' is not 'local' (the default: this host only) or 'lan'";
+        return false;
+      }
+      scope = value;
+    } else if (key == "iface") {
+      if (value.empty() || value.size() >= IF_NAMESIZE) {
+        why = "iface '" + value + "' is not an interface name";
+        return false;
+      }
+      out.iface = value;
+      have_iface = true;
+    } else {
+      why = "unknown key '" + key + "' after '?' (keys: scope=local|lan, iface=IFACE)";
+      return false;
+    }
+  }
+  out.lan = scope == "lan";
+  if (have_iface && !out.lan) {
+    why = "iface=" + out.iface + " is for scope=lan (a local bus is not on any network interface)";
+    return false;
+  }
+  if (have_iface) {
+    out.iface_index = ::if_nametoindex(out.iface.c_str());
+    if (out.iface_index == 0) {
+      why = "iface '" + out.iface + "': no such interface";
+      return false;
+    }
+  }
+  return true;
+}
+}  // namespace
+
+bool parse_udp_address(const std::string& full, UdpAddress& out, std::string& why) {
+  const std::size_t q = full.find('?');
+  const std::string arg = full.substr(0, q);
+  UdpAddress parsed;
+  if (q != std::string::npos && !parse_udp_query(full.substr(q + 1), parsed, why)) return false;
   std::string group = kUdpDefaultGroupV6, port_s = arg;
   if (!arg.empty() && arg.front() == '[') {
     const std::size_t close = arg.find("]:");
@@ -252,9 +314,55 @@ bool parse_udp_address(const std::string& arg, UdpAddress& out, std::string& why
     why = "'" + group + "' is not an IPv4 or IPv6 address";
     return false;
   }
-  out.group = group;
-  out.port = std::stoi(port_s);
+  parsed.group = group;
+  parsed.port = std::stoi(port_s);
+  out = parsed;
   return true;
+}
+
+bool UdpMulticastTransport::source_is_local(const sockaddr_storage& src) {
+  std::vector<std::uint8_t> a;
+  if (src.ss_family == AF_INET6) {
+    const auto& x = reinterpret_cast<const sockaddr_in6&>(src);
+    if (IN6_IS_ADDR_V4MAPPED(&x.sin6_addr))
+      a.assign(x.sin6_addr.s6_addr + 12, x.sin6_addr.s6_addr + 16);
+    else
+      a.assign(x.sin6_addr.s6_addr, x.sin6_addr.s6_addr + 16);
+  } else if (src.ss_family == AF_INET) {
+    const auto& x = reinterpret_cast<const sockaddr_in&>(src);
+    const auto* b = reinterpret_cast<const std::uint8_t*>(&x.sin_addr.s_addr);
+    a.assign(b, b + 4);
+  } else {
+    return false;
+  }
+  if (a.size() == 4 && a[0] == 127) return true;  // 127.0.0.0/8
+  static const std::uint8_t kLoop6[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1};
+  if (a.size() == 16 && std::memcmp(a.data(), kLoop6, 16) == 0) return true;
+  const auto known = [&] {
+    for (const auto& l : local_addrs_)
+      if (l == a) return true;
+    return false;
+  };
+  if (known()) return true;
+  const double now = can_wall_time_s();
+  if (local_addrs_at_s_ >= 0.0 && now - local_addrs_at_s_ < 1.0) return false;
+  local_addrs_at_s_ = now;
+  local_addrs_.clear();
+  ifaddrs* list = nullptr;
+  if (::getifaddrs(&list) != 0) return false;
+  for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
+    if (i->ifa_addr == nullptr) continue;
+    if (i->ifa_addr->sa_family == AF_INET6) {
+      const auto* x = reinterpret_cast<const sockaddr_in6*>(i->ifa_addr);
+      local_addrs_.emplace_back(x->sin6_addr.s6_addr, x->sin6_addr.s6_addr + 16);
+    } else if (i->ifa_addr->sa_family == AF_INET) {
+      const auto* x = reinterpret_cast<const sockaddr_in*>(i->ifa_addr);
+      const auto* b = reinterpret_cast<const std::uint8_t*>(&x->sin_addr.s_addr);
+      local_addrs_.emplace_back(b, b + 4);
+    }
+  }
+  ::freeifaddrs(list);
+  return known();
 }
 
 CanBusStatus UdpMulticastTransport::open(const std::string& arg) {
@@ -267,7 +375,8 @@ CanBusStatus UdpMulticastTransport::open(const std::string& arg) {
     close();
     return st;
   };
-  const int on = 1, hops = kUdpHopLimit;
+  const int on = 1, hops = addr.lan ? kUdpHopLimit : kUdpLocalHopLimit;
+  lan_ = addr.lan;
   sockaddr_storage dst{};
   socklen_t dst_len = 0;
   in6_addr a6{};
@@ -293,7 +402,7 @@ CanBusStatus UdpMulticastTransport::open(const std::string& arg) {
       return fail(CanBusStatus::kIoError, "bind([::]:" + std::to_string(addr.port) + ")");
     ipv6_mreq mreq{};
     mreq.ipv6mr_multiaddr = a6;
-    mreq.ipv6mr_interface = 0;
+    mreq.ipv6mr_interface = addr.iface_index;  // local: the default interface too (no IPv6 multicast on lo)
     if (::setsockopt(rx_fd_, IPPROTO_IPV6, IPV6_JOIN_GROUP, &mreq, sizeof mreq) < 0)
       return fail(CanBusStatus::kNoSupport, "join IPv6 group " + addr.group + " (no IPv6 multicast route?)");
     auto& d = reinterpret_cast<sockaddr_in6&>(dst);
@@ -308,9 +417,10 @@ CanBusStatus UdpMulticastTransport::open(const std::string& arg) {
     b.sin_port = htons(static_cast<std::uint16_t>(addr.port));
     if (::bind(rx_fd_, reinterpret_cast<sockaddr*>(&b), sizeof b) < 0)
       return fail(CanBusStatus::kIoError, "bind(0.0.0.0:" + std::to_string(addr.port) + ")");
-    ip_mreq mreq{};
+    ip_mreqn mreq{};
     mreq.imr_multiaddr = a4;
-    mreq.imr_interface.s_addr = htonl(INADDR_ANY);
+    mreq.imr_address.s_addr = htonl(INADDR_ANY);
+    mreq.imr_ifindex = addr.lan ? static_cast<int>(addr.iface_index) : static_cast<int>(::if_nametoindex("lo"));
     if (::setsockopt(rx_fd_, IPPROTO_IP, IP_ADD_MEMBERSHIP, &mreq, sizeof mreq) < 0)
       return fail(CanBusStatus::kNoSupport,
                   "join IPv4 group " + addr.group + " (no multicast route? ip route add 224.0.0.0/4 dev lo)");
@@ -324,14 +434,19 @@ CanBusStatus UdpMulticastTransport::open(const std::string& arg) {
   tx_fd_ = ::socket(family_, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
   if (tx_fd_ < 0) return fail(CanBusStatus::kIoError, "socket (sender)");
   if (family_ == AF_INET6) {
+    const unsigned index = addr.iface_index;
     if (::setsockopt(tx_fd_, IPPROTO_IPV6, IPV6_MULTICAST_HOPS, &hops, sizeof hops) < 0 ||
-        ::setsockopt(tx_fd_, IPPROTO_IPV6, IPV6_MULTICAST_LOOP, &on, sizeof on) < 0)
-      return fail(CanBusStatus::kIoError, "setsockopt(IPV6_MULTICAST_HOPS/LOOP)");
+        ::setsockopt(tx_fd_, IPPROTO_IPV6, IPV6_MULTICAST_LOOP, &on, sizeof on) < 0 ||
+        (index != 0 && ::setsockopt(tx_fd_, IPPROTO_IPV6, IPV6_MULTICAST_IF, &index, sizeof index) < 0))
+      return fail(CanBusStatus::kIoError, "setsockopt(IPV6_MULTICAST_HOPS/LOOP/IF)");
   } else {
-    const unsigned char ttl = static_cast<unsigned char>(kUdpHopLimit), loop = 1;
+    const unsigned char ttl = static_cast<unsigned char>(hops), loop = 1;
+    ip_mreqn via{};
+    via.imr_ifindex = addr.lan ? static_cast<int>(addr.iface_index) : static_cast<int>(::if_nametoindex("lo"));
     if (::setsockopt(tx_fd_, IPPROTO_IP, IP_MULTICAST_TTL, &ttl, sizeof ttl) < 0 ||
-        ::setsockopt(tx_fd_, IPPROTO_IP, IP_MULTICAST_LOOP, &loop, sizeof loop) < 0)
-      return fail(CanBusStatus::kIoError, "setsockopt(IP_MULTICAST_TTL/LOOP)");
+        ::setsockopt(tx_fd_, IPPROTO_IP, IP_MULTICAST_LOOP, &loop, sizeof loop) < 0 ||
+        (via.imr_ifindex != 0 && ::setsockopt(tx_fd_, IPPROTO_IP, IP_MULTICAST_IF, &via, sizeof via) < 0))
+      return fail(CanBusStatus::kIoError, "setsockopt(IP_MULTICAST_TTL/LOOP/IF)");
   }
   if (::connect(tx_fd_, reinterpret_cast<sockaddr*>(&dst), dst_len) < 0)
     return fail(CanBusStatus::kNoSupport, "connect to " + addr.group + " (no multicast route?)");
@@ -394,6 +509,10 @@ CanBusStatus UdpMulticastTransport::receive(CanFrame& f, double timeout_s) {
     if (n >= 0) {
       if (same_endpoint(src, own_addr_)) {
         ++stats.own_dropped;
+        continue;
+      }
+      if (!lan_ && !source_is_local(src)) {  // docs/can.md: a local bus takes nothing from the network
+        ++stats.foreign_dropped;
         continue;
       }
       CanFrame g;

@@ -247,7 +247,7 @@ LcmLogStatus LcmLogReader::next(LcmLogEvent& ev) {
 }
 
 // ---------------------------------------------------------------------------------------------
-LcmLogWriter::~LcmLogWriter() { close(); }
+LcmLogWriter::~LcmLogWriter() { abort(); }  // docs/faults.md: only close() puts a log in place
 
 LcmLogStatus LcmLogWriter::open(const std::string& path) {
   close();

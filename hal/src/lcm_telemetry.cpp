@@ -19,7 +19,12 @@ std::string resolve_lcm_url(const std::string& requested) {
 
 LcmTelemetry::LcmTelemetry() : warn_fn_(stderr_warning) {}
 
-LcmTelemetry::~LcmTelemetry() { close(); }
+LcmTelemetry::~LcmTelemetry() {
+  // docs/faults.md: a log not closed (an exception, an early return) is dropped, never put in place half
+  // written.
+  abort_log();
+  close();
+}
 
 void LcmTelemetry::set_warning_handler(WarningHandler fn, void* user) {
   warn_fn_ = fn != nullptr ? fn : stderr_warning;

@@ -2,6 +2,7 @@
 
 #include <cinttypes>
 #include <cstdio>
+#include <type_traits>
 
 #include "fsw/error_state.hpp"
 #include "fsw/executive.hpp"
@@ -270,9 +271,45 @@ LcmInputStatus row_of(const void* data, std::size_t len, LcmRow& row) {
   return st;
 }
 
+/// The flight software's input conversion (nullptr for the output types).
+template <class Msg>
+struct InputOf {
+  static constexpr LcmInputStatus (*kFn)(const void*, std::size_t, int&) = nullptr;
+};
+template <class Msg, class Out>
+LcmInputStatus input_of(const void* data, std::size_t len, int& values_dropped) {
+  values_dropped = 0;
+  Msg m{};
+  LcmInputStatus st = decode_exact(data, len, m);
+  Out out{};
+  if (st != LcmInputStatus::kOk) return st;
+  if constexpr (std::is_same_v<Msg, sdins::gnss_raw_epoch_t>)
+    return from_msg(m, out, values_dropped);
+  else
+    return from_msg(m, out);
+}
+template <>
+struct InputOf<sdins::imu_sample_t> {
+  static constexpr LcmInputStatus (*kFn)(const void*, std::size_t, int&) = &input_of<sdins::imu_sample_t, ImuRecord>;
+};
+template <>
+struct InputOf<sdins::gnss_raw_epoch_t> {
+  static constexpr LcmInputStatus (*kFn)(const void*, std::size_t, int&) =
+      &input_of<sdins::gnss_raw_epoch_t, fsw::GnssRawEpoch>;
+};
+template <>
+struct InputOf<sdins::gps_almanac_t> {
+  static constexpr LcmInputStatus (*kFn)(const void*, std::size_t, int&) = &input_of<sdins::gps_almanac_t, fsw::GpsAlmanac>;
+};
+template <>
+struct InputOf<sdins::gnss_pvt_t> {
+  static constexpr LcmInputStatus (*kFn)(const void*, std::size_t, int&) = &input_of<sdins::gnss_pvt_t, GnssPvtSample>;
+};
+
 template <class Msg>
 LcmTypeInfo make_lcm_type() {
-  return LcmTypeInfo{std::string("sdins.") + Msg::getTypeName(), Msg::getHash(), &time_of<Msg>, &row_of<Msg>};
+  return LcmTypeInfo{std::string("sdins.") + Msg::getTypeName(), Msg::getHash(), &time_of<Msg>, &row_of<Msg>,
+                     InputOf<Msg>::kFn};
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <mutex>
 #include <cstring>
 #include <filesystem>
 #include <system_error>
@@ -145,7 +146,12 @@ bool OutputFile::open(const std::string& path) {
   fs::path target = path;
   if (fs::is_symlink(target, ec)) {
     const fs::path c = fs::weakly_canonical(target, ec);
-    if (!ec) target = c;
+    if (ec) {  // a loop of links: refused (it used to replace the link itself with a regular file)
+      target_ = path;
+      fail("is a symbolic link that does not resolve", ec.value());
+      return false;
+    }
+    target = c;
   }
   target_ = target.string();
   struct stat st {};
@@ -299,6 +305,7 @@ bool OutputFile::commit() {
   release_slot();
   tmp_.clear();
   if (ok) {
+    note_output(path_);
     // Make the rename itself durable.
     std::error_code ec;
     const fs::path dir = fs::path(target_).has_parent_path() ? fs::path(target_).parent_path() : fs::path(".");
@@ -342,6 +349,21 @@ bool write_file_atomic(const std::string& path, std::string_view content, std::s
 }
 
 void set_unnamed_temporaries(bool on) noexcept { g_unnamed.store(on, std::memory_order_relaxed); }
+
+namespace {
+std::mutex g_committed_mu;
+std::vector<std::string> g_committed;
+}  // namespace
+
+void note_output(const std::string& path) {
+  const std::lock_guard<std::mutex> lock(g_committed_mu);
+  g_committed.push_back(path);
+}
+
+std::vector<std::string> committed_outputs() {
+  const std::lock_guard<std::mutex> lock(g_committed_mu);
+  return g_committed;
+}
 
 void remove_pending_outputs() noexcept {
   for (Slot& s : g_slots)

@@ -113,7 +113,7 @@ def main():
     # 1. python-can Bus -> sdins can record
     port = base
     rx_log = os.path.join(work, "from_python.log")
-    rec = subprocess.Popen([sdins, "can", "record", "--can", f"udp:[{group}]:{port}", "--out", rx_log, "--count",
+    rec = subprocess.Popen([sdins, "can", "record", "--can", f"udp:[{group}]:{port}?scope=lan", "--out", rx_log, "--count",
                             str(len(sent)), "--timeout", "10"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     wait_for_line(rec, rec.stderr, "listening", 10)
     with can.Bus(interface="udp_multicast", channel=group, port=port) as bus:
@@ -130,7 +130,7 @@ def main():
     port = base + 1
     got = []
     with can.Bus(interface="udp_multicast", channel=group, port=port) as bus:
-        play = subprocess.Popen([sdins, "can", "play", src, "--can", f"udp:[{group}]:{port}", "--gap", "0.0001"],
+        play = subprocess.Popen([sdins, "can", "play", src, "--can", f"udp:[{group}]:{port}?scope=lan", "--gap", "0.0001"],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         deadline = time.time() + 20
         while len(got) < len(sent) and time.time() < deadline:
@@ -147,7 +147,7 @@ def main():
     # 3. python -m can.player -> sdins can record
     port = base + 2
     rx_log = os.path.join(work, "from_player.log")
-    rec = subprocess.Popen([sdins, "can", "record", "--can", f"udp:[{group}]:{port}", "--out", rx_log, "--count",
+    rec = subprocess.Popen([sdins, "can", "record", "--can", f"udp:[{group}]:{port}?scope=lan", "--out", rx_log, "--count",
                             str(len(sent)), "--timeout", "10"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     wait_for_line(rec, rec.stderr, "listening", 10)
     subprocess.run([sys.executable, "-m", "can.player", "-i", "udp_multicast", "-c", group, f"--port={port}", src],
@@ -162,7 +162,7 @@ def main():
     logger = subprocess.Popen([sys.executable, "-u", "-m", "can.logger", "-i", "udp_multicast", "-c", group,
                                f"--port={port}", "-f", py_log], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     wait_for_line(logger, logger.stdout, "Can Logger", 15)
-    subprocess.run([sdins, "can", "play", src, "--can", f"udp:[{group}]:{port}", "--gap", "0.0001"], check=True, timeout=60,
+    subprocess.run([sdins, "can", "play", src, "--can", f"udp:[{group}]:{port}?scope=lan", "--gap", "0.0001"], check=True, timeout=60,
                    stdout=subprocess.DEVNULL)
     time.sleep(0.5)
     logger.send_signal(signal.SIGINT)

@@ -16,9 +16,17 @@
 #include <tuple>
 #include <vector>
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <thread>
 
 #include "fsw/gps_orbit.hpp"
+#include "hal/can_bus.hpp"
+#include "hal/can_log.hpp"
+#include "hal/can_transports.hpp"
 #include "hal/input_file.hpp"
+#include "hal/lcm_types.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "hal/output_file.hpp"
 #include "hal/time_tag_gate.hpp"
@@ -26,6 +34,7 @@
 #include "sim/almanac.hpp"
 #include "cfg/text_file.hpp"
 #include "tools/importers.hpp"
+#include "tools/output_file.hpp"
 
 namespace fs = std::filesystem;
 
@@ -432,4 +441,161 @@ TEST(AlmanacValidation, SimulatorRefusesWhatTheFlightSoftwareRefuses) {
   a.sqrt_a_sqrtm = 1e30;
   EXPECT_STREQ(fsw::almanac_invalid_field(a), "sqrt(A)");
   EXPECT_FALSE(fsw::almanac_valid(a));
+}
+
+// ---- second pass (issue 30): players, recorders, run directories, counted drops, bus scope ----
+
+TEST(CandumpPacer, OneWildTimestampCostsNoSleepAndNoFrame) {
+  hal::CandumpPacer p;
+  std::vector<std::pair<double, double>> out;  // (log time, play time)
+  const auto drain = [&] {
+    hal::CanFrame f;
+    double play = 0.0;
+    while (p.pop(f, play)) out.emplace_back(f.timestamp_s, play);
+  };
+  for (int k = 0; k < 200; ++k) {
+    hal::CanFrame f;
+    f.id = 0x10;
+    f.len = 8;
+    f.timestamp_s = 1000.0 + 0.005 * k + (k == 100 ? 86400.0 : 0.0);  // one a day ahead
+    p.push(f);
+    drain();
+  }
+  p.finish();
+  drain();
+  ASSERT_EQ(out.size(), 200u);  // every frame sent
+  EXPECT_EQ(p.stats().outliers, 1u);
+  EXPECT_NEAR(out.back().second, 0.005 * 199, 1e-9);  // the log's own play time: the outlier moved nothing
+  for (std::size_t i = 1; i < out.size(); ++i) EXPECT_GE(out[i].second, out[i - 1].second);
+  EXPECT_DOUBLE_EQ(out[100].first, 1000.0 + 0.5 + 86400.0);  // in log order
+}
+
+TEST(CandumpPacer, NewTimeBaseIsAStepOfZero) {
+  hal::CandumpPacer p;
+  double last_play = 0.0;
+  int n = 0;
+  for (int k = 0; k < 100; ++k) {
+    hal::CanFrame f;
+    f.id = 0x10;
+    f.len = 8;
+    f.timestamp_s = 10.0 + 0.01 * k + (k >= 50 ? 3600.0 : 0.0);
+    p.push(f);
+    hal::CanFrame g;
+    while (p.pop(g, last_play)) ++n;
+  }
+  p.finish();
+  hal::CanFrame g;
+  while (p.pop(g, last_play)) ++n;
+  EXPECT_EQ(n, 100);
+  EXPECT_EQ(p.stats().new_bases, 1u);
+  EXPECT_NEAR(last_play, 0.01 * 98, 1e-9);
+}
+
+TEST(CanBusStop, AStopFlagEndsTheWaitAtOnce) {
+  hal::CanBus bus;
+  ASSERT_EQ(bus.open("loop:stop-test"), hal::CanBusStatus::kOk);
+  std::atomic<bool> stop{false};
+  std::thread t([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    stop = true;
+  });
+  const auto t0 = std::chrono::steady_clock::now();
+  hal::CanFrame f;
+  EXPECT_EQ(bus.receive(f, 60.0, stop), hal::CanBusStatus::kStopped);
+  t.join();
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+  stop = false;
+  EXPECT_EQ(bus.receive(f, 0.05, stop), hal::CanBusStatus::kTimeout);  // no flag: the timeout as before
+}
+
+TEST(RunDirectory, AReRunRemovesItsStaleOutputsAndNothingElse) {
+  const ScratchDir d;
+  const std::string dir = d / "run";
+  {
+    tools::RunDirectory r(dir);
+    tools::write_text_file(r.path("a.csv"), "a\n");
+    tools::write_text_file(r.path("b.csv"), "b\n");
+    r.finish({{"command", "test"}});
+    EXPECT_EQ(r.outputs(), (std::vector<std::string>{"a.csv", "b.csv"}));
+  }
+  put(dir + "/mine.txt", "the user's\n");
+  {
+    tools::RunDirectory r(dir);
+    EXPECT_FALSE(fs::exists(dir + "/summary.json"));  // removed when the run starts
+    tools::write_text_file(r.path("b.csv"), "b2\n");
+    r.finish({{"command", "test"}});
+    EXPECT_EQ(r.removed(), (std::vector<std::string>{"a.csv"}));
+  }
+  EXPECT_FALSE(fs::exists(dir + "/a.csv"));
+  EXPECT_EQ(slurp(dir + "/b.csv"), "b2\n");
+  EXPECT_EQ(slurp(dir + "/mine.txt"), "the user's\n");
+  std::ifstream in(dir + "/summary.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["outputs"], nlohmann::json::array({"b.csv"}));
+  // A manifest naming a path outside the directory is not followed.
+  put(d / "outside.txt", "keep\n");
+  put(dir + "/.sdins-outputs.json", R"({"files": ["../outside.txt", "/etc/hostname", "b.csv"]})");
+  {
+    tools::RunDirectory r(dir);
+    r.finish({{"command", "test"}});
+  }
+  EXPECT_EQ(slurp(d / "outside.txt"), "keep\n");
+  EXPECT_FALSE(fs::exists(dir + "/b.csv"));  // listed, not written again: stale
+  // A run that does not finish (an error, SIGINT) lists what it wrote; the next complete run
+  // removes it when it does not write it again.
+  {
+    tools::RunDirectory r(dir);
+    tools::write_text_file(r.path("c.csv"), "c\n");
+  }
+  EXPECT_FALSE(fs::exists(dir + "/summary.json"));
+  {
+    tools::RunDirectory r(dir);
+    r.finish({{"command", "test"}});
+    EXPECT_EQ(r.removed(), (std::vector<std::string>{"c.csv"}));
+  }
+  EXPECT_FALSE(fs::exists(dir + "/c.csv"));
+  EXPECT_EQ(slurp(dir + "/mine.txt"), "the user's\n");
+}
+
+TEST(LcmInputCheck, NanPseudorangesAreCountedByTheTypeTable) {
+  sdins::gnss_raw_epoch_t m{};
+  m.t_s = 10.0;
+  m.gps_tow_s = 1000.0;
+  m.gps_week = 2200;
+  m.n_meas = 3;
+  for (int i = 0; i < 3; ++i) {
+    m.meas[i].prn = i + 1;
+    m.meas[i].pseudorange_m = 2.1e7 + i;
+    m.meas[i].pseudorange_rate_mps = 1.0;
+    m.meas[i].cn0_dbhz = 45.0;
+  }
+  m.meas[1].pseudorange_m = std::nan("");
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_GT(m.encode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  const hal::LcmTypeInfo* t = hal::lcm_channel_type("GNSS_RAW");
+  ASSERT_NE(t, nullptr);
+  ASSERT_NE(t->input, nullptr);
+  int dropped = 0;
+  EXPECT_EQ(t->input(buf.data(), buf.size(), dropped), hal::LcmInputStatus::kMeasurementsDropped);
+  EXPECT_EQ(dropped, 1);
+  EXPECT_EQ(hal::lcm_channel_type("NAV_SOLUTION")->input, nullptr);  // an output type
+}
+
+TEST(UdpScope, LocalByDefaultLanOnlyWhenAsked) {
+  hal::UdpAddress a;
+  std::string why;
+  ASSERT_TRUE(hal::parse_udp_address("43113", a, why)) << why;
+  EXPECT_FALSE(a.lan);
+  ASSERT_TRUE(hal::parse_udp_address("239.74.163.2:43113?scope=lan", a, why)) << why;
+  EXPECT_TRUE(a.lan);
+  EXPECT_EQ(a.group, "239.74.163.2");
+  ASSERT_TRUE(hal::parse_udp_address("[ff15::1]:43113?scope=lan&iface=lo", a, why)) << why;
+  EXPECT_EQ(a.iface, "lo");
+  EXPECT_NE(a.iface_index, 0u);
+  ASSERT_TRUE(hal::parse_udp_address("43113?scope=local", a, why)) << why;
+  EXPECT_FALSE(a.lan);
+  for (const char* bad : {"43113?scope=world", "43113?ttl=1", "43113?iface=lo", "43113?scope=lan&iface=nosuch9"}) {
+    EXPECT_FALSE(hal::parse_udp_address(bad, a, why)) << bad;
+    EXPECT_FALSE(why.empty());
+  }
 }

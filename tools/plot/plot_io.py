@@ -99,3 +99,15 @@ def save_figure(fig, path, **kwargs):
             _write_named(fig, target, kwargs)
     except OSError as e:
         raise OutputError(f"{path}: {e.strerror or e}") from e
+    _note_output(path)
+
+
+def _note_output(path):
+    """Names a figure put in place to the sdins command that ran this script (run_plot_script sets
+    SDINS_OUTPUTS_NOTE): its run directory's summary names every output of the run and removes a
+    previous run's outputs that this run did not write (docs/faults.md, "run directories")."""
+    note = os.environ.get("SDINS_OUTPUTS_NOTE")
+    if not note:
+        return
+    with open(note, "a", encoding="utf-8", errors="surrogateescape") as f:
+        f.write(os.path.abspath(path) + "\n")

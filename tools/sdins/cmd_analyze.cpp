@@ -86,7 +86,7 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
   namespace fs = std::filesystem;
   const fs::path out(out_dir);
   tools::require_distinct({out_dir}, {});
-  const tools::RunDirectory run_dir(out_dir);  // docs/faults.md: summary.json removed now, written last
+  tools::RunDirectory run_dir(out_dir);  // docs/faults.md: summary.json removed now, written last
   const double lat = sc.start.lat_deg * kDegToRad;
   json j;
   j["scenario"] = {{"name", sc.name}, {"duration_s", sc.duration_s}, {"lat_deg", sc.start.lat_deg},

@@ -31,19 +31,24 @@ void register_bus_sim(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "bus-sim", "Play a scenario's simulated IMU and GPS receiver onto a CAN bus for `sdins fsw`: in lockstep "
                  "(as fast as the flight software acknowledges, no frame dropped) or in real time.");
-  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT")->required();
+  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; append ?scope=lan to reach the network)")->required();
   add_scenario_options(sub, opt.scenario);
   auto* mode = sub->add_option_group("mode");
-  mode->add_flag("--lockstep", opt.lockstep, "wait for FSW_ACK: never more than --window IMU samples ahead");
-  mode->add_flag("--realtime", opt.realtime, "pace the IMU samples on CLOCK_MONOTONIC (clock_nanosleep)");
+  CLI::Option* lockstep = mode->add_flag("--lockstep", opt.lockstep, "wait for FSW_ACK: never more than --window IMU samples ahead");
+  CLI::Option* realtime = mode->add_flag("--realtime", opt.realtime, "pace the IMU samples on CLOCK_MONOTONIC (clock_nanosleep)");
   mode->require_option(1);
   sub->add_option("--window", opt.window, "lockstep: IMU samples allowed beyond the last acknowledged [samples]")
       ->capture_default_str()
-      ->check(CLI::Range(1, 65535));
-  sub->add_option("--speed", opt.speed, "realtime: time factor (2 = twice as fast)")->capture_default_str()->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 65535))
+      ->needs(lockstep);  // docs/faults.md: an option that would do nothing is refused
+  sub->add_option("--speed", opt.speed, "realtime: time factor (2 = twice as fast)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber)
+      ->needs(realtime);
   sub->add_option("--pace-every", opt.pace_every, "realtime: sleep before every N-th IMU sample [samples]")
       ->capture_default_str()
-      ->check(CLI::Range(1, 1000));
+      ->check(CLI::Range(1, 1000))
+      ->needs(realtime);
   sub->add_option("--ack-timeout", opt.ack_timeout_s,
                   "give up when no flight software answers / acknowledges for this long [s]")
       ->capture_default_str()

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "commands.hpp"
+#include "numeric_options.hpp"
 #include "tools/interrupt.hpp"
 #include "tools/output_file.hpp"
 #include "hal/can_bus.hpp"
@@ -201,11 +202,7 @@ void print_health(const hal::CanRxHealth& h) {
 }
 
 void print_bus_stats(const hal::CanBus& bus) {
-  const hal::CanBusStats& s = bus.stats();
-  std::printf("bus %s: sent=%llu received=%llu own_dropped=%llu malformed=%llu unsupported=%llu\n", bus.name().c_str(),
-              static_cast<unsigned long long>(s.sent), static_cast<unsigned long long>(s.received),
-              static_cast<unsigned long long>(s.own_dropped), static_cast<unsigned long long>(s.malformed),
-              static_cast<unsigned long long>(s.unsupported));
+  std::printf("bus %s: %s\n", bus.name().c_str(), hal::to_string(bus.stats()).c_str());
 }
 
 void drain(hal::CanRxAssembler& rx, long long& items) {
@@ -264,13 +261,19 @@ int run_dump() {
       throw std::runtime_error(opt.log + ": no valid candump frame in " + std::to_string(r.lines()) + " lines");
     return 0;
   }
+  const tools::InterruptPolling polling;  // SIGINT/SIGTERM end the dump with the counters so far
   hal::CanBus bus;
   if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
   std::fprintf(stderr, "sdins can dump: listening on %s\n", opt.bus.c_str());
   int rc = 0;
   while (opt.count <= 0 || frames < opt.count) {
     hal::CanFrame f;
-    const hal::CanBusStatus st = bus.receive(f, opt.timeout_s);
+    const hal::CanBusStatus st = bus.receive(f, opt.timeout_s, tools::interrupt_flag());
+    if (st == hal::CanBusStatus::kStopped) {
+      std::printf("%s: stopped\n", tools::interrupt_signal_name().c_str());
+      rc = tools::interrupt_exit_code();
+      break;
+    }
     if (st == hal::CanBusStatus::kTimeout) {
       std::printf("silent bus: no frame for %.3f s\n", opt.timeout_s);
       rc = opt.count > 0 ? 2 : 0;
@@ -301,14 +304,15 @@ int run_record() {
   long long n = 0;
   int rc = 0;
   while (opt.count <= 0 || n < opt.count) {
-    if (tools::interrupted()) {
+    hal::CanFrame f;
+    // docs/faults.md: a signal ends the wait at once; the frames received so far are kept.
+    const hal::CanBusStatus st = bus.receive(f, opt.timeout_s, tools::interrupt_flag());
+    if (st == hal::CanBusStatus::kStopped) {
+      std::printf("%s: recording stopped\n", tools::interrupt_signal_name().c_str());
       rc = tools::interrupt_exit_code();
       break;
     }
-    hal::CanFrame f;
-    const hal::CanBusStatus st = bus.receive(f, opt.timeout_s);
     if (st == hal::CanBusStatus::kTimeout) {
-      if (tools::interrupted()) continue;  // the signal cut the wait short
       std::printf("silent bus: no frame for %.3f s\n", opt.timeout_s);
       rc = opt.count > 0 ? 2 : 0;
       break;
@@ -330,29 +334,49 @@ int run_play() {
   if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
   using Clock = std::chrono::steady_clock;
   const Clock::time_point t0 = Clock::now();
-  bool have_first = false;
-  double log_t0 = 0.0;
-  hal::CanFrame f;
-  std::string iface;
   long long n = 0;
-  while ((opt.count <= 0 || n < opt.count) && r.next(f, iface)) {
-    if (opt.realtime) {
-      if (!have_first) {
-        log_t0 = f.timestamp_s;
-        have_first = true;
-      }
-      const double due_s = (f.timestamp_s - log_t0) / opt.speed;
-      std::this_thread::sleep_until(t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(due_s)));
-    } else if (opt.gap_s > 0.0 && n > 0) {
+  const auto send = [&](const hal::CanFrame& f, double play_s) {
+    if (opt.realtime)
+      std::this_thread::sleep_until(
+          t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(play_s / opt.speed)));
+    else if (opt.gap_s > 0.0 && n > 0)
       std::this_thread::sleep_for(std::chrono::duration<double>(opt.gap_s));
-    }
     const hal::CanBusStatus st = bus.send(f);
     if (st != hal::CanBusStatus::kOk)
       throw std::runtime_error("send frame " + std::to_string(n + 1) + ": " + hal::to_string(st) + ": " + bus.last_error());
     ++n;
+  };
+  // --realtime: the log's timestamps pass the replay reader's time-tag gate (hal::CandumpPacer): one
+  // wild timestamp neither stops the play nor sleeps for days (docs/faults.md).
+  hal::CandumpPacer pacer;
+  hal::CanFrame f;
+  std::string iface;
+  double play_s = 0.0;
+  bool log_left = true;
+  while (opt.count <= 0 || n < opt.count) {
+    if (!opt.realtime) {
+      if (!r.next(f, iface)) break;
+      send(f, 0.0);
+    } else if (pacer.pop(f, play_s)) {
+      send(f, play_s);
+    } else if (!log_left) {
+      break;
+    } else if (r.next(f, iface)) {
+      pacer.push(f);
+    } else {
+      pacer.finish();
+      log_left = false;
+    }
   }
   std::printf("played %lld frames from %s (%d lines, %d malformed)\n", n, opt.log.c_str(), r.lines(), r.bad_lines());
   for (const std::string& p : r.problems()) std::printf("  %s\n", p.c_str());
+  if (opt.realtime) {
+    const hal::TimeTagGateStats& g = pacer.stats();
+    std::printf("time tags: %llu outliers (sent without pacing), %llu new time bases",
+                static_cast<unsigned long long>(g.rejected()), static_cast<unsigned long long>(g.new_bases));
+    if (g.new_bases > 0) std::printf(" (last: a jump of %.6g s at %.6f)", g.last_new_base_jump_s, g.last_new_base_at_s);
+    std::printf("\n");
+  }
   print_bus_stats(bus);
   return r.error().empty() ? 0 : 1;
 }
@@ -361,7 +385,7 @@ int run_play() {
 
 void register_can(CLI::App& app) {
   CLI::App* can = app.add_subcommand("can", "CAN bus tools for the sdins IMU/GPS protocol (hal/can/sdins.dbc). Buses: "
-                                            "socketcan:IFACE, udp:PORT, udp:GROUP:PORT, loop:NAME.");
+                                            "socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; ?scope=lan: the network), loop:NAME.");
   can->require_subcommand(1);
 
   g_encode = can->add_subcommand("encode", "Fly a scenario's IMU and GPS receiver models and write the protocol frames "
@@ -379,24 +403,30 @@ void register_can(CLI::App& app) {
   src->add_option("--can", opt.bus, "bus to listen on");
   src->add_option("--log", opt.log, "candump log to decode");
   src->require_option(1);
-  g_dump->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent / the log ends)")->capture_default_str();
-  g_dump->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the dump [s]")->capture_default_str();
+  g_dump->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent / the log ends)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  g_dump->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the dump [s]")->capture_default_str()->check(tools::positive());
   g_dump->add_flag("--quiet", opt.quiet, "print only the counters");
 
   g_record = can->add_subcommand("record", "Record frames from a bus into a candump log.");
   g_record->add_option("--can", opt.bus, "bus to listen on")->required();
   g_record->add_option("--out", opt.out, "candump log to write")->required();
-  g_record->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent)")->capture_default_str();
-  g_record->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the recording [s]")->capture_default_str();
+  g_record->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  g_record->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the recording [s]")->capture_default_str()->check(tools::positive());
   g_record->add_option("--iface", opt.iface, "interface name in the log")->capture_default_str();
 
   g_play = can->add_subcommand("play", "Send the frames of a candump log onto a bus.");
   g_play->add_option("log", opt.log, "candump log")->required();
   g_play->add_option("--can", opt.bus, "bus to send on")->required();
-  g_play->add_option("--count", opt.count, "send only the first N frames (0: all)")->capture_default_str();
-  g_play->add_flag("--realtime", opt.realtime, "pace the frames by the log's timestamps");
-  g_play->add_option("--speed", opt.speed, "with --realtime: time factor (2 = twice as fast)")->capture_default_str()->check(CLI::PositiveNumber);
-  g_play->add_option("--gap", opt.gap_s, "without --realtime: pause between frames [s]")->capture_default_str()->check(CLI::NonNegativeNumber);
+  g_play->add_option("--count", opt.count, "send only the first N frames (0: all)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  CLI::Option* realtime = g_play->add_flag("--realtime", opt.realtime, "pace the frames by the log's timestamps");
+  g_play->add_option("--speed", opt.speed, "with --realtime: time factor (2 = twice as fast)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber)
+      ->needs(realtime);  // docs/faults.md: an option that would do nothing is refused
+  g_play->add_option("--gap", opt.gap_s, "without --realtime: pause between frames [s]")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber)
+      ->excludes(realtime);
 }
 
 int run_can() {

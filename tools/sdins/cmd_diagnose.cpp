@@ -471,7 +471,7 @@ int run_diagnose() {
 
   bool plots_failed = false;
   if (!opt.report.empty()) {
-    const tools::RunDirectory run_dir(opt.report);  // docs/faults.md: summary.json removed now, written last
+    tools::RunDirectory run_dir(opt.report);  // docs/faults.md: summary.json removed now, written last
     write_traces(run_dir.path("baseline.csv"), r.base);
     write_traces(run_dir.path("extended.csv"), r.extended);
     std::vector<std::string> files = {"diagnosis.json", "report.md", "baseline.csv", "extended.csv"};

@@ -34,13 +34,14 @@ void register_fsw(CLI::App& app) {
       "fsw", "Run the flight software fed by a CAN bus (IMU and GPS frames of hal/can/sdins.dbc), with LCM "
              "telemetry and log; answers `sdins bus-sim` with FSW_ACK. Exit 0: end of run; 2: silent bus; 130/143: "
              "stopped by SIGINT/SIGTERM (summary, log and --json complete).");
-  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT")->required();
+  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; append ?scope=lan to reach the network)")->required();
   add_fsw_run_options(sub, opt.run, "");
-  sub->add_flag("--realtime", opt.realtime,
+  CLI::Option* realtime = sub->add_flag("--realtime", opt.realtime,
                 "real-time mode: SCHED_FIFO when permitted, minor-frame execution times (overruns), IMU lateness");
   sub->add_option("--fifo-priority", opt.fifo_priority, "realtime: SCHED_FIFO priority")
       ->capture_default_str()
-      ->check(CLI::Range(1, 99));
+      ->check(CLI::Range(1, 99))
+      ->needs(realtime);  // docs/faults.md: an option that would do nothing is refused
   sub->add_option("--idle-timeout", opt.idle_timeout_s, "stop after this long without frames [s]")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
@@ -111,6 +112,11 @@ int run_fsw() {
   if (r.realtime && r.minor_frames_timed > 0)
     std::printf("realtime: longest minor frame %.6f s at INS time %.3f s (%s)\n", r.exec_max_s, r.exec_max_t_s,
                 r.exec_max_work.c_str());
+  std::printf("bus %s: %s\n", opt.bus.c_str(), hal::to_string(r.bus).c_str());
+  if (r.bus.foreign_dropped > 0)
+    std::printf("WARNING: %llu datagrams from other hosts dropped (the bus is local to this host; docs/can.md: "
+                "?scope=lan to take frames from the network)\n",
+                static_cast<unsigned long long>(r.bus.foreign_dropped));
   std::printf("wall time: %.3f s\n", r.wall_s);
   if (!opt.run.json.empty()) tools::write_json_file(opt.run.json, tools::to_json(r));
   if (r.exit == tools::FswExit::kStopped) return tools::interrupt_exit_code();

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "numeric_options.hpp"
 #include "tools/import_describe.hpp"
 #include "tools/importers.hpp"
 #include "tools/output_file.hpp"
@@ -58,7 +59,8 @@ void register_import(CLI::App& app) {
       ->check(CLI::Range(0, 7));
   sub->add_option("--max-fit-error", opt.imp.max_fit_error_m,
                   "largest position + clock error [m] of an almanac fitted to the broadcast ephemeris that is written")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(tools::positive());  // docs/faults.md: 0 or less wrote no almanac at all, exit 0
   sub->add_flag("--clip-gnss-to-imu", opt.imp.clip_gnss_to_imu,
                 "keep GNSS epochs and solutions only within the IMU's time span (+-1 s)");
   sub->add_option("--imu-clock-ratio", opt.imp.imu_clock_ratio,

@@ -47,6 +47,15 @@ struct ChannelSummary {
   std::uint64_t wrong_type = 0;     ///< fingerprint is not the channel's type
   std::uint64_t decode_failed = 0;  ///< a project type's fingerprint, but the bytes do not decode
   std::uint64_t unknown_type = 0;   ///< fingerprint of no project type (foreign channels)
+  /// The flight software's input conversion (the replay reader's): rejections by status, and GNSS
+  /// measurements removed from accepted epochs (non-finite pseudorange, rate or C/N0).
+  std::map<std::string, std::uint64_t> input_rejected;
+  std::uint64_t measurements_dropped = 0;
+  std::uint64_t input_rejected_total() const {
+    std::uint64_t n = 0;
+    for (const auto& [why, k] : input_rejected) n += k;
+    return n;
+  }
 
   std::string type_text() const {
     std::string s;
@@ -124,6 +133,13 @@ int run_info() {
       ++c.decode_failed;
       continue;
     }
+    if (type->input != nullptr) {
+      int dropped = 0;
+      const hal::LcmInputStatus in = type->input(ev.data, ev.data_len, dropped);
+      c.measurements_dropped += static_cast<std::uint64_t>(dropped);
+      if (in != hal::LcmInputStatus::kOk && in != hal::LcmInputStatus::kMeasurementsDropped)
+        ++c.input_rejected[hal::to_string(in)];
+    }
     if (!c.have_t || t_s < c.t_first_s) c.t_first_s = t_s;
     if (!c.have_t || t_s > c.t_last_s) c.t_last_s = t_s;
     c.have_t = true;
@@ -159,6 +175,9 @@ int run_info() {
                         {"wrong_type", c.wrong_type},
                         {"decode_failed", c.decode_failed},
                         {"unknown_type", c.unknown_type},
+                        {"input_rejected", c.input_rejected_total()},
+                        {"input_rejections", c.input_rejected},
+                        {"measurements_dropped", c.measurements_dropped},
                         {"event_timestamp_first_us", c.ts_first_us},
                         {"event_timestamp_last_us", c.ts_last_us}};
       if (c.have_t) {
@@ -181,9 +200,15 @@ int run_info() {
   for (const ChannelSummary& c : channels) {
     char span[64] = "-";
     if (c.have_t) std::snprintf(span, sizeof(span), "%.6f .. %.6f", c.t_first_s, c.t_last_s);
-    std::string rej = std::to_string(c.wrong_type + c.decode_failed);
-    if (c.wrong_type + c.decode_failed > 0)
-      rej += " (wrong_type " + std::to_string(c.wrong_type) + ", decode_failed " + std::to_string(c.decode_failed) + ")";
+    std::string rej = std::to_string(c.wrong_type + c.decode_failed + c.input_rejected_total());
+    if (c.wrong_type + c.decode_failed + c.input_rejected_total() > 0) {
+      rej += " (wrong_type " + std::to_string(c.wrong_type) + ", decode_failed " + std::to_string(c.decode_failed);
+      for (const auto& [why, k] : c.input_rejected) rej += ", " + why + " " + std::to_string(k);
+      rej += ")";
+    }
+    // docs/faults.md: measurements the flight software's input conversion removes are counted here.
+    if (c.measurements_dropped > 0)
+      rej += "; " + std::to_string(c.measurements_dropped) + " measurements with non-finite values dropped";
     std::printf("%-16s %10" PRIu64 "  %-30s %-28s %s\n", c.name.c_str(), c.messages, c.type_text().c_str(), span,
                 rej.c_str());
   }

@@ -1,5 +1,6 @@
 // sdins montecarlo: N seeded runs of a scenario through the fsw executive with the 15- and/or
 // 24-state filter; per-epoch statistics across runs (CSV), consistency (NEES) and a JSON summary.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -30,7 +31,12 @@ std::vector<fsw::FilterModel> parse_models(const std::string& text) {
   std::vector<fsw::FilterModel> models;
   std::stringstream ss(text);
   std::string item;
-  while (std::getline(ss, item, ',')) models.push_back(parse_model(item, "--models", kMonteCarloModels));
+  while (std::getline(ss, item, ',')) {
+    const fsw::FilterModel m = parse_model(item, "--models", kMonteCarloModels);
+    if (std::find(models.begin(), models.end(), m) != models.end())  // it would be flown and written twice
+      throw std::runtime_error("--models: model '" + item + "' is given twice in '" + text + "'");
+    models.push_back(m);
+  }
   if (models.empty()) throw std::runtime_error("--models: no model given");
   return models;
 }

@@ -360,6 +360,10 @@ int run_paper_body() {
   tools::throw_if_interrupted("paper stopped before its summary; no summary.json written");
   run_dir->finish(summary);  // the completion marker; the figures below are drawn from it
   const bool plots_failed = opt.plots && run_plot_script("plot_paper.py", "\"" + out.string() + "\"") != 0;
+  if (opt.plots) {
+    write_report(out, summary);  // its figure list: this run's figures (a previous run's were removed)
+    run_dir->finish(summary);    // the summary names the figures too (docs/faults.md)
+  }
   std::printf("\nclaims:\n");
   for (const auto& c : summary["claims"])
     std::printf("  %-24s %s\n", c["id"].get<std::string>().c_str(), c["verdict"].get<std::string>().c_str());

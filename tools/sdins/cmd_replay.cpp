@@ -44,7 +44,21 @@ void register_replay(CLI::App& app) {
                 "`sdins fsw`): the frames go through the receive path of `sdins fsw`, rejections counted as there, "
                 "receive times from the log's timestamps");
   add_fsw_run_options(sub, opt.run, "none");
-  sub->add_option("--outages", opt.outages,
+  sub->add_option_function<std::vector<double>>(
+         "--outages",
+         [](const std::vector<double>& v) {
+           // docs/faults.md: a combination that would withhold nothing (or everything) is refused.
+           const auto bad = [&](const std::string& rule) {
+             throw CLI::ValidationError("--outages", "LENGTH " + CLI::detail::to_string(v[0]) + ", PERIOD " +
+                                                         CLI::detail::to_string(v[1]) + ", FIRST " +
+                                                         CLI::detail::to_string(v[2]) + ": " + rule);
+           };
+           if (!(v[0] > 0.0)) bad("LENGTH must be > 0 s (nothing would be withheld)");
+           if (!(v[1] > 0.0)) bad("PERIOD must be > 0 s");
+           if (v[0] > v[1]) bad("LENGTH must not exceed PERIOD (LENGTH = PERIOD withholds every epoch after FIRST)");
+           if (!(v[2] >= 0.0)) bad("FIRST must be >= 0 s (it counts from the initialisation)");
+           opt.outages = v;
+         },
                   "withhold GNSS (raw epochs and solutions) for LENGTH s every PERIOD s from FIRST s after the "
                   "initialisation, to score the coasting solution against a reference (LENGTH PERIOD FIRST [s]; default: "
                   "none)")
@@ -214,6 +228,10 @@ int run_replay() {
       std::printf(" (last: a jump of %.6f s at t = %.6f s)", st.last_time_base_jump_s, st.last_time_base_at_s);
     std::printf("\n");
   }
+  if (st.gnss.measurements_dropped > 0)
+    std::printf("GNSS: %llu measurements with non-finite values (pseudorange, rate or C/N0) dropped from accepted "
+                "epochs\n",
+                static_cast<unsigned long long>(st.gnss.measurements_dropped));
   if (opt.outages.size() == 3)
     std::printf("GNSS outages: %.1f s every %.1f s from %.1f s after initialisation, %llu inputs withheld\n",
                 opt.outages[0], opt.outages[1], opt.outages[2], static_cast<unsigned long long>(withheld));
@@ -233,6 +251,7 @@ int run_replay() {
     j["inputs"] = {{"delivered", st.delivered},
                    {"imu_accepted", st.imu.accepted()},
                    {"gnss_accepted", st.gnss.accepted()},
+                   {"gnss_measurements_dropped", st.gnss.measurements_dropped},
                    {"gnss_pvt_accepted", st.gnss_pvt.accepted()},
                    {"gnss_raw_not_used", raw_not_used},
                    {"gnss_withheld", withheld},

@@ -219,10 +219,6 @@ int run_sim() {
     }
   }
   if (sink.encode_failures() != 0) throw std::runtime_error("messages that did not encode: " + std::to_string(sink.encode_failures()));
-  check(sink.close(), "the log (final flush)");
-  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  std::error_code ec;
-  const auto bytes = std::filesystem::file_size(opt.log, ec);
 
   // Sidecar: what was simulated. No wall-clock data, so the same command gives the same file.
   const std::vector<EffectEntry> on = effects_on(sc.effects, scenario_effects, cli_effects);
@@ -259,8 +255,16 @@ int run_sim() {
   j["time_scales"] =
       "IMU, GNSS_RAW and GPS_ALMANAC t_s: navigation time (IMU time tags = true time + imu_gnss_time_offset); "
       "TRUTH t_s: true time";
+  // docs/faults.md: the log and its sidecar, both or neither. The sidecar is complete in its
+  // temporary file before the log is put in place; a failure up to here leaves neither.
   const std::string sidecar = opt.log + ".json";
-  tools::write_text_file(sidecar, j.dump(2) + "\n");
+  tools::TextOutput sidecar_out(sidecar);
+  sidecar_out.os() << j.dump(2) << "\n";
+  check(sink.close(), "the log (final flush)");
+  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(opt.log, ec);
+  sidecar_out.commit();
 
   std::string fx;
   for (const EffectEntry& e : on) {

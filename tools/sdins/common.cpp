@@ -1,13 +1,17 @@
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <stdexcept>
 
 #include "commands.hpp"
 #include "cfg/data_dir.hpp"
 #include "cfg/flight_config.hpp"
+#include "hal/output_file.hpp"
 
 namespace sdins {
 
@@ -106,8 +110,20 @@ int run_plot_script(const std::string& script, const std::string& args) {
     std::fprintf(stderr, "sdins: plot script %s not found\n", path.c_str());
     return 1;
   }
-  const std::string cmd = std::string(SDINS_PYTHON) + " " + shell_quote(path) + " " + args;
+  // The script names each figure it puts in place in a note file; they become outputs of this run
+  // (hal::note_output: tools::RunDirectory's summary names them, docs/faults.md).
+  char note[] = "/tmp/sdins-plot-outputs.XXXXXX";
+  const int nfd = ::mkstemp(note);
+  if (nfd >= 0) ::close(nfd);
+  const std::string env = nfd >= 0 ? "SDINS_OUTPUTS_NOTE=" + shell_quote(note) + " " : std::string();
+  const std::string cmd = env + std::string(SDINS_PYTHON) + " " + shell_quote(path) + " " + args;
   const int rc = std::system(cmd.c_str());
+  if (nfd >= 0) {
+    std::ifstream in(note);
+    for (std::string line; std::getline(in, line);)
+      if (!line.empty()) hal::note_output(line);
+    ::unlink(note);
+  }
   return rc == 0 ? 0 : 1;
 }
 

@@ -353,10 +353,12 @@ CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig&
                         {"final_filter_sigma_deg", enu(s.att_filter_sigma_rad[last], fsw::kRadToDeg)},
                         {"u_sigma_after_first_turn_deg", s.att_std_rad[aft][2] * fsw::kRadToDeg},
                         {"first_turn_end_s", s.t_s[aft]},
-                        {"mean_nees", s.mean_nees},
+                        {"mean_nees", s.nees_measured() ? json(s.mean_nees) : json(nullptr)},
+                        {"nees_measured", s.nees_measured()},
+                        {"nees_epochs", s.nees_epochs},
                         {"nees_bounds", {s.nees_bounds[0], s.nees_bounds[1]}},
                         {"nees_dof", 9},
-                        {"mean_nees_att", s.mean_nees_att},
+                        {"mean_nees_att", s.nees_measured() ? json(s.mean_nees_att) : json(nullptr)},
                         {"nees_att_bounds", {s.nees_att_bounds[0], s.nees_att_bounds[1]}},
                         {"nees_from_s", s.nees_from_s},
                         {"final_pos_rms_m", s.pos_rms_m[last]},
@@ -494,11 +496,22 @@ void print_case(const CaseResult& r) {
               "95% bounds");
   for (const auto& m : r.models) {
     const auto& f = m["final_residual_sigma_deg"];
-    std::printf("%-6s %5d %8.5f %8.5f %8.5f deg %10.5f %8.2f [%6.2f, %6.2f]\n", m["model"].get<std::string>().c_str(),
+    char nees[32];
+    if (m["mean_nees"].is_number())
+      std::snprintf(nees, sizeof nees, "%8.2f", m["mean_nees"].get<double>());
+    else
+      std::snprintf(nees, sizeof nees, "%8s", "-");
+    std::printf("%-6s %5d %8.5f %8.5f %8.5f deg %10.5f %s [%6.2f, %6.2f]\n", m["model"].get<std::string>().c_str(),
                 m["runs"].get<int>(), f["E"].get<double>(), f["N"].get<double>(), f["U"].get<double>(),
-                m["u_sigma_after_first_turn_deg"].get<double>(), m["mean_nees"].get<double>(),
-                m["nees_bounds"][0].get<double>(), m["nees_bounds"][1].get<double>());
+                m["u_sigma_after_first_turn_deg"].get<double>(), nees, m["nees_bounds"][0].get<double>(),
+                m["nees_bounds"][1].get<double>());
   }
+  for (const auto& m : r.models)
+    if (!m["nees_measured"].get<bool>()) {
+      std::printf("NEES not measured: the flight ends before the NEES window starts (t >= %.0f s)\n",
+                  m["nees_from_s"].get<double>());
+      break;
+    }
   const auto& t = r.timing;
   std::printf("wall %.1f s (truth %.2f s; cpu: IMU/GPS models %.1f s, mechanization %.1f s, EKF %.1f s), %.0fx real time\n",
               t["wall_s"].get<double>(), t["truth_generation_s"].get<double>(), t["imu_gps_models_cpu_s"].get<double>(),

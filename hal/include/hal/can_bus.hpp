@@ -5,8 +5,10 @@
 //                       the kernel; open() returns kNoSupport with the reason where it is missing.
 //   udp:PORT            UDP multicast speaking python-can's `udp_multicast` wire format (one
 //                       msgpack map per frame) on python-can's default group
-//                       ff15:7079:7468:6f6e:6465:6d6f:6d63:6173 (IPv6), hop limit 1, so
-//                       `can.Bus(interface="udp_multicast", port=PORT)` is a peer.
+//                       ff15:7079:7468:6f6e:6465:6d6f:6d63:6173 (IPv6). Local to this host by
+//                       default (hop limit 0, datagrams from other hosts counted and dropped);
+//                       udp:PORT?scope=lan[&iface=IFACE]: hop limit 1 and every sender, so
+//                       `can.Bus(interface="udp_multicast", port=PORT)` on the LAN is a peer.
 //   udp:GROUP:PORT      the same on another group, e.g. udp:239.74.163.2:43113 (python-can's
 //                       IPv4 default) or udp:[ff15::1234]:43113.
 //   loop:NAME           in-process bus: every CanBus opened on the same NAME in this process
@@ -18,6 +20,7 @@
 // in words (with the errno text where there is one).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -36,6 +39,7 @@ enum class CanBusStatus : std::uint8_t {
   kBadFrame,    ///< send: invalid identifier or length
   kTxBusy,      ///< send: the transmit queue stayed full for the send timeout
   kIoError,     ///< any other system call failure
+  kStopped,     ///< receive(f, timeout, stop): the stop flag was set while waiting
 };
 const char* to_string(CanBusStatus s);
 
@@ -47,7 +51,10 @@ struct CanBusStats {
   std::uint64_t unsupported = 0;       ///< remote and error frames (the protocol uses neither)
   std::uint64_t queue_dropped = 0;     ///< loop: frames lost because a receiver's queue was full; socketcan:
                                        ///< frames the kernel dropped, this socket's buffer full (SO_RXQ_OVFL)
+  std::uint64_t foreign_dropped = 0;   ///< udp scope=local: datagrams from another host, dropped
 };
+/// "sent=.. received=.. own_dropped=.. foreign_dropped=.. malformed=.. unsupported=.. queue_dropped=.."
+std::string to_string(const CanBusStats& s);
 
 /// One transport backend (see the table above). CanBus owns one.
 class CanTransport {
@@ -81,6 +88,9 @@ class CanBus {
   CanBusStatus send(const CanFrame& f);
   /// The next frame from another node, with its receive time in timestamp_s (Unix time, s).
   CanBusStatus receive(CanFrame& f, double timeout_s);
+  /// The same, but the wait is cut short (kStopped) within kCanStopCheck_s of stop being set (e.g. by
+  /// a SIGINT handler: a recorder keeps what it received and ends at once, docs/faults.md).
+  CanBusStatus receive(CanFrame& f, double timeout_s, const std::atomic<bool>& stop);
   /// A descriptor that polls readable when receive() has a frame (-1 when closed).
   int fd() const;
   void close();
@@ -102,5 +112,7 @@ class CanBus {
 inline constexpr double kCanSendTimeout_s = 0.1;
 /// Receive buffer socketcan: asks for [bytes] (a CAN FD frame takes about 1 KiB of it in the kernel).
 inline constexpr int kSocketCanRxBufferBytes = 4 << 20;
+/// How often receive(f, timeout, stop) looks at the stop flag while waiting [s].
+inline constexpr double kCanStopCheck_s = 0.05;
 
 }  // namespace hal

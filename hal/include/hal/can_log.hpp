@@ -12,6 +12,7 @@
 #include <array>
 #include <cstdint>
 #include <cstdio>
+#include <deque>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "hal/output_file.hpp"
 
 #include "hal/can_frame.hpp"
+#include "hal/time_tag_gate.hpp"
 
 namespace hal {
 
@@ -101,6 +103,32 @@ class CandumpWriter {
   int frames_ = 0;
   std::string error_;
   std::string line_;
+};
+
+/// Log time -> play time for a player that paces frames by their timestamps (`sdins can play
+/// --realtime`, docs/faults.md). The timestamps go through the replay reader's time-tag gate
+/// (hal::TimeTagGate, 2 s ahead / 1 s behind): only the steps between accepted tags within that band
+/// advance the play clock. One wild timestamp (a day ahead) costs no sleep: the frame is still sent,
+/// at the play time of the frame before it, and counted (stats().outliers); a sustained jump (a new
+/// time base, counted) is a step of 0; a step backwards is no pause. The frames come out in log order.
+class CandumpPacer {
+ public:
+  CandumpPacer();
+  /// One frame of the log; then pop() the frames it released (the gate may hold a few).
+  void push(const CanFrame& frame);
+  /// End of the log: releases what is still held.
+  void finish();
+  /// The next released frame and its play time [s after the first frame].
+  bool pop(CanFrame& frame, double& play_s);
+  const TimeTagGateStats& stats() const { return filter_.stats(); }
+
+ private:
+  void release(CanFrame&& f);
+  TimeTagFilter<CanFrame> filter_;
+  std::deque<std::pair<CanFrame, double>> ready_;
+  bool have_last_ = false;
+  double last_t_s_ = 0.0;
+  double play_s_ = 0.0;
 };
 
 }  // namespace hal

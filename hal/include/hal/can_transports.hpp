@@ -11,6 +11,7 @@
 #include "hal/can_bus.hpp"
 
 struct canfd_frame;  // <linux/can.h>
+struct sockaddr_storage;  // <sys/socket.h>
 
 namespace hal {
 
@@ -41,7 +42,8 @@ class SocketCanTransport final : public CanTransport {
 inline constexpr const char* kUdpDefaultGroupV6 = "ff15:7079:7468:6f6e:6465:6d6f:6d63:6173";
 inline constexpr const char* kUdpDefaultGroupV4 = "239.74.163.2";
 inline constexpr int kUdpDefaultPort = 43113;
-inline constexpr int kUdpHopLimit = 1;
+inline constexpr int kUdpHopLimit = 1;       ///< scope=lan: python-can's hop limit (the local segment)
+inline constexpr int kUdpLocalHopLimit = 0;  ///< scope=local (the default): the datagrams never leave the host
 inline constexpr std::size_t kUdpMaxDatagram = 4096;  ///< python-can's receive buffer
 
 /// One frame as python-can's pack_message() writes it: a msgpack map of timestamp,
@@ -55,10 +57,21 @@ enum class UdpUnpack : std::uint8_t { kOk, kMalformed, kUnsupported };
 UdpUnpack udp_unpack(const std::uint8_t* data, std::size_t n, CanFrame& f, double& sender_timestamp_s,
                      std::string& why);
 
-/// Parsed "udp:" argument: PORT, GROUP:PORT or [GROUP]:PORT.
+/// Parsed "udp:" argument: PORT, GROUP:PORT or [GROUP]:PORT, optionally followed by
+/// "?scope=local" (the default) or "?scope=lan[&iface=IFACE]" (docs/can.md, "Who can talk to the bus").
+///  - local: hop limit / TTL 0 (the kernel loops the datagrams back to this host's members and never
+///    transmits them); IPv4 groups are joined and sent on the loopback interface; IPv6 groups on the
+///    default multicast interface (Linux does not deliver IPv6 multicast over lo), with hop limit 0;
+///    a datagram whose source address is not an address of this host is counted
+///    (CanBusStats::foreign_dropped) and dropped.
+///  - lan: python-can's behaviour: hop limit 1, group joined on IFACE (default: the default multicast
+///    interface), every sender accepted.
 struct UdpAddress {
   std::string group;
   int port = 0;
+  bool lan = false;
+  std::string iface;         ///< scope=lan only; "" = the default multicast interface
+  unsigned iface_index = 0;  ///< if_nametoindex(iface), 0 for the default
 };
 bool parse_udp_address(const std::string& arg, UdpAddress& out, std::string& why);
 
@@ -77,6 +90,12 @@ class UdpMulticastTransport final : public CanTransport {
   int family_ = 0;
   std::vector<std::uint8_t> own_addr_;  ///< tx_fd_'s local sockaddr bytes (address + port)
   std::vector<std::uint8_t> buf_;
+  bool lan_ = false;
+  /// scope=local: whether a source address is one of this host's (getifaddrs, refreshed at most once
+  /// a second when an unknown source is seen: addresses can be added while the bus is open).
+  bool source_is_local(const sockaddr_storage& src);
+  std::vector<std::vector<std::uint8_t>> local_addrs_;  ///< 4 or 16 address bytes each
+  double local_addrs_at_s_ = -1.0;
 };
 
 // ---- in-process loopback --------------------------------------------------------------------------

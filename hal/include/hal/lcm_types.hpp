@@ -59,6 +59,11 @@ struct LcmTypeInfo {
   LcmInputStatus (*time)(const void* data, std::size_t len, double& t_s) = nullptr;
   /// Decodes and flattens the message into row (cleared first).
   LcmInputStatus (*row)(const void* data, std::size_t len, LcmRow& row) = nullptr;
+  /// For the flight software's input types (IMU, GNSS_RAW, GPS_ALMANAC, GNSS_PVT): decodes and runs
+  /// the input conversion the replay reader applies (hal::from_msg, default limits); values_dropped
+  /// is the number of GNSS measurements removed from an accepted epoch (non-finite values). nullptr
+  /// for the output types. `sdins log info` reports the result per channel (docs/faults.md).
+  LcmInputStatus (*input)(const void* data, std::size_t len, int& values_dropped) = nullptr;
 };
 
 /// Every project message type (sent on a channel).

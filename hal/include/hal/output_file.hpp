@@ -110,4 +110,10 @@ void set_unnamed_temporaries(bool on) noexcept;
 /// Removes every registered temporary file (async-signal-safe: unlink only). For signal handlers.
 void remove_pending_outputs() noexcept;
 
+/// Every output this process put in place (commit() succeeded), as the paths were given, in commit
+/// order; and outputs written by other means (e.g. a plot script's figures) added by note_output().
+/// tools::RunDirectory names a run's outputs from it (docs/faults.md, "run directories").
+std::vector<std::string> committed_outputs();
+void note_output(const std::string& path);
+
 }  // namespace hal

@@ -301,6 +301,8 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
     << " GNSS solutions, " << out.almanac.size()
     << " almanac entries, " << out.truth.size() << " truth samples; rejected: " << s.rejected() << " inputs, "
     << rd.log_stats().total_rejections() << " log events, " << truth_rejected << " truth samples";
+  if (s.gnss.measurements_dropped > 0)  // docs/faults.md: counted where the user looks
+    r << "; " << s.gnss.measurements_dropped << " GNSS measurements with non-finite values dropped";
   if (out.damaged_stretches > 0)
     r << "; " << out.damaged_stretches << " damaged stretches (IMU gaps > " << kDamagedImuGap_s
       << " s) excluded: diagnosed on the longest undamaged stretch, " << out.excluded_imu_samples

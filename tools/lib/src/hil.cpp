@@ -599,6 +599,7 @@ nlohmann::json to_json(const FswRunResult& r) {
   j["bus"] = {{"sent", r.bus.sent},
               {"received", r.bus.received},
               {"own_dropped", r.bus.own_dropped},
+              {"foreign_dropped", r.bus.foreign_dropped},
               {"malformed", r.bus.malformed},
               {"unsupported", r.bus.unsupported},
               {"queue_dropped", r.bus.queue_dropped}};

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -496,8 +497,11 @@ ModelStats reduce(const std::vector<RunResult>& results, std::size_t mi, fsw::Fi
       acc_att += s.nees_att_mean[e];
       ++cnt;
     }
-  s.mean_nees = cnt ? acc / cnt : 0.0;
-  s.mean_nees_att = cnt ? acc_att / cnt : 0.0;
+  // docs/faults.md: a flight shorter than the window has no NEES; NaN (JSON null, "not measured"), never
+  // a 0 that would sit inside the bounds as if measured.
+  s.nees_epochs = cnt;
+  s.mean_nees = cnt ? acc / cnt : std::numeric_limits<double>::quiet_NaN();
+  s.mean_nees_att = cnt ? acc_att / cnt : std::numeric_limits<double>::quiet_NaN();
   s.nees_bounds = chi2_mean_bounds(9, s.runs);
   s.nees_att_bounds = chi2_mean_bounds(3, s.runs);
   // Sensor residuals: RMS across runs and the mean filter sigma.

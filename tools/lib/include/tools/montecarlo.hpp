@@ -148,6 +148,8 @@ struct ModelStats {
   double mean_nees = 0.0;        ///< time average of nees_mean over t >= nees_from_s
   double mean_nees_att = 0.0;
   double nees_from_s = 0.0;
+  int nees_epochs = 0;           ///< epochs at t >= nees_from_s; 0: NEES not measured (mean_nees NaN)
+  bool nees_measured() const { return nees_epochs > 0; }
   std::array<double, 2> nees_bounds{};      ///< 95% bounds of the run-averaged 9-dof NEES
   std::array<double, 2> nees_att_bounds{};  ///< ... of the 3-dof attitude NEES
   std::vector<SensorResidual> sensors;      ///< residual = RMS across runs, sigma = mean filter sigma

@@ -42,18 +42,43 @@ void write_text_file(const std::string& path, std::string_view content);
 /// JSON (dump(2) and a newline).
 void write_json_file(const std::string& path, const nlohmann::json& j);
 
+/// A directory of results (docs/faults.md, "run directories"). The outputs of a run are exactly the
+/// files its summary.json names ("outputs"): every file this process put in place inside the
+/// directory after the RunDirectory was created (hal::committed_outputs(), figures of the plot
+/// scripts included). A manifest (.sdins-outputs.json) lists what the last complete run wrote; the
+/// next run removes those of them it did not write again (stale results of a run with more models).
+/// Files the tool did not write (not in a manifest) are never touched.
 class RunDirectory {
  public:
-  /// Creates the directory and removes a previous run's summary.json (the completion marker).
+  /// Creates the directory, reads the previous run's manifest and removes its summary.json (the
+  /// completion marker).
+  /// Takes an exclusive lock on the directory (flock): a second run into the same directory while
+  /// this one is alive is refused, naming it.
   explicit RunDirectory(const std::string& dir);
+  ~RunDirectory();
+  RunDirectory(const RunDirectory&) = delete;
+  RunDirectory& operator=(const RunDirectory&) = delete;
   std::string path(const std::string& name) const;
-  /// Writes summary.json last, atomically: the run is complete.
-  void finish(const nlohmann::json& summary) const;
+  /// Removes the previous run's outputs this run did not write, writes the manifest, then
+  /// summary.json last, atomically (with "outputs" added): the run is complete. May be called again
+  /// after more outputs (figures drawn from the summary): the summary and the manifest are renewed.
+  void finish(nlohmann::json summary);
   const std::string& dir() const { return dir_; }
+  /// This run's outputs so far, relative to the directory, sorted (summary.json excluded).
+  std::vector<std::string> outputs() const;
+  /// Files of the previous run removed by finish() (relative names).
+  const std::vector<std::string>& removed() const { return removed_; }
   static constexpr const char* kMarker = "summary.json";
+  static constexpr const char* kManifest = ".sdins-outputs.json";
 
  private:
   std::string dir_;
+  std::size_t first_output_ = 0;       ///< index into hal::committed_outputs() at creation
+  std::vector<std::string> previous_;  ///< the previous manifest's files
+  std::vector<std::string> removed_;
+  int lock_fd_ = -1;  ///< the directory, flock()ed while the run lasts
+  bool finished_ = false;
+  void write_manifest(const std::vector<std::string>& files) const;
 };
 
 }  // namespace tools
