@@ -14,6 +14,7 @@
 #include "tools/diagnosis.hpp"
 #include "tools/fsw_report.hpp"
 #include "tools/flight_config.hpp"
+#include "tools/diagnosis_chain.hpp"
 #include "tools/diagnosis_intervals.hpp"
 #include "tools/diagnosis_separation.hpp"
 #include <chrono>
@@ -30,6 +31,7 @@ struct Options {
   std::string intervals = "profile";
   std::vector<std::string> profile;
   bool profile_only = false;
+  bool no_chain = false;
 } opt;
 
 nlohmann::json innovations_json(const tools::InnovationStats& s) {
@@ -182,6 +184,126 @@ void print_disagreement(double deviance) {
               deviance, tools::kModelAgreementDeviance);
 }
 
+/// A separable finding's headline on the terminal: the profile's maximum when the interval is a
+/// profile (the filter's own figure beside it, labelled), else the filter's estimate.
+void print_finding_headline(const tools::Finding& f) {
+  const std::string name = std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component);
+  if (f.estimate_method == "profile_maximum")
+    std::printf("finding: %s = %.4g %s (profile-likelihood maximum), 95%% interval [%.4g, %.4g] %s%s; the filter's own "
+                "estimate %.4g +- %.3g %s (z^2 %.1f, p %.2g)\n",
+                name.c_str(), f.estimate, f.unit.c_str(), f.interval.lo, f.interval.hi, f.unit.c_str(),
+                f.interval.bounded ? "" : " (not bounded within the range searched)", f.filter_estimate, f.filter_sigma,
+                f.unit.c_str(), f.z2, f.p_value);
+  else
+    std::printf("finding: %s = %.4g +- %.3g %s (filter), 95%% interval [%.4g, %.4g] %s (%s) (z^2 %.1f, p %.2g)\n",
+                name.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.interval.lo, f.interval.hi, f.unit.c_str(),
+                f.interval.method.c_str(), f.z2, f.p_value);
+}
+
+/// A group member's "alone" value as shown: the profile's maximum with the filter's figure beside
+/// it when the member's interval is a profile, else the filter's estimate +- sigma.
+std::string member_headline(const tools::GroupMember& m) {
+  char b[160];
+  if (m.alone_interval.is_profile())
+    std::snprintf(b, sizeof b, "%.4g (profile maximum; filter %.4g +- %.3g)", m.alone_interval.estimate, m.alone_estimate,
+                  m.alone_sigma);
+  else
+    std::snprintf(b, sizeof b, "%.4g +- %.3g (filter)", m.alone_estimate, m.alone_sigma);
+  return b;
+}
+
+std::string finding_label(const tools::Finding& f) {
+  return std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component) +
+         (f.separable() ? "" : " (group of " + std::to_string(f.group.size()) + ")");
+}
+
+std::string applied_text(const std::vector<tools::AppliedCorrection>& applied) {
+  if (applied.empty()) return "nothing (the recording as given)";
+  std::string t;
+  for (const tools::AppliedCorrection& a : applied) t += (t.empty() ? "" : ", ") + a.name + " " + fmt(a.value, "%+.5g") + " " + a.unit;
+  return t;
+}
+
+/// The chain in the JSON (docs/diagnosis.md, "The chain").
+nlohmann::json chain_json(const tools::DiagnosisChain& ch) {
+  const auto corr = [](const tools::AppliedCorrection& a) {
+    return nlohmann::json{{"candidate", a.name}, {"value", a.value}, {"total", a.total}, {"unit", a.unit},
+                          {"source", a.source}, {"stage", a.stage},
+                          {"from_group", a.from_group}};
+  };
+  nlohmann::json stages = nlohmann::json::array();
+  for (const tools::ChainStage& st : ch.stages) {
+    nlohmann::json before = nlohmann::json::array(), found = nlohmann::json::array();
+    for (const tools::AppliedCorrection& a : st.applied_before) before.push_back(corr(a));
+    for (const tools::Finding& f : st.findings)
+      found.push_back({{"candidate", std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component)},
+                       {"separable", f.separable()},
+                       {"estimate", f.estimate},
+                       {"estimate_method", f.estimate_method},
+                       {"filter_estimate", f.filter_estimate},
+                       {"filter_sigma", f.filter_sigma},
+                       {"interval_95", interval_json(f.interval)},
+                       {"statistic", f.z2},
+                       {"unit", f.unit}});
+    stages.push_back({{"stage", st.stage},
+                      {"applied_before", before},
+                      {"findings", found},
+                      {"baseline_log_likelihood", st.base_log_likelihood},
+                      {"common_measurements", st.common_measurements},
+                      {"baseline_nis_mean", st.base_nis},
+                      {"extended_nis_mean", st.extended_nis},
+                      {"extended_log_likelihood_gain", st.extended_gain},
+                      {"applied_after", st.applied_after.empty() ? nlohmann::json(nullptr) : nlohmann::json(st.applied_after)}});
+  }
+  nlohmann::json applied = nlohmann::json::array();
+  for (const tools::AppliedCorrection& a : ch.applied) applied.push_back(corr(a));
+  return {{"stages", stages}, {"applied", applied}, {"not_found_after_corrections", ch.vanished}};
+}
+
+void print_chain(const tools::DiagnosisChain& ch) {
+  for (const tools::ChainStage& st : ch.stages) {
+    std::string found;
+    for (const tools::Finding& f : st.findings)
+      found += (found.empty() ? "" : ", ") + finding_label(f) + (f.separable() ? " " + fmt(f.estimate, "%.4g") + " " + f.unit : "");
+    std::printf("chain stage %d, after %s: %s; baseline log-likelihood %.1f over %d measurements common to every stage "
+                "(extended %+.1f)%s\n",
+                st.stage, applied_text(st.applied_before).c_str(), found.empty() ? "no finding" : found.c_str(),
+                st.base_log_likelihood, st.common_measurements, st.extended_gain,
+                st.applied_after.empty() ? "" : ("; applies " + st.applied_after).c_str());
+  }
+  if (!ch.vanished.empty()) {
+    std::string v;
+    for (const std::string& n : ch.vanished) v += (v.empty() ? "" : ", ") + n;
+    std::printf("chain: not found once the corrections before them are applied (not reported): %s\n", v.c_str());
+  }
+}
+
+void chain_md(std::ostream& md, const tools::DiagnosisChain& ch) {
+  md << "## The chain: findings that survive their predecessors\n\n"
+        "After each timing or geometry finding the recording (or the antenna in the model) is corrected by it, at "
+        "the profile likelihood's maximum, and searched again; a finding is reported only if the search after every "
+        "correction before it still finds it (docs/diagnosis.md). The baseline log-likelihood is over the measurements "
+        "common to every stage.\n\n"
+        "| stage | applied before | found | baseline log-likelihood | extended model gain | applied after |\n"
+        "|---|---|---|---|---|---|\n";
+  for (const tools::ChainStage& st : ch.stages) {
+    std::string found;
+    for (const tools::Finding& f : st.findings)
+      found += (found.empty() ? "" : "; ") + finding_label(f) +
+               (f.separable() ? " " + fmt(f.estimate) + " " + f.unit + " " + interval_cell(f.interval) : "");
+    md << "| " << st.stage << " | " << applied_text(st.applied_before) << " | " << (found.empty() ? "nothing" : found)
+       << " | " << fmt(st.base_log_likelihood, "%.1f") << " (" << st.common_measurements << ") | "
+       << fmt(st.extended_gain, "%+.1f") << " | " << (st.applied_after.empty() ? "(end)" : st.applied_after) << " |\n";
+  }
+  md << "\n";
+  if (!ch.vanished.empty()) {
+    md << "Found at an earlier stage and not once the corrections before them were applied (side effects, not "
+          "reported): ";
+    for (std::size_t i = 0; i < ch.vanished.size(); ++i) md << (i ? ", " : "") << "`" << ch.vanished[i] << "`";
+    md << ".\n\n";
+  }
+}
+
 }  // namespace
 
 void register_diagnose(CLI::App& app) {
@@ -218,6 +340,9 @@ void register_diagnose(CLI::App& app) {
   sub->add_flag("--profile-only", opt.profile_only,
                "no search: only the baseline run and the --profile components on top of it, each with the filter's "
                "and the profile-likelihood interval (the coverage study, docs/diagnosis-intervals.md)");
+  sub->add_flag("--no-chain", opt.no_chain,
+               "search once: do not apply a timing or geometry finding (time offset, clock drift, lever arm) to the "
+               "recording and search again from the corrected data (docs/diagnosis.md, the chain)");
   sub->add_option("--filter-config", opt.filter_config,
                   "filter configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
                   "(raw or solutions), initialisation, priors and outage pattern of the diagnosis, applied on top of the "
@@ -244,12 +369,29 @@ int run_diagnose() {
   };
   if (opt.profile_only && opt.profile.empty()) throw std::runtime_error("--profile-only needs at least one --profile");
   tools::DiagnosisResult r;
+  tools::DiagnosisChain chain;
+  const bool chained = !opt.profile_only && !opt.no_chain;
   if (opt.profile_only) {
     r.baseline = fsw::to_string(cfg.baseline);
     r.base = tools::run_diagnosis_model(data, cfg, cfg.baseline_states);
     r.extended = r.base;
-  } else {
+  } else if (opt.no_chain) {
     r = tools::diagnose(data, cfg, progress);
+  } else {
+    // The chain (docs/diagnosis.md): the last search on the corrected recording, its findings those
+    // that survived every correction before them, scored against the recording as given.
+    chain = tools::diagnose_chain(data, cfg, progress);
+    r = chain.last;
+    r.findings = chain.findings;
+    r.base = chain.first.base;
+    std::vector<std::string> ext;
+    for (const tools::AppliedCorrection& a : chain.applied)
+      if (std::find(ext.begin(), ext.end(), a.name) == ext.end()) ext.push_back(a.name + "(applied)");
+    ext.insert(ext.end(), r.extended_model.begin(), r.extended_model.end());
+    r.extended_model = ext;
+    tools::compare_likelihood(r.base, r.extended);
+    data = chain.corrected;
+    cfg = chain.corrected_cfg;
   }
   tools::throw_if_interrupted("diagnose stopped; no output written");
   if (!r.base.initialised) throw std::runtime_error("the flight software never initialised on this log");
@@ -326,7 +468,7 @@ int run_diagnose() {
   nlohmann::json findings = nlohmann::json::array();
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
     const tools::Finding& f = r.findings[fi];
-    const tools::ReportedInterval filter_iv = tools::filter_interval(f.estimate, f.sigma);
+    const tools::ReportedInterval filter_iv = tools::filter_interval(f.filter_estimate, f.filter_sigma);
     nlohmann::json cw = nlohmann::json::array();
     for (const auto& c : f.confounded_with) cw.push_back({{"candidate", c.first}, {"correlation", c.second}});
     nlohmann::json group = nlohmann::json::array();
@@ -335,6 +477,7 @@ int run_diagnose() {
                        {"correlation", m.correlation},
                        {"multiple_correlation", m.multiple_correlation},
                        {"alone_estimate", m.alone_estimate},
+                       {"alone_headline_estimate", m.alone_interval.is_profile() ? m.alone_interval.estimate : m.alone_estimate},
                        {"alone_sigma", m.alone_sigma},
                        {"alone_statistic", m.alone_z2},
                        {"alone_interval_95", interval_json(m.alone_interval)},
@@ -346,6 +489,9 @@ int run_diagnose() {
                         {"component", f.component},
                         {"estimate", f.estimate},
                         {"sigma", f.sigma},
+                        {"estimate_method", f.estimate_method},
+                        {"filter_estimate", f.filter_estimate},
+                        {"filter_sigma", f.filter_sigma},
                         {"unit", f.unit},
                         {"statistic", f.z2},
                         {"dof", f.dof},
@@ -359,6 +505,7 @@ int run_diagnose() {
     if (!f.separable()) findings.back()["separation"] = separation_json(seps[fi], trials, fi);
   }
   j["findings"] = findings;
+  j["chain"] = chained ? chain_json(chain) : nlohmann::json(nullptr);
   j["profiles"] = profiles;
   std::string ext_name = opt.baseline;
   for (const std::string& s : r.extended_model) ext_name += "+" + s;
@@ -415,23 +562,31 @@ int run_diagnose() {
                 heading_text(r.base.nav).c_str());
   std::printf("\n");
   tools::print_configuration_warnings(r.base.exec_health);
+  if (chained) print_chain(chain);
   if (r.findings.empty()) std::printf("no finding (threshold z^2 %.2f over %d components)\n", r.threshold_z2, r.tested);
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
     const tools::Finding& f = r.findings[fi];
     if (f.separable()) {
-      std::printf("finding: %s%s%s = %.4g +- %.3g %s (z^2 %.1f, p %.2g)\n", fsw::effect_info(f.effect).name,
-                  f.component.empty() ? "" : ".", f.component.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.z2,
-                  f.p_value);
-      std::printf("  95%% interval [%.4g, %.4g] %s (%s%s)\n", f.interval.lo, f.interval.hi, f.unit.c_str(),
-                  f.interval.method.c_str(), f.interval.bounded ? "" : ", not bounded within the range searched");
+      print_finding_headline(f);
       if (!f.interval.model_agrees) print_disagreement(f.interval.deviance_at_filter);
       continue;
     }
-    std::printf("finding: a group this data cannot separate (z^2 %.1f, %d dof, p %.2g); the cause is one of (or a mix "
-                "of):\n", f.z2, f.dof, f.p_value);
+    bool applied_member = false;  // the chain applied this group's most plausible member
+    for (const tools::AppliedCorrection& a : chain.applied)
+      applied_member = applied_member || (a.from_group && a.name == std::string(fsw::effect_info(f.effect).name) +
+                                                                         (f.component.empty() ? "" : "." + f.component));
+    if (applied_member) {
+      print_finding_headline(f);
+      std::printf("  applied by the chain as the group's most plausible member (plausibility >= %.2f under the priors; "
+                  "the next stage searched the corrected data: the chain above); the data alone do not separate:\n",
+                  tools::kChainMemberPlausibility);
+    } else {
+      std::printf("finding: a group this data cannot separate (z^2 %.1f, %d dof, p %.2g); the cause is one of (or a mix "
+                  "of):\n", f.z2, f.dof, f.p_value);
+    }
     for (const tools::GroupMember& m : f.group)
-      std::printf("  %-26s alone %.4g +- %.3g %s, 95%% %s = %+.1f prior sigma, plausibility %.2f, rho %+.4f\n",
-                  m.name.c_str(), m.alone_estimate, m.alone_sigma, m.unit.c_str(), interval_cell(m.alone_interval).c_str(), m.prior_z,
+      std::printf("  %-26s alone %s %s, 95%% %s = %+.1f prior sigma, plausibility %.2f, rho %+.4f\n",
+                  m.name.c_str(), member_headline(m).c_str(), m.unit.c_str(), interval_cell(m.alone_interval).c_str(), m.prior_z,
                   m.plausibility, m.correlation);
     const tools::Separation& sp = seps[fi];
     if (sp.predicted)
@@ -492,17 +647,21 @@ int run_diagnose() {
        << " are observable with this data (posterior variance <= " << cfg.max_variance_ratio
        << " x prior); the test is Wald chi-square(1) at a family-wise false-alarm rate of " << cfg.alpha
        << " (threshold z^2 = " << fmt(r.threshold_z2, "%.2f") << ").\n\n";
+    if (chained) chain_md(md, chain);
     md << "## Findings\n\n";
     if (r.findings.empty()) md << "None: the baseline model explains the data.\n\n";
     else {
-      md << "| effect | component | estimate | sigma | unit | 95% interval | z^2 | p | not separable from |\n"
-            "|---|---|---|---|---|---|---|---|---|\n";
+      md << "| effect | component | estimate | sigma | unit | 95% interval | the filter's own estimate | z^2 | p | not separable from |\n"
+            "|---|---|---|---|---|---|---|---|---|---|\n";
       for (const tools::Finding& f : r.findings) {
         std::string cw;
         for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
         md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | "
-           << (f.separable() ? fmt(f.estimate) : "group, below") << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "")
-           << " | " << f.unit << " | " << interval_cell(f.interval) << " | " << fmt(f.z2, "%.1f")
+           << (f.separable() ? fmt(f.estimate) + (f.estimate_method == "profile_maximum" ? " (profile maximum)" : "")
+                             : "group, below")
+           << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "") << " | " << f.unit << " | " << interval_cell(f.interval)
+           << " | " << (f.separable() ? fmt(f.filter_estimate) + " +- " + fmt(f.filter_sigma, "%.3g") : "") << " | "
+           << fmt(f.z2, "%.1f")
            << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
            << " | " << fmt(f.p_value, "%.2g") << " | " << cw << " |\n";
       }
@@ -524,10 +683,12 @@ int run_diagnose() {
         md << "**A group, not one cause.** The data fit each of these alone about equally well and cannot tell them "
               "apart; the finding is the group. Each member's estimate is what it alone would need; plausibility is "
               "relative, under the members' priors only.\n\n"
-              "| member | alone estimate | sigma | unit | alone 95% interval | prior sigmas | plausibility | correlation with the lead |\n"
+              "| member | alone estimate | the filter's alone estimate, sigma | unit | alone 95% interval | prior sigmas | plausibility | correlation with the lead |\n"
               "|---|---|---|---|---|---|---|---|\n";
         for (const tools::GroupMember& m : f.group)
-          md << "| " << m.name << " | " << fmt(m.alone_estimate) << " | " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
+          md << "| " << m.name << " | "
+             << (m.alone_interval.is_profile() ? fmt(m.alone_interval.estimate) + " (profile maximum)" : fmt(m.alone_estimate))
+             << " | " << fmt(m.alone_estimate) << " +- " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
              << " | " << interval_cell(m.alone_interval) << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
              << fmt(m.correlation, "%+.4f") << " |\n";
         md << "\n";
