@@ -15,6 +15,7 @@
 #include "tools/fsw_report.hpp"
 #include "tools/flight_config.hpp"
 #include "tools/diagnosis_chain.hpp"
+#include "tools/diagnosis_evidence.hpp"
 #include "tools/diagnosis_intervals.hpp"
 #include "tools/diagnosis_separation.hpp"
 #include <chrono>
@@ -304,6 +305,91 @@ void chain_md(std::ostream& md, const tools::DiagnosisChain& ch) {
   }
 }
 
+nlohmann::json evidence_json(const tools::RecordingEvidence& ev) {
+  nlohmann::json checks = nlohmann::json::array();
+  for (const tools::EvidenceCheck& c : ev.checks)
+    checks.push_back({{"finding", c.finding},
+                      {"source", c.source},
+                      {"evidence", c.evidence},
+                      {"tolerance", c.tolerance},
+                      {"unit", c.unit},
+                      {"finding_estimate", c.finding_estimate},
+                      {"finding_interval_95", {c.finding_lo, c.finding_hi}},
+                      {"contradicts", c.contradicts},
+                      {"note", c.note}});
+  nlohmann::json j;
+  j["imu_counter"] = ev.counter_samples > 0 ? nlohmann::json{{"samples", ev.counter_samples},
+                                                             {"nominal_rate_hz", ev.counter_rate_hz},
+                                                             {"tag_stretch_ppm", ev.counter_stretch_ppm},
+                                                             {"residual_rms_s", ev.counter_residual_rms_s}}
+                                            : nlohmann::json(nullptr);
+  j["clock_fit"] = ev.has_clock_fit ? nlohmann::json{{"summary", ev.summary_path},
+                                                     {"drift_ppm", ev.clock_fit_drift_ppm},
+                                                     {"residual_rms_s", ev.clock_fit_residual_rms_s}}
+                                    : nlohmann::json(nullptr);
+  j["summary_note"] = ev.summary_note;
+  j["imu_counter_note"] = ev.counter_note;
+  j["reference_lag"] = ev.has_reference_lag ? nlohmann::json{{"reference", ev.reference_kind},
+                                                             {"imu_lag_s", ev.reference_lag_s},
+                                                             {"correlation", ev.reference_correlation},
+                                                             {"intervals", ev.reference_samples}}
+                                            : nlohmann::json(nullptr);
+  j["checks"] = checks;
+  return j;
+}
+
+void print_evidence(const tools::RecordingEvidence& ev) {
+  if (ev.counter_samples > 0)
+    std::printf("evidence: the IMU's sample counter against its tags: stretch %+.1f ppm at a nominal %.0f Hz (%d samples, "
+                "residual %.2g s RMS)\n",
+                ev.counter_stretch_ppm, ev.counter_rate_hz, ev.counter_samples, ev.counter_residual_rms_s);
+  if (!ev.counter_note.empty()) std::printf("evidence: %s\n", ev.counter_note.c_str());
+  if (ev.has_clock_fit)
+    std::printf("evidence: the import's clock pair (%s): local clock drift %+.2f ppm against GPS\n", ev.summary_path.c_str(),
+                ev.clock_fit_drift_ppm);
+  if (ev.has_reference_lag)
+    std::printf("evidence: the IMU's rate against the reference's %s rate: IMU tags lag %+.4f s (correlation %.3f)\n",
+                ev.reference_kind.c_str(), ev.reference_lag_s, ev.reference_correlation);
+  for (const tools::EvidenceCheck& c : ev.checks)
+    std::printf("evidence on %s = %.4g %s [%.4g, %.4g]: %s says %+.4g %s (tolerance %.3g)%s\n", c.finding.c_str(),
+                c.finding_estimate, c.unit.c_str(), c.finding_lo, c.finding_hi, c.source.c_str(), c.evidence,
+                c.unit.c_str(), c.tolerance, c.contradicts ? ": CONTRADICTED by the recording's own evidence" : ": consistent");
+}
+
+void evidence_md(std::ostream& md, const tools::RecordingEvidence& ev) {
+  md << "## Evidence the recording carries\n\n";
+  if (ev.counter_samples == 0 && !ev.has_clock_fit && !ev.has_reference_lag && ev.counter_note.empty()) {
+    md << "None: no IMU sample counter, no import clock pair" << (ev.summary_note.empty() ? "" : " (" + ev.summary_note + ")")
+       << ", no reference with a usable rate.\n\n";
+    return;
+  }
+  if (ev.counter_samples > 0)
+    md << "- The IMU's own sample counter against its time tags: the tags are stretched by "
+       << fmt(ev.counter_stretch_ppm, "%+.1f") << " ppm against a nominal " << fmt(ev.counter_rate_hz, "%.0f") << " Hz ("
+       << ev.counter_samples << " samples).\n";
+  if (!ev.counter_note.empty()) md << "- " << ev.counter_note << ".\n";
+  if (ev.has_clock_fit)
+    md << "- The import's clock pair (`" << ev.summary_path << "`): the local clock drifts "
+       << fmt(ev.clock_fit_drift_ppm, "%+.2f") << " ppm against GPS time.\n";
+  else if (!ev.summary_path.empty())
+    md << "- `" << ev.summary_path << "`: " << ev.summary_note << ".\n";
+  if (ev.has_reference_lag)
+    md << "- The reference's " << ev.reference_kind << " rate against the IMU's gyro rate: the IMU tags lag "
+       << fmt(ev.reference_lag_s, "%+.4f") << " s (correlation " << fmt(ev.reference_correlation, "%.3f") << ").\n";
+  md << "\n";
+  if (ev.checks.empty()) {
+    md << "No timing finding to check against it.\n\n";
+    return;
+  }
+  md << "| finding | estimate | 95% interval | evidence | what it says | tolerance | verdict |\n|---|---|---|---|---|---|---|\n";
+  for (const tools::EvidenceCheck& c : ev.checks)
+    md << "| " << c.finding << " | " << fmt(c.finding_estimate) << " " << c.unit << " | [" << fmt(c.finding_lo) << ", "
+       << fmt(c.finding_hi) << "] | " << c.source << " | " << fmt(c.evidence, "%+.4g") << " " << c.unit << " | "
+       << fmt(c.tolerance, "%.3g") << " | " << (c.contradicts ? "**contradicted**" : "consistent") << " |\n";
+  md << "\nNothing is overridden: the finding stays as the likelihood gives it; a contradicted one says that the data "
+        "and the recording's own clocks or reference disagree, and one of them (or the model) is wrong.\n\n";
+}
+
 }  // namespace
 
 void register_diagnose(CLI::App& app) {
@@ -356,6 +442,8 @@ int run_diagnose() {
   std::string err, load_report;
   if (!tools::load_recorded_data(opt.log, data, err, load_report)) throw std::runtime_error(err);
   std::printf("diagnose: %s: %s\n", opt.log.c_str(), load_report.c_str());
+  // What the recording as given says of itself (before any correction of the chain).
+  tools::RecordingEvidence evidence = tools::recording_evidence(data, opt.log);
   // The shipped config/default.toml with --filter-config on top: filter, GNSS input, priors, outages.
   tools::DiagnosisConfig cfg;
   tools::apply_filter_config(cfg, tools::filter_config(opt.filter_config));
@@ -384,11 +472,6 @@ int run_diagnose() {
     r = chain.last;
     r.findings = chain.findings;
     r.base = chain.first.base;
-    std::vector<std::string> ext;
-    for (const tools::AppliedCorrection& a : chain.applied)
-      if (std::find(ext.begin(), ext.end(), a.name) == ext.end()) ext.push_back(a.name + "(applied)");
-    ext.insert(ext.end(), r.extended_model.begin(), r.extended_model.end());
-    r.extended_model = ext;
     tools::compare_likelihood(r.base, r.extended);
     data = chain.corrected;
     cfg = chain.corrected_cfg;
@@ -505,11 +588,19 @@ int run_diagnose() {
     if (!f.separable()) findings.back()["separation"] = separation_json(seps[fi], trials, fi);
   }
   j["findings"] = findings;
+  tools::check_findings(evidence, r.findings);
+  j["evidence"] = evidence_json(evidence);
   j["chain"] = chained ? chain_json(chain) : nlohmann::json(nullptr);
   j["profiles"] = profiles;
+  // The extended model's name: the corrections the chain applied to the data or the antenna, then
+  // the states added in its last search.
+  std::vector<std::string> applied_names;
+  for (const tools::AppliedCorrection& a : chain.applied)
+    if (std::find(applied_names.begin(), applied_names.end(), a.name) == applied_names.end()) applied_names.push_back(a.name);
   std::string ext_name = opt.baseline;
+  for (const std::string& s : applied_names) ext_name += "+" + s + "(applied)";
   for (const std::string& s : r.extended_model) ext_name += "+" + s;
-  j["extended_model"] = {{"name", ext_name}, {"added_states", r.extended_model}};
+  j["extended_model"] = {{"name", ext_name}, {"added_states", r.extended_model}, {"applied_corrections", applied_names}};
   nlohmann::json gain;
   gain["innovations"] = {{"before", innovations_json(r.base.innovations)},
                          {"after", innovations_json(r.extended.innovations)},
@@ -563,6 +654,7 @@ int run_diagnose() {
   std::printf("\n");
   tools::print_configuration_warnings(r.base.exec_health);
   if (chained) print_chain(chain);
+  print_evidence(evidence);
   if (r.findings.empty()) std::printf("no finding (threshold z^2 %.2f over %d components)\n", r.threshold_z2, r.tested);
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
     const tools::Finding& f = r.findings[fi];
@@ -714,6 +806,7 @@ int run_diagnose() {
         md << "```toml\n" << sp.segments_toml << "```\n\n";
       }
     }
+    evidence_md(md, evidence);
     if (!r.unobservable.empty()) {
       md << "Not observable with this data (never named as a cause): ";
       for (std::size_t k = 0; k < r.unobservable.size(); ++k) md << (k ? ", " : "") << r.unobservable[k];

@@ -345,7 +345,9 @@ void RecordedData::push(const fsw::InputEvent& ev) {
     array.push_back(value);
   };
   switch (ev.kind) {
-    case fsw::InputEvent::Kind::kImu: return add(Kind::kImu, imu, ev.imu);
+    case fsw::InputEvent::Kind::kImu:
+      if (ev.imu_counter >= 0) imu_counter_tags.emplace_back(ev.imu.t_s, ev.imu_counter);  // a second clock
+      return add(Kind::kImu, imu, ev.imu);
     case fsw::InputEvent::Kind::kGnssRaw: return add(Kind::kGnss, gnss, ev.gnss);
     case fsw::InputEvent::Kind::kGnssPvt: return add(Kind::kPvt, pvt, ev.pvt);
     case fsw::InputEvent::Kind::kAlmanac: return add(Kind::kAlmanac, almanac, ev.almanac);

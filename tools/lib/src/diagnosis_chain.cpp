@@ -32,6 +32,10 @@ struct Pick {
 Pick to_apply(const DiagnosisResult& r) {
   Pick p;
   for (const Finding& f : r.findings) {  // most significant first
+    // A profile not bounded within the range searched does not determine the value (its maximum
+    // can sit at the edge of the range: psins-tc's offset at +0.416 s, the range's end): never
+    // applied.
+    if (f.interval.is_profile() && !f.interval.bounded) continue;
     if (f.separable()) {
       if (!chain_applicable(f.effect) || !std::isfinite(f.estimate)) continue;
       p.finding = &f;
@@ -47,6 +51,7 @@ Pick to_apply(const DiagnosisResult& r) {
     });
     if (best == f.group.end() || !(best->plausibility >= kChainMemberPlausibility) || !chain_applicable(best->effect))
       continue;
+    if (best->alone_interval.is_profile() && !best->alone_interval.bounded) continue;
     const bool profile = best->alone_interval.is_profile();
     p.finding = &f;
     p.name = best->name;

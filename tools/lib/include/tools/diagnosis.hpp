@@ -38,6 +38,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fsw/chi_square.hpp"
@@ -73,6 +74,9 @@ struct RecordedData {
   std::vector<fsw::GnssPvtMeasurement> pvt;  ///< GNSS position/velocity solutions (GNSS_PVT)
   std::vector<Event> order;
   std::vector<TruthPoint> truth;  ///< time-ordered; empty without truth
+  /// (time tag, the sensor's own sample counter) of every IMU input that carried one (imported
+  /// recordings): a second clock, read only as evidence (tools/diagnosis_evidence.hpp).
+  std::vector<std::pair<double, std::int32_t>> imu_counter_tags;
   std::string description;
   int damaged_stretches = 0;                ///< IMU holes > kDamagedImuGap_s (exclude_damaged_stretches)
   std::uint64_t excluded_imu_samples = 0;   ///< IMU samples outside the stretch kept
