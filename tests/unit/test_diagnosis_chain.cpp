@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <string>
 
+#include "hal/lcm_log_sink.hpp"
+#include "lcm_test_util.hpp"
 #include "sim/effects.hpp"
 #include "tools/diagnosis.hpp"
 #include "tools/diagnosis_chain.hpp"
@@ -26,6 +28,31 @@ sim::Scenario aircraft(double duration_s, std::uint64_t seed) {
   sc.seed = seed;
   sc.imu.errors = sim::ImuErrorSet::kBaseline;
   return sc;
+}
+
+/// The scenario's data through an LCM log and its reader (time-tag order), as `sdins diagnose --log`
+/// sees it. (In the simulator's own order an epoch follows the IMU sample of its true time, which
+/// with IMU tags 250 ms late is older than the executive's max_gnss_age_s at use: no update.)
+tools::RecordedData through_a_log(const tools::RecordedData& stream, const std::string& name) {
+  const std::string path = lcm_test::scratch(name);
+  {
+    hal::LcmLogSink sink;
+    hal::LcmTelemetryConfig tc;
+    tc.lcm_url = "none";
+    tc.log_path = path;
+    EXPECT_EQ(sink.open(tc), hal::LcmLogStatus::kOk);
+    for (const fsw::GpsAlmanac& a : stream.almanac) EXPECT_EQ(sink.write_almanac(a, 0.0), hal::LcmLogStatus::kOk);
+    for (const tools::RecordedData::Event& ev : stream.order) {
+      if (ev.kind == tools::RecordedData::Kind::kImu) EXPECT_EQ(sink.write_imu(stream.imu[ev.index]), hal::LcmLogStatus::kOk);
+      if (ev.kind == tools::RecordedData::Kind::kGnss) EXPECT_EQ(sink.write_gnss(stream.gnss[ev.index]), hal::LcmLogStatus::kOk);
+    }
+    EXPECT_EQ(sink.close(), hal::LcmLogStatus::kOk);
+  }
+  tools::RecordedData logged;
+  std::string err, report;
+  EXPECT_TRUE(tools::load_recorded_data(path, logged, err, report)) << err;
+  std::remove(path.c_str());
+  return logged;
 }
 
 std::string name_of(const tools::Finding& f) {
@@ -48,7 +75,8 @@ TEST(DiagnosisChain, LargeHiddenTimeOffsetIsNamedWithinTenMillisecondsAndNothing
   for (const Case c : {Case{0.25, 7}, Case{-0.4, 8}}) {
     sim::Scenario sc = aircraft(600.0, c.seed);
     ASSERT_EQ(sim::apply_effect_assignment(sc.effects, "imu_gnss_time_offset=" + std::to_string(c.offset_s)), "");
-    const tools::DiagnosisChain ch = tools::diagnose_chain(tools::record_scenario(sc, c.seed), tools::default_diagnosis_config());
+    const tools::DiagnosisChain ch = tools::diagnose_chain(through_a_log(tools::record_scenario(sc, c.seed), "diag_chain_offset.lcmlog"),
+                                                       tools::default_diagnosis_config());
     for (const tools::ChainStage& st : ch.stages) {
       std::printf("offset %+.3f s, stage %d: %zu findings, baseline log-likelihood %.1f (%d), applied after: %s\n",
                   c.offset_s, st.stage, st.findings.size(), st.base_log_likelihood, st.common_measurements,
