@@ -332,6 +332,7 @@ nlohmann::json evidence_json(const tools::RecordingEvidence& ev) {
   j["reference_lag"] = ev.has_reference_lag ? nlohmann::json{{"reference", ev.reference_kind},
                                                              {"imu_lag_s", ev.reference_lag_s},
                                                              {"correlation", ev.reference_correlation},
+                                                             {"note", ev.reference_note},
                                                              {"intervals", ev.reference_samples}}
                                             : nlohmann::json(nullptr);
   j["checks"] = checks;
@@ -348,8 +349,9 @@ void print_evidence(const tools::RecordingEvidence& ev) {
     std::printf("evidence: the import's clock pair (%s): local clock drift %+.2f ppm against GPS\n", ev.summary_path.c_str(),
                 ev.clock_fit_drift_ppm);
   if (ev.has_reference_lag)
-    std::printf("evidence: the IMU's rate against the reference's %s rate: IMU tags lag %+.4f s (correlation %.3f)\n",
-                ev.reference_kind.c_str(), ev.reference_lag_s, ev.reference_correlation);
+    std::printf("evidence: the IMU's rate against the reference's %s rate: IMU tags lag %+.4f s (correlation %.3f)%s%s\n",
+                ev.reference_kind.c_str(), ev.reference_lag_s, ev.reference_correlation,
+                ev.reference_note.empty() ? "" : "; ", ev.reference_note.c_str());
   for (const tools::EvidenceCheck& c : ev.checks)
     std::printf("evidence on %s = %.4g %s [%.4g, %.4g]: %s says %+.4g %s (tolerance %.3g)%s\n", c.finding.c_str(),
                 c.finding_estimate, c.unit.c_str(), c.finding_lo, c.finding_hi, c.source.c_str(), c.evidence,
@@ -375,7 +377,8 @@ void evidence_md(std::ostream& md, const tools::RecordingEvidence& ev) {
     md << "- `" << ev.summary_path << "`: " << ev.summary_note << ".\n";
   if (ev.has_reference_lag)
     md << "- The reference's " << ev.reference_kind << " rate against the IMU's gyro rate: the IMU tags lag "
-       << fmt(ev.reference_lag_s, "%+.4f") << " s (correlation " << fmt(ev.reference_correlation, "%.3f") << ").\n";
+       << fmt(ev.reference_lag_s, "%+.4f") << " s (correlation " << fmt(ev.reference_correlation, "%.3f") << ")"
+       << (ev.reference_note.empty() ? "" : "; " + ev.reference_note) << ".\n";
   md << "\n";
   if (ev.checks.empty()) {
     md << "No timing finding to check against it.\n\n";
@@ -588,6 +591,22 @@ int run_diagnose() {
     if (!f.separable()) findings.back()["separation"] = separation_json(seps[fi], trials, fi);
   }
   j["findings"] = findings;
+  if (chained && evidence.has_reference_lag) {
+    // The lag on the corrected recording (the drift's re-timing included) plus the offset applied:
+    // the frame in which the chain states its offset.
+    double offset_applied_s = 0.0;
+    for (const tools::AppliedCorrection& a : chain.applied)
+      if (a.name == "imu_gnss_time_offset") offset_applied_s += a.value;
+    const double as_given_s = evidence.reference_lag_s;
+    tools::reference_lag(evidence, data);  // data: the chain's corrected recording here
+    evidence.reference_lag_s += offset_applied_s;
+    char b[200];
+    std::snprintf(b, sizeof b,
+                  "measured on the recording with the chain's corrections applied, plus the %+.4f s offset applied "
+                  "(on the recording as given: %+.4f s)",
+                  offset_applied_s, as_given_s);
+    evidence.reference_note = b;
+  }
   tools::check_findings(evidence, r.findings);
   j["evidence"] = evidence_json(evidence);
   j["chain"] = chained ? chain_json(chain) : nlohmann::json(nullptr);
@@ -848,7 +867,7 @@ int run_diagnose() {
     if (rc == 0) {
       md << "![innovations](innovations.png)\n\n";
       if (r.base.nav.available) md << "![heading error](heading.png)\n\n";
-      if (!r.findings.empty()) md << "![estimates](estimates.png)\n\n";
+      if (!r.extended_model.empty()) md << "![estimates](estimates.png)\n\n";  // the last search's states
     } else {
       md << "(plots not made: plot_diagnosis.py failed)\n\n";
     }

@@ -108,7 +108,8 @@ double correlation(const std::vector<double>& a, const std::vector<double>& b) {
   return saa > 0.0 && sbb > 0.0 ? sab / std::sqrt(saa * sbb) : 0.0;
 }
 
-/// The lag of the IMU's angular-rate magnitude against the reference's (IMU tag - reference time).
+}  // namespace
+
 void reference_lag(RecordingEvidence& ev, const RecordedData& data) {
   const std::vector<TruthPoint>& tr = data.truth;
   if (tr.size() < 50 || data.imu.size() < 100) return;
@@ -181,8 +182,6 @@ void reference_lag(RecordingEvidence& ev, const RecordedData& data) {
   ev.reference_correlation = best_r;
   ev.reference_samples = n_best;
 }
-
-}  // namespace
 
 RecordingEvidence recording_evidence(const RecordedData& data, const std::string& log_path) {
   RecordingEvidence ev;

@@ -66,12 +66,19 @@ struct RecordingEvidence {
   double reference_lag_s = 0.0;       ///< IMU tag - reference time of the best correlation
   double reference_correlation = 0.0;
   int reference_samples = 0;
+  std::string reference_note;         ///< on which data the lag was measured
   std::vector<EvidenceCheck> checks;
 };
 
 /// The evidence of the recording as given (not corrected); log_path: the recording, whose
 /// summary `<log_path>.json` is read when present (tolerating its absence and foreign sidecars).
 RecordingEvidence recording_evidence(const RecordedData& data, const std::string& log_path);
+
+/// Measures the reference's lag (RecordingEvidence::reference_*) on data. The lag is a statement about
+/// the tags of that data: a time-offset finding that the chain reports on a recording it also
+/// re-timed for a clock drift (the offset at the drift's reference time) is compared with the lag
+/// measured on the recording with every other correction applied, plus the offset applied.
+void reference_lag(RecordingEvidence& ev, const RecordedData& data);
 
 /// Puts the evidence beside each timing finding (findings on the recording as given: the chain's
 /// totals) and flags contradictions.
