@@ -258,10 +258,29 @@ nlohmann::json chain_json(const tools::DiagnosisChain& ch) {
   }
   nlohmann::json applied = nlohmann::json::array();
   for (const tools::AppliedCorrection& a : ch.applied) applied.push_back(corr(a));
-  return {{"stages", stages}, {"applied", applied}, {"not_found_after_corrections", ch.vanished}};
+  const tools::MountingEstimate& m = ch.mounting;
+  nlohmann::json mounting = nullptr;
+  if (m.searched)
+    mounting = {{"quantity", "mounting yaw: added to init.heading_offset_deg (track initialisation)"},
+                {"found", m.found},
+                {"yaw_deg", m.yaw_deg},
+                {"interval_95_deg", {m.lo_deg, m.hi_deg}},
+                {"method", "profile_likelihood over the initial heading offset (ungated baseline runs)"},
+                {"deviance_at_configured", m.deviance_at_configured},
+                {"runs", m.runs},
+                {"curve", {{"value_deg", m.theta_deg}, {"deviance", m.deviance}}}};
+  return {{"mounting", mounting}, {"stages", stages}, {"applied", applied}, {"not_found_after_corrections", ch.vanished}};
 }
 
 void print_chain(const tools::DiagnosisChain& ch) {
+  const tools::MountingEstimate& m = ch.mounting;
+  if (m.searched)
+    std::printf("mounting yaw (track initialisation): %s (%d runs; deviance at the configured heading offset %.1f)\n",
+                m.found ? ("found " + fmt(m.yaw_deg, "%.2f") + " deg, 95% [" + fmt(m.lo_deg, "%.2f") + ", " + fmt(m.hi_deg, "%.2f") +
+                           "] deg, applied to init.heading_offset_deg before every search")
+                              .c_str()
+                        : "none (no rotated start fits better than the configured one)",
+                m.runs, m.deviance_at_configured);
   for (const tools::ChainStage& st : ch.stages) {
     std::string found;
     for (const tools::Finding& f : st.findings)
@@ -280,7 +299,15 @@ void print_chain(const tools::DiagnosisChain& ch) {
 }
 
 void chain_md(std::ostream& md, const tools::DiagnosisChain& ch) {
-  md << "## The chain: findings that survive their predecessors\n\n"
+  md << "## The chain: findings that survive their predecessors\n\n";
+  if (ch.mounting.searched)
+    md << "Mounting yaw (the track initialisation's heading offset, profile likelihood of the ungated baseline over "
+       << ch.mounting.runs << " runs): "
+       << (ch.mounting.found ? "**" + fmt(ch.mounting.yaw_deg, "%.2f") + " deg**, 95% [" + fmt(ch.mounting.lo_deg, "%.2f") +
+                                   ", " + fmt(ch.mounting.hi_deg, "%.2f") + "] deg, applied to `init.heading_offset_deg` before every search"
+                             : std::string("none (no rotated start fits better than the configured one)"))
+       << ".\n\n";
+  md << ""
         "After each timing or geometry finding the recording (or the antenna in the model) is corrected by it, at "
         "the profile likelihood's maximum, and searched again; a finding is reported only if the search after every "
         "correction before it still finds it (docs/diagnosis.md). The baseline log-likelihood is over the measurements "

@@ -1,6 +1,9 @@
 #include "tools/diagnosis_chain.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <limits>
+#include <thread>
 #include <cstdio>
 #include <cmath>
 #include <map>
@@ -107,7 +110,126 @@ void chain_log_likelihood(std::vector<ChainStage>& stages, const std::vector<con
   }
 }
 
+/// The baseline's log-likelihood over the keys every run used.
+std::vector<double> common_ll(const std::vector<DiagnosisRun>& runs) {
+  std::map<std::uint64_t, int> count;
+  for (const DiagnosisRun& r : runs) {
+    std::set<std::uint64_t> keys;
+    for (const DiagnosisRun::Scalar& x : r.scalars) keys.insert(x.key);
+    for (std::uint64_t k : keys) ++count[k];
+  }
+  std::vector<double> ll;
+  for (const DiagnosisRun& r : runs) {
+    double l = 0.0;
+    std::set<std::uint64_t> seen;
+    for (const DiagnosisRun::Scalar& x : r.scalars)
+      if (count[x.key] == static_cast<int>(runs.size()) && seen.insert(x.key).second)
+        l += -0.5 * (std::log(2.0 * fsw::kPi * x.S) + x.nu * x.nu / x.S);
+    ll.push_back(r.initialised ? l : -1e300);
+  }
+  return ll;
+}
+
 }  // namespace
+
+MountingEstimate estimate_mounting_yaw(const RecordedData& data, const DiagnosisConfig& cfg) {
+  MountingEstimate m;
+  if (cfg.app.init_mode != fsw::InitMode::kTrack) return m;
+  m.searched = true;
+  DiagnosisConfig k = cfg;
+  k.app.exec.ekf.gate_chi2 = std::numeric_limits<double>::max();  // one data set for every value
+  k.outage_length_s = 0.0;
+  std::vector<double> theta;
+  std::vector<DiagnosisRun> runs;
+  const auto add = [&](const std::vector<double>& t) {
+    std::vector<DiagnosisRun> r(t.size());
+    std::atomic<std::size_t> next{0};
+    auto worker = [&]() {
+      for (std::size_t i = next++; i < t.size(); i = next++) {
+        DiagnosisConfig c = k;
+        c.app.init_heading_offset_rad += t[i] * fsw::kDegToRad;
+        r[i] = run_diagnosis_model(data, c, cfg.baseline_states);
+        r[i].est_trace.clear();
+        r[i].sigma_trace.clear();
+      }
+    };
+    const unsigned n = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), static_cast<unsigned>(t.size())));
+    std::vector<std::thread> th;
+    for (unsigned i = 1; i < n; ++i) th.emplace_back(worker);
+    worker();
+    for (std::thread& x : th) x.join();
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      theta.push_back(t[i]);
+      runs.push_back(std::move(r[i]));
+    }
+    m.runs += static_cast<int>(t.size());
+  };
+  const auto best_of = [&]() {
+    const std::vector<double> ll = common_ll(runs);
+    return static_cast<std::size_t>(std::max_element(ll.begin(), ll.end()) - ll.begin());
+  };
+  // Screen at 45 deg steps (8 runs); the full search only when a rotated start beats the one
+  // configured (a mounting within about 20 deg of it: the filter's heading converges from there).
+  std::vector<double> grid;
+  for (int d = -180; d < 180; d += 45) grid.push_back(d);
+  add(grid);
+  bool beaten = false;
+  {
+    const std::vector<double> ll = common_ll(runs);
+    double at0 = -1e300;
+    for (std::size_t i = 0; i < theta.size(); ++i)
+      if (theta[i] == 0.0) at0 = ll[i];
+    for (std::size_t i = 0; i < theta.size(); ++i) beaten = beaten || 2.0 * (ll[i] - at0) > kMountingDeviance;
+  }
+  if (beaten) {
+    grid.clear();
+    for (int d = -180; d < 180; d += 15)
+      if (d % 45 != 0) grid.push_back(d);
+    add(grid);
+  }
+  for (double step = 7.5; beaten && step >= 0.5; step /= 2.0) {
+    const double b = theta[best_of()];
+    add({b - step, b + step});
+  }
+  const std::vector<double> ll = common_ll(runs);
+  std::vector<std::size_t> idx(theta.size());
+  for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+  std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return theta[a] < theta[b]; });
+  const double ll_max = *std::max_element(ll.begin(), ll.end());
+  for (std::size_t i : idx) {
+    m.theta_deg.push_back(theta[i]);
+    m.deviance.push_back(2.0 * (ll_max - ll[i]));
+  }
+  const std::size_t b = best_of();
+  m.yaw_deg = theta[b];
+  // The parabola through the best point and its nearest neighbours on either side.
+  std::size_t lo = b, hi = b;
+  for (std::size_t i = 0; i < theta.size(); ++i) {
+    if (theta[i] < theta[b] && (lo == b || theta[i] > theta[lo])) lo = i;
+    if (theta[i] > theta[b] && (hi == b || theta[i] < theta[hi])) hi = i;
+  }
+  m.lo_deg = m.hi_deg = m.yaw_deg;
+  if (lo != b && hi != b) {
+    const double x0 = theta[lo], x1 = theta[b], x2 = theta[hi];
+    const double y0 = 2.0 * (ll_max - ll[lo]), y1 = 0.0, y2 = 2.0 * (ll_max - ll[hi]);
+    const double den = (x0 - x1) * (x0 - x2) * (x1 - x2);
+    const double A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den;
+    const double B = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / den;
+    if (A > 0.0) {
+      const double v = std::clamp(-B / (2.0 * A), x0, x2);
+      const double C = y1 - A * x1 * x1 - B * x1, y_min = A * v * v + B * v + C;
+      const double half = std::sqrt(std::max(0.0, 3.841458820694124 + y_min) / A);
+      m.yaw_deg = v;
+      m.lo_deg = v - half;
+      m.hi_deg = v + half;
+    }
+  }
+  for (std::size_t i = 0; i < theta.size(); ++i)
+    if (theta[i] == 0.0) m.deviance_at_configured = 2.0 * (ll_max - ll[i]);
+  m.found = beaten && m.deviance_at_configured > kMountingDeviance && (m.lo_deg > 0.0 || m.hi_deg < 0.0);
+  if (!beaten) m.yaw_deg = m.lo_deg = m.hi_deg = 0.0;  // the screen: no rotated start fits better
+  return m;
+}
 
 bool chain_applicable(Effect e) {
   return e == Effect::kImuGnssTimeOffset || e == Effect::kImuClockDrift || e == Effect::kAntennaLeverArm;
@@ -141,6 +263,18 @@ DiagnosisChain diagnose_chain(const RecordedData& data, const DiagnosisConfig& c
   std::vector<int> applied_order;
   std::vector<DiagnosisResult> results;
   std::set<std::string> ever_found;
+  // The mounting first: a track initialisation off by the mounting yaw spoils every search after.
+  ch.mounting = estimate_mounting_yaw(data, cfg);
+  if (ch.mounting.found) {
+    ch.corrected_cfg.app.init_heading_offset_rad += ch.mounting.yaw_deg * fsw::kDegToRad;
+    if (progress) {
+      char b[200];
+      std::snprintf(b, sizeof b, "mounting yaw %.2f deg [%.2f, %.2f] (profile over the track initialisation's heading "
+                    "offset, %d runs): applied to init.heading_offset_deg", ch.mounting.yaw_deg, ch.mounting.lo_deg,
+                    ch.mounting.hi_deg, ch.mounting.runs);
+      progress(b);
+    }
+  }
   for (int stage = 1; stage <= kMaxChainStages; ++stage) {
     ChainStage st;
     st.stage = stage;

@@ -59,7 +59,28 @@ struct ChainStage {
   std::string applied_after;                  ///< the finding applied after this stage ("": the chain ends)
 };
 
+/// The mounting yaw of an IMU initialised from the GNSS track (init mode "track": heading = track +
+/// init.heading_offset_deg): a fixed rotation about the vehicle's vertical between the IMU and the
+/// direction of travel, e.g. a sensor mounted sideways. An estimated initial quantity, not a filter
+/// state: the baseline is run ungated with the heading offset held at each value (a 15 deg grid
+/// over the circle, then halving steps about the best to 0.5 deg) and the profile of its
+/// log-likelihood gives the estimate and the 95% interval (a parabola through the finest points).
+/// Found when the offset configured lies at a deviance above kMountingDeviance.
+struct MountingEstimate {
+  bool searched = false;     ///< false: the initialisation does not use the track
+  bool found = false;
+  double yaw_deg = 0.0;      ///< the offset to add to init.heading_offset_deg (profile maximum)
+  double lo_deg = 0.0, hi_deg = 0.0;
+  double deviance_at_configured = 0.0;  ///< at the configured offset (what is added: 0)
+  int runs = 0;
+  std::vector<double> theta_deg, deviance;  ///< the curve, sorted
+};
+/// chi-square(1) at p = 0.001.
+inline constexpr double kMountingDeviance = 10.827566170662733;
+MountingEstimate estimate_mounting_yaw(const RecordedData& data, const DiagnosisConfig& cfg);
+
 struct DiagnosisChain {
+  MountingEstimate mounting;  ///< searched first; applied to the initialisation when found
   std::vector<ChainStage> stages;
   std::vector<AppliedCorrection> applied;  ///< in order
   /// The findings reported: each applied component (its total, the interval of the last stage that
