@@ -354,6 +354,7 @@ nlohmann::json evidence_json(const tools::RecordingEvidence& ev) {
                                                      {"drift_ppm", ev.clock_fit_drift_ppm},
                                                      {"residual_rms_s", ev.clock_fit_residual_rms_s}}
                                     : nlohmann::json(nullptr);
+  j["tick_mapping"] = ev.has_tick_ratio ? nlohmann::json{{"tag_stretch_ppm", ev.tick_stretch_ppm}} : nlohmann::json(nullptr);
   j["summary_note"] = ev.summary_note;
   j["imu_counter_note"] = ev.counter_note;
   j["reference_lag"] = ev.has_reference_lag ? nlohmann::json{{"reference", ev.reference_kind},
@@ -372,6 +373,9 @@ void print_evidence(const tools::RecordingEvidence& ev) {
                 "residual %.2g s RMS)\n",
                 ev.counter_stretch_ppm, ev.counter_rate_hz, ev.counter_samples, ev.counter_residual_rms_s);
   if (!ev.counter_note.empty()) std::printf("evidence: %s\n", ev.counter_note.c_str());
+  if (ev.has_tick_ratio)
+    std::printf("evidence: the import mapped the IMU's own tick onto GPS time stretched by %+.1f ppm (%s)\n",
+                ev.tick_stretch_ppm, ev.summary_path.c_str());
   if (ev.has_clock_fit)
     std::printf("evidence: the import's clock pair (%s): local clock drift %+.2f ppm against GPS\n", ev.summary_path.c_str(),
                 ev.clock_fit_drift_ppm);
@@ -387,7 +391,7 @@ void print_evidence(const tools::RecordingEvidence& ev) {
 
 void evidence_md(std::ostream& md, const tools::RecordingEvidence& ev) {
   md << "## Evidence the recording carries\n\n";
-  if (ev.counter_samples == 0 && !ev.has_clock_fit && !ev.has_reference_lag && ev.counter_note.empty()) {
+  if (ev.counter_samples == 0 && !ev.has_clock_fit && !ev.has_reference_lag && ev.counter_note.empty() && !ev.has_tick_ratio) {
     md << "None: no IMU sample counter, no import clock pair" << (ev.summary_note.empty() ? "" : " (" + ev.summary_note + ")")
        << ", no reference with a usable rate.\n\n";
     return;
@@ -397,6 +401,9 @@ void evidence_md(std::ostream& md, const tools::RecordingEvidence& ev) {
        << fmt(ev.counter_stretch_ppm, "%+.1f") << " ppm against a nominal " << fmt(ev.counter_rate_hz, "%.0f") << " Hz ("
        << ev.counter_samples << " samples).\n";
   if (!ev.counter_note.empty()) md << "- " << ev.counter_note << ".\n";
+  if (ev.has_tick_ratio)
+    md << "- The import mapped the IMU's own tick onto GPS time stretched by " << fmt(ev.tick_stretch_ppm, "%+.1f")
+       << " ppm (`imu.seconds_per_imu_second` of `" << ev.summary_path << "`).\n";
   if (ev.has_clock_fit)
     md << "- The import's clock pair (`" << ev.summary_path << "`): the local clock drifts "
        << fmt(ev.clock_fit_drift_ppm, "%+.2f") << " ppm against GPS time.\n";

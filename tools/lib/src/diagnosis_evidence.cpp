@@ -62,6 +62,11 @@ void read_clock_fit(RecordingEvidence& ev, const std::string& log_path) {
     ev.summary_note = "not JSON (" + std::string(e.what()) + "): not used";
     return;
   }
+  if (j.is_object() && j.contains("imu") && j["imu"].is_object() && j["imu"].contains("seconds_per_imu_second") &&
+      j["imu"]["seconds_per_imu_second"].is_number()) {
+    ev.has_tick_ratio = true;
+    ev.tick_stretch_ppm = (j["imu"]["seconds_per_imu_second"].get<double>() - 1.0) * 1e6;
+  }
   if (!j.is_object() || !j.contains("time_fit") || !j["time_fit"].is_object()) {
     ev.summary_note = "no time_fit (no clock pair in this recording's import)";
     return;
@@ -213,6 +218,16 @@ void check_findings(RecordingEvidence& ev, const std::vector<Finding>& findings)
         k.contradicts = far(f, k.evidence, k.tolerance);
         k.note = "the tags' stretch against the sensor's sample clock, if the sensor samples at its nominal rate "
                  "(an oscillator within the tolerance)";
+        ev.checks.push_back(k);
+      }
+      if (ev.has_tick_ratio) {
+        EvidenceCheck k = c;
+        k.source = "the import's mapping of the IMU's own tick (imu.seconds_per_imu_second of " + ev.summary_path + ")";
+        k.evidence = ev.tick_stretch_ppm;
+        k.tolerance = kCounterTolerance_ppm;
+        k.contradicts = far(f, k.evidence, k.tolerance);
+        k.note = "the tags' stretch against the IMU's tick records, if the IMU's oscillator keeps GPS time within the "
+                 "tolerance";
         ev.checks.push_back(k);
       }
       if (ev.has_clock_fit) {

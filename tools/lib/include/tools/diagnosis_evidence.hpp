@@ -58,6 +58,10 @@ struct RecordingEvidence {
   bool has_clock_fit = false;
   double clock_fit_drift_ppm = 0.0;
   double clock_fit_residual_rms_s = 0.0;
+  // The import's tick mapping (`imu.seconds_per_imu_second` of the summary: GPS seconds the importer
+  // gave one second of the IMU's own tick, e.g. an RTKLIB tag file's span over the tick span).
+  bool has_tick_ratio = false;
+  double tick_stretch_ppm = 0.0;      ///< (ratio - 1) 1e6: the tags' stretch against the IMU's ticks
   std::string summary_path;           ///< the summary read ("" none)
   std::string summary_note;           ///< why it was not used, if so
   // The reference's lag.
