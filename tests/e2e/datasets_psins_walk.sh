@@ -77,9 +77,15 @@ for d in (p, w):
 drift = [f for f in w["findings"] if f["effect"] == "imu_clock_drift"]
 if drift and drift[0]["interval_95"]["method"] == "profile_likelihood":
     assert not drift[0]["interval_95"]["model_agrees"], drift[0]["interval_95"]
+# The time offset: with the chain (docs/diagnosis.md) it is applied to the walk and searched again
+# until no residual is found; the reported interval is the last residual's profile, shifted, where
+# filter and profile may disagree (measured: deviance 12.7 at the residual's filter estimate).
+ch = w["chain"]
 for f in w["findings"]:
     if f["effect"] == "imu_gnss_time_offset":
-        assert f["interval_95"]["method"] == "profile_likelihood" and f["interval_95"]["model_agrees"], f
+        assert f["interval_95"]["method"] == "profile_likelihood" and f["interval_95"]["bounded"], f
+        assert "imu_gnss_time_offset" in [a["candidate"] for a in ch["applied"]], ch["applied"]
+        assert "imu_gnss_time_offset" not in [g["candidate"] for g in ch["stages"][-1]["findings"]], ch["stages"][-1]
 for f in w["findings"]:
     if f["effect"] == "antenna_lever_arm" and f["interval_95"]["method"] == "profile_likelihood":
         assert f["interval_95"]["model_agrees"], f

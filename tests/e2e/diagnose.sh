@@ -31,7 +31,11 @@ for k in ("effect", "component", "estimate", "sigma", "unit", "statistic", "dof"
 assert (f["effect"], f["component"], f["unit"]) == ("antenna_lever_arm", "z", "m"), f
 assert abs(f["estimate"] - -1.2) < 3 * f["sigma"] and abs(f["estimate"] - -1.2) < 0.36, f
 assert f["statistic"] > j["method"]["threshold"] and f["separable"] and f["group"] == [] and f["dof"] == 1, f
-assert j["extended_model"]["added_states"][0] == "antenna_lever_arm.z", j["extended_model"]
+# The chain (docs/diagnosis.md): the lever arm is applied to the antenna and the search repeated.
+assert (j["extended_model"]["applied_corrections"] + j["extended_model"]["added_states"])[0] == "antenna_lever_arm.z", j["extended_model"]
+assert j["chain"]["applied"][0]["candidate"] == "antenna_lever_arm.z" and j["chain"]["stages"][-1]["findings"] == [], j["chain"]
+assert f["estimate_method"] == "profile_maximum" and f["estimate"] == f["interval_95"]["estimate"], f
+assert f["filter_interval_95"][0] < f["filter_estimate"] < f["filter_interval_95"][1], f
 g = j["gain"]
 assert g["innovations"]["log_likelihood_gain"] > 0, g["innovations"]
 for side in ("before", "after"):
@@ -45,9 +49,13 @@ assert o["length_s"] == 15 and o["before"]["windows"] >= 3 and o["before"]["wind
 assert o["before"]["epochs_withheld"] >= 15 * o["before"]["windows"] - 2 and o["after"]["horizontal_rms_m"] > 0, o
 assert j["method"]["alpha"] == 0.05 and j["method"]["tested_components"] > 5, j["method"]
 assert len(j["screening"]) == 25 and all(u in [s["candidate"] for s in j["screening"]] for u in j["unobservable"])
-for p in ("report.md", "innovations.png", "heading.png", "estimates.png", "baseline.csv", "extended.csv"):
+# estimates.png plots the states of the last search: none here (the chain applied the lever arm);
+# the group's report below has them.
+assert os.path.getsize(f"{out}/group/estimates.png") > 0
+for p in ("report.md", "innovations.png", "heading.png", "baseline.csv", "extended.csv"):
     assert os.path.getsize(f"{out}/report/{p}") > 0, p
 md = open(f"{out}/report/report.md").read()
+assert "## The chain" in md and "## Evidence the recording carries" in md, md
 assert "antenna_lever_arm" in md and "![heading error](heading.png)" in md
 n = json.load(open(f"{out}/null.json"))
 assert n["findings"] == [] and n["extended_model"]["added_states"] == [], n["findings"]

@@ -14,6 +14,8 @@
 #include "tools/diagnosis.hpp"
 #include "tools/fsw_report.hpp"
 #include "cfg/flight_config.hpp"
+#include "tools/diagnosis_chain.hpp"
+#include "tools/diagnosis_evidence.hpp"
 #include "tools/diagnosis_intervals.hpp"
 #include "tools/diagnosis_separation.hpp"
 #include <chrono>
@@ -30,6 +32,7 @@ struct Options {
   std::string intervals = "profile";
   std::vector<std::string> profile;
   bool profile_only = false;
+  bool no_chain = false;
 } opt;
 
 nlohmann::json innovations_json(const tools::InnovationStats& s) {
@@ -182,6 +185,248 @@ void print_disagreement(double deviance) {
               deviance, tools::kModelAgreementDeviance);
 }
 
+/// A separable finding's headline on the terminal: the profile's maximum when the interval is a
+/// profile (the filter's own figure beside it, labelled), else the filter's estimate.
+void print_finding_headline(const tools::Finding& f) {
+  const std::string name = std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component);
+  if (f.estimate_method == "profile_maximum")
+    std::printf("finding: %s = %.4g %s (profile-likelihood maximum), 95%% interval [%.4g, %.4g] %s%s; the filter's own "
+                "estimate %.4g +- %.3g %s (z^2 %.1f, p %.2g)\n",
+                name.c_str(), f.estimate, f.unit.c_str(), f.interval.lo, f.interval.hi, f.unit.c_str(),
+                f.interval.bounded ? "" : " (not bounded within the range searched)", f.filter_estimate, f.filter_sigma,
+                f.unit.c_str(), f.z2, f.p_value);
+  else
+    std::printf("finding: %s = %.4g +- %.3g %s (filter), 95%% interval [%.4g, %.4g] %s (%s) (z^2 %.1f, p %.2g)\n",
+                name.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.interval.lo, f.interval.hi, f.unit.c_str(),
+                f.interval.method.c_str(), f.z2, f.p_value);
+}
+
+/// A group member's "alone" value as shown: the profile's maximum with the filter's figure beside
+/// it when the member's interval is a profile, else the filter's estimate +- sigma.
+std::string member_headline(const tools::GroupMember& m) {
+  char b[160];
+  if (m.alone_interval.is_profile())
+    std::snprintf(b, sizeof b, "%.4g (profile maximum; filter %.4g +- %.3g)", m.alone_interval.estimate, m.alone_estimate,
+                  m.alone_sigma);
+  else
+    std::snprintf(b, sizeof b, "%.4g +- %.3g (filter)", m.alone_estimate, m.alone_sigma);
+  return b;
+}
+
+std::string finding_label(const tools::Finding& f) {
+  return std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component) +
+         (f.separable() ? "" : " (group of " + std::to_string(f.group.size()) + ")");
+}
+
+std::string applied_text(const std::vector<tools::AppliedCorrection>& applied) {
+  if (applied.empty()) return "nothing (the recording as given)";
+  std::string t;
+  for (const tools::AppliedCorrection& a : applied) t += (t.empty() ? "" : ", ") + a.name + " " + fmt(a.value, "%+.5g") + " " + a.unit;
+  return t;
+}
+
+/// The chain in the JSON (docs/diagnosis.md, "The chain").
+nlohmann::json chain_json(const tools::DiagnosisChain& ch) {
+  const auto corr = [](const tools::AppliedCorrection& a) {
+    return nlohmann::json{{"candidate", a.name}, {"value", a.value}, {"total", a.total}, {"unit", a.unit},
+                          {"source", a.source}, {"stage", a.stage},
+                          {"from_group", a.from_group}};
+  };
+  nlohmann::json stages = nlohmann::json::array();
+  for (const tools::ChainStage& st : ch.stages) {
+    nlohmann::json before = nlohmann::json::array(), found = nlohmann::json::array();
+    for (const tools::AppliedCorrection& a : st.applied_before) before.push_back(corr(a));
+    for (const tools::Finding& f : st.findings)
+      found.push_back({{"candidate", std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component)},
+                       {"separable", f.separable()},
+                       {"estimate", f.estimate},
+                       {"estimate_method", f.estimate_method},
+                       {"filter_estimate", f.filter_estimate},
+                       {"filter_sigma", f.filter_sigma},
+                       {"interval_95", interval_json(f.interval)},
+                       {"statistic", f.z2},
+                       {"unit", f.unit}});
+    stages.push_back({{"stage", st.stage},
+                      {"applied_before", before},
+                      {"findings", found},
+                      {"baseline_log_likelihood", st.base_log_likelihood},
+                      {"common_measurements", st.common_measurements},
+                      {"baseline_nis_mean", st.base_nis},
+                      {"extended_nis_mean", st.extended_nis},
+                      {"extended_log_likelihood_gain", st.extended_gain},
+                      {"applied_after", st.applied_after.empty() ? nlohmann::json(nullptr) : nlohmann::json(st.applied_after)}});
+  }
+  nlohmann::json applied = nlohmann::json::array();
+  for (const tools::AppliedCorrection& a : ch.applied) applied.push_back(corr(a));
+  const tools::MountingEstimate& m = ch.mounting;
+  nlohmann::json mounting = nullptr;
+  if (m.searched)
+    mounting = {{"quantity", "mounting yaw: added to init.heading_offset_deg (track initialisation)"},
+                {"found", m.found},
+                {"yaw_deg", m.yaw_deg},
+                {"interval_95_deg", {m.lo_deg, m.hi_deg}},
+                {"method", "profile_likelihood over the initial heading offset (ungated baseline runs)"},
+                {"deviance_at_configured", m.deviance_at_configured},
+                {"runs", m.runs},
+                {"curve", {{"value_deg", m.theta_deg}, {"deviance", m.deviance}}}};
+  return {{"mounting", mounting}, {"stages", stages}, {"applied", applied}, {"not_found_after_corrections", ch.vanished}};
+}
+
+void print_chain(const tools::DiagnosisChain& ch) {
+  const tools::MountingEstimate& m = ch.mounting;
+  if (m.searched)
+    std::printf("mounting yaw (track initialisation): %s (%d runs; deviance at the configured heading offset %.1f)\n",
+                m.found ? ("found " + fmt(m.yaw_deg, "%.2f") + " deg, 95% [" + fmt(m.lo_deg, "%.2f") + ", " + fmt(m.hi_deg, "%.2f") +
+                           "] deg, applied to init.heading_offset_deg before every search")
+                              .c_str()
+                        : "none (no rotated start fits better than the configured one)",
+                m.runs, m.deviance_at_configured);
+  for (const tools::ChainStage& st : ch.stages) {
+    std::string found;
+    for (const tools::Finding& f : st.findings)
+      found += (found.empty() ? "" : ", ") + finding_label(f) + (f.separable() ? " " + fmt(f.estimate, "%.4g") + " " + f.unit : "");
+    std::printf("chain stage %d, after %s: %s; baseline log-likelihood %.1f over %d measurements common to every stage "
+                "(extended %+.1f)%s\n",
+                st.stage, applied_text(st.applied_before).c_str(), found.empty() ? "no finding" : found.c_str(),
+                st.base_log_likelihood, st.common_measurements, st.extended_gain,
+                st.applied_after.empty() ? "" : ("; applies " + st.applied_after).c_str());
+  }
+  if (!ch.vanished.empty()) {
+    std::string v;
+    for (const std::string& n : ch.vanished) v += (v.empty() ? "" : ", ") + n;
+    std::printf("chain: not found once the corrections before them are applied (not reported): %s\n", v.c_str());
+  }
+}
+
+void chain_md(std::ostream& md, const tools::DiagnosisChain& ch) {
+  md << "## The chain: findings that survive their predecessors\n\n";
+  if (ch.mounting.searched)
+    md << "Mounting yaw (the track initialisation's heading offset, profile likelihood of the ungated baseline over "
+       << ch.mounting.runs << " runs): "
+       << (ch.mounting.found ? "**" + fmt(ch.mounting.yaw_deg, "%.2f") + " deg**, 95% [" + fmt(ch.mounting.lo_deg, "%.2f") +
+                                   ", " + fmt(ch.mounting.hi_deg, "%.2f") + "] deg, applied to `init.heading_offset_deg` before every search"
+                             : std::string("none (no rotated start fits better than the configured one)"))
+       << ".\n\n";
+  md << ""
+        "After each timing or geometry finding the recording (or the antenna in the model) is corrected by it, at "
+        "the profile likelihood's maximum, and searched again; a finding is reported only if the search after every "
+        "correction before it still finds it (docs/diagnosis.md). The baseline log-likelihood is over the measurements "
+        "common to every stage.\n\n"
+        "| stage | applied before | found | baseline log-likelihood | extended model gain | applied after |\n"
+        "|---|---|---|---|---|---|\n";
+  for (const tools::ChainStage& st : ch.stages) {
+    std::string found;
+    for (const tools::Finding& f : st.findings)
+      found += (found.empty() ? "" : "; ") + finding_label(f) +
+               (f.separable() ? " " + fmt(f.estimate) + " " + f.unit + " " + interval_cell(f.interval) : "");
+    md << "| " << st.stage << " | " << applied_text(st.applied_before) << " | " << (found.empty() ? "nothing" : found)
+       << " | " << fmt(st.base_log_likelihood, "%.1f") << " (" << st.common_measurements << ") | "
+       << fmt(st.extended_gain, "%+.1f") << " | " << (st.applied_after.empty() ? "(end)" : st.applied_after) << " |\n";
+  }
+  md << "\n";
+  if (!ch.vanished.empty()) {
+    md << "Found at an earlier stage and not once the corrections before them were applied (side effects, not "
+          "reported): ";
+    for (std::size_t i = 0; i < ch.vanished.size(); ++i) md << (i ? ", " : "") << "`" << ch.vanished[i] << "`";
+    md << ".\n\n";
+  }
+}
+
+nlohmann::json evidence_json(const tools::RecordingEvidence& ev) {
+  nlohmann::json checks = nlohmann::json::array();
+  for (const tools::EvidenceCheck& c : ev.checks)
+    checks.push_back({{"finding", c.finding},
+                      {"source", c.source},
+                      {"evidence", c.evidence},
+                      {"tolerance", c.tolerance},
+                      {"unit", c.unit},
+                      {"finding_estimate", c.finding_estimate},
+                      {"finding_interval_95", {c.finding_lo, c.finding_hi}},
+                      {"contradicts", c.contradicts},
+                      {"note", c.note}});
+  nlohmann::json j;
+  j["imu_counter"] = ev.counter_samples > 0 ? nlohmann::json{{"samples", ev.counter_samples},
+                                                             {"nominal_rate_hz", ev.counter_rate_hz},
+                                                             {"tag_stretch_ppm", ev.counter_stretch_ppm},
+                                                             {"residual_rms_s", ev.counter_residual_rms_s}}
+                                            : nlohmann::json(nullptr);
+  j["clock_fit"] = ev.has_clock_fit ? nlohmann::json{{"summary", ev.summary_path},
+                                                     {"drift_ppm", ev.clock_fit_drift_ppm},
+                                                     {"residual_rms_s", ev.clock_fit_residual_rms_s}}
+                                    : nlohmann::json(nullptr);
+  j["tick_mapping"] = ev.has_tick_ratio ? nlohmann::json{{"tag_stretch_ppm", ev.tick_stretch_ppm}} : nlohmann::json(nullptr);
+  j["summary_note"] = ev.summary_note;
+  j["imu_counter_note"] = ev.counter_note;
+  j["reference_lag"] = ev.has_reference_lag ? nlohmann::json{{"reference", ev.reference_kind},
+                                                             {"imu_lag_s", ev.reference_lag_s},
+                                                             {"correlation", ev.reference_correlation},
+                                                             {"note", ev.reference_note},
+                                                             {"intervals", ev.reference_samples}}
+                                            : nlohmann::json(nullptr);
+  j["checks"] = checks;
+  return j;
+}
+
+void print_evidence(const tools::RecordingEvidence& ev) {
+  if (ev.counter_samples > 0)
+    std::printf("evidence: the IMU's sample counter against its tags: stretch %+.1f ppm at a nominal %.0f Hz (%d samples, "
+                "residual %.2g s RMS)\n",
+                ev.counter_stretch_ppm, ev.counter_rate_hz, ev.counter_samples, ev.counter_residual_rms_s);
+  if (!ev.counter_note.empty()) std::printf("evidence: %s\n", ev.counter_note.c_str());
+  if (ev.has_tick_ratio)
+    std::printf("evidence: the import mapped the IMU's own tick onto GPS time stretched by %+.1f ppm (%s)\n",
+                ev.tick_stretch_ppm, ev.summary_path.c_str());
+  if (ev.has_clock_fit)
+    std::printf("evidence: the import's clock pair (%s): local clock drift %+.2f ppm against GPS\n", ev.summary_path.c_str(),
+                ev.clock_fit_drift_ppm);
+  if (ev.has_reference_lag)
+    std::printf("evidence: the IMU's rate against the reference's %s rate: IMU tags lag %+.4f s (correlation %.3f)%s%s\n",
+                ev.reference_kind.c_str(), ev.reference_lag_s, ev.reference_correlation,
+                ev.reference_note.empty() ? "" : "; ", ev.reference_note.c_str());
+  for (const tools::EvidenceCheck& c : ev.checks)
+    std::printf("evidence on %s = %.4g %s [%.4g, %.4g]: %s says %+.4g %s (tolerance %.3g)%s\n", c.finding.c_str(),
+                c.finding_estimate, c.unit.c_str(), c.finding_lo, c.finding_hi, c.source.c_str(), c.evidence,
+                c.unit.c_str(), c.tolerance, c.contradicts ? ": CONTRADICTED by the recording's own evidence" : ": consistent");
+}
+
+void evidence_md(std::ostream& md, const tools::RecordingEvidence& ev) {
+  md << "## Evidence the recording carries\n\n";
+  if (ev.counter_samples == 0 && !ev.has_clock_fit && !ev.has_reference_lag && ev.counter_note.empty() && !ev.has_tick_ratio) {
+    md << "None: no IMU sample counter, no import clock pair" << (ev.summary_note.empty() ? "" : " (" + ev.summary_note + ")")
+       << ", no reference with a usable rate.\n\n";
+    return;
+  }
+  if (ev.counter_samples > 0)
+    md << "- The IMU's own sample counter against its time tags: the tags are stretched by "
+       << fmt(ev.counter_stretch_ppm, "%+.1f") << " ppm against a nominal " << fmt(ev.counter_rate_hz, "%.0f") << " Hz ("
+       << ev.counter_samples << " samples).\n";
+  if (!ev.counter_note.empty()) md << "- " << ev.counter_note << ".\n";
+  if (ev.has_tick_ratio)
+    md << "- The import mapped the IMU's own tick onto GPS time stretched by " << fmt(ev.tick_stretch_ppm, "%+.1f")
+       << " ppm (`imu.seconds_per_imu_second` of `" << ev.summary_path << "`).\n";
+  if (ev.has_clock_fit)
+    md << "- The import's clock pair (`" << ev.summary_path << "`): the local clock drifts "
+       << fmt(ev.clock_fit_drift_ppm, "%+.2f") << " ppm against GPS time.\n";
+  else if (!ev.summary_path.empty())
+    md << "- `" << ev.summary_path << "`: " << ev.summary_note << ".\n";
+  if (ev.has_reference_lag)
+    md << "- The reference's " << ev.reference_kind << " rate against the IMU's gyro rate: the IMU tags lag "
+       << fmt(ev.reference_lag_s, "%+.4f") << " s (correlation " << fmt(ev.reference_correlation, "%.3f") << ")"
+       << (ev.reference_note.empty() ? "" : "; " + ev.reference_note) << ".\n";
+  md << "\n";
+  if (ev.checks.empty()) {
+    md << "No timing finding to check against it.\n\n";
+    return;
+  }
+  md << "| finding | estimate | 95% interval | evidence | what it says | tolerance | verdict |\n|---|---|---|---|---|---|---|\n";
+  for (const tools::EvidenceCheck& c : ev.checks)
+    md << "| " << c.finding << " | " << fmt(c.finding_estimate) << " " << c.unit << " | [" << fmt(c.finding_lo) << ", "
+       << fmt(c.finding_hi) << "] | " << c.source << " | " << fmt(c.evidence, "%+.4g") << " " << c.unit << " | "
+       << fmt(c.tolerance, "%.3g") << " | " << (c.contradicts ? "**contradicted**" : "consistent") << " |\n";
+  md << "\nNothing is overridden: the finding stays as the likelihood gives it; a contradicted one says that the data "
+        "and the recording's own clocks or reference disagree, and one of them (or the model) is wrong.\n\n";
+}
+
 }  // namespace
 
 void register_diagnose(CLI::App& app) {
@@ -218,6 +463,9 @@ void register_diagnose(CLI::App& app) {
   sub->add_flag("--profile-only", opt.profile_only,
                "no search: only the baseline run and the --profile components on top of it, each with the filter's "
                "and the profile-likelihood interval (the coverage study, docs/diagnosis-intervals.md)");
+  sub->add_flag("--no-chain", opt.no_chain,
+               "search once: do not apply a timing or geometry finding (time offset, clock drift, lever arm) to the "
+               "recording and search again from the corrected data (docs/diagnosis.md, the chain)");
   sub->add_option("--flight-config,--filter-config", opt.flight_config,
                   "flight configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
                   "(raw or solutions), initialisation, priors and outage pattern of the diagnosis, applied on top of the "
@@ -235,6 +483,8 @@ int run_diagnose() {
   std::string err, load_report;
   if (!tools::load_recorded_data(opt.log, data, err, load_report)) throw std::runtime_error(err);
   std::printf("diagnose: %s: %s\n", opt.log.c_str(), load_report.c_str());
+  // What the recording as given says of itself (before any correction of the chain).
+  tools::RecordingEvidence evidence = tools::recording_evidence(data, opt.log);
   cfg.alpha = opt.alpha;
   cfg.profile_intervals = opt.intervals == "profile";
   if (!tools::set_diagnosis_baseline(cfg, parse_model(opt.baseline, "--baseline", kFlightModels)))
@@ -245,12 +495,24 @@ int run_diagnose() {
   };
   if (opt.profile_only && opt.profile.empty()) throw std::runtime_error("--profile-only needs at least one --profile");
   tools::DiagnosisResult r;
+  tools::DiagnosisChain chain;
+  const bool chained = !opt.profile_only && !opt.no_chain;
   if (opt.profile_only) {
     r.baseline = fsw::to_string(cfg.baseline);
     r.base = tools::run_diagnosis_model(data, cfg, cfg.baseline_states);
     r.extended = r.base;
-  } else {
+  } else if (opt.no_chain) {
     r = tools::diagnose(data, cfg, progress);
+  } else {
+    // The chain (docs/diagnosis.md): the last search on the corrected recording, its findings those
+    // that survived every correction before them, scored against the recording as given.
+    chain = tools::diagnose_chain(data, cfg, progress);
+    r = chain.last;
+    r.findings = chain.findings;
+    r.base = chain.first.base;
+    tools::compare_likelihood(r.base, r.extended);
+    data = chain.corrected;
+    cfg = chain.corrected_cfg;
   }
   tools::throw_if_interrupted("diagnose stopped; no output written");
   if (!r.base.initialised) throw std::runtime_error("the flight software never initialised on this log");
@@ -327,7 +589,7 @@ int run_diagnose() {
   nlohmann::json findings = nlohmann::json::array();
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
     const tools::Finding& f = r.findings[fi];
-    const tools::ReportedInterval filter_iv = tools::filter_interval(f.estimate, f.sigma);
+    const tools::ReportedInterval filter_iv = tools::filter_interval(f.filter_estimate, f.filter_sigma);
     nlohmann::json cw = nlohmann::json::array();
     for (const auto& c : f.confounded_with) cw.push_back({{"candidate", c.first}, {"correlation", c.second}});
     nlohmann::json group = nlohmann::json::array();
@@ -336,6 +598,7 @@ int run_diagnose() {
                        {"correlation", m.correlation},
                        {"multiple_correlation", m.multiple_correlation},
                        {"alone_estimate", m.alone_estimate},
+                       {"alone_headline_estimate", m.alone_interval.is_profile() ? m.alone_interval.estimate : m.alone_estimate},
                        {"alone_sigma", m.alone_sigma},
                        {"alone_statistic", m.alone_z2},
                        {"alone_interval_95", interval_json(m.alone_interval)},
@@ -347,6 +610,9 @@ int run_diagnose() {
                         {"component", f.component},
                         {"estimate", f.estimate},
                         {"sigma", f.sigma},
+                        {"estimate_method", f.estimate_method},
+                        {"filter_estimate", f.filter_estimate},
+                        {"filter_sigma", f.filter_sigma},
                         {"unit", f.unit},
                         {"statistic", f.z2},
                         {"dof", f.dof},
@@ -360,10 +626,35 @@ int run_diagnose() {
     if (!f.separable()) findings.back()["separation"] = separation_json(seps[fi], trials, fi);
   }
   j["findings"] = findings;
+  if (chained && evidence.has_reference_lag) {
+    // The lag on the corrected recording (the drift's re-timing included) plus the offset applied:
+    // the frame in which the chain states its offset.
+    double offset_applied_s = 0.0;
+    for (const tools::AppliedCorrection& a : chain.applied)
+      if (a.name == "imu_gnss_time_offset") offset_applied_s += a.value;
+    const double as_given_s = evidence.reference_lag_s;
+    tools::reference_lag(evidence, data);  // data: the chain's corrected recording here
+    evidence.reference_lag_s += offset_applied_s;
+    char b[200];
+    std::snprintf(b, sizeof b,
+                  "measured on the recording with the chain's corrections applied, plus the %+.4f s offset applied "
+                  "(on the recording as given: %+.4f s)",
+                  offset_applied_s, as_given_s);
+    evidence.reference_note = b;
+  }
+  tools::check_findings(evidence, r.findings);
+  j["evidence"] = evidence_json(evidence);
+  j["chain"] = chained ? chain_json(chain) : nlohmann::json(nullptr);
   j["profiles"] = profiles;
+  // The extended model's name: the corrections the chain applied to the data or the antenna, then
+  // the states added in its last search.
+  std::vector<std::string> applied_names;
+  for (const tools::AppliedCorrection& a : chain.applied)
+    if (std::find(applied_names.begin(), applied_names.end(), a.name) == applied_names.end()) applied_names.push_back(a.name);
   std::string ext_name = opt.baseline;
+  for (const std::string& s : applied_names) ext_name += "+" + s + "(applied)";
   for (const std::string& s : r.extended_model) ext_name += "+" + s;
-  j["extended_model"] = {{"name", ext_name}, {"added_states", r.extended_model}};
+  j["extended_model"] = {{"name", ext_name}, {"added_states", r.extended_model}, {"applied_corrections", applied_names}};
   nlohmann::json gain;
   gain["innovations"] = {{"before", innovations_json(r.base.innovations)},
                          {"after", innovations_json(r.extended.innovations)},
@@ -416,23 +707,32 @@ int run_diagnose() {
                 heading_text(r.base.nav).c_str());
   std::printf("\n");
   tools::print_configuration_warnings(r.base.exec_health);
+  if (chained) print_chain(chain);
+  print_evidence(evidence);
   if (r.findings.empty()) std::printf("no finding (threshold z^2 %.2f over %d components)\n", r.threshold_z2, r.tested);
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
     const tools::Finding& f = r.findings[fi];
     if (f.separable()) {
-      std::printf("finding: %s%s%s = %.4g +- %.3g %s (z^2 %.1f, p %.2g)\n", fsw::effect_info(f.effect).name,
-                  f.component.empty() ? "" : ".", f.component.c_str(), f.estimate, f.sigma, f.unit.c_str(), f.z2,
-                  f.p_value);
-      std::printf("  95%% interval [%.4g, %.4g] %s (%s%s)\n", f.interval.lo, f.interval.hi, f.unit.c_str(),
-                  f.interval.method.c_str(), f.interval.bounded ? "" : ", not bounded within the range searched");
+      print_finding_headline(f);
       if (!f.interval.model_agrees) print_disagreement(f.interval.deviance_at_filter);
       continue;
     }
-    std::printf("finding: a group this data cannot separate (z^2 %.1f, %d dof, p %.2g); the cause is one of (or a mix "
-                "of):\n", f.z2, f.dof, f.p_value);
+    bool applied_member = false;  // the chain applied this group's most plausible member
+    for (const tools::AppliedCorrection& a : chain.applied)
+      applied_member = applied_member || (a.from_group && a.name == std::string(fsw::effect_info(f.effect).name) +
+                                                                         (f.component.empty() ? "" : "." + f.component));
+    if (applied_member) {
+      print_finding_headline(f);
+      std::printf("  applied by the chain as the group's most plausible member (plausibility >= %.2f under the priors; "
+                  "the next stage searched the corrected data: the chain above); the data alone do not separate:\n",
+                  tools::kChainMemberPlausibility);
+    } else {
+      std::printf("finding: a group this data cannot separate (z^2 %.1f, %d dof, p %.2g); the cause is one of (or a mix "
+                  "of):\n", f.z2, f.dof, f.p_value);
+    }
     for (const tools::GroupMember& m : f.group)
-      std::printf("  %-26s alone %.4g +- %.3g %s, 95%% %s = %+.1f prior sigma, plausibility %.2f, rho %+.4f\n",
-                  m.name.c_str(), m.alone_estimate, m.alone_sigma, m.unit.c_str(), interval_cell(m.alone_interval).c_str(), m.prior_z,
+      std::printf("  %-26s alone %s %s, 95%% %s = %+.1f prior sigma, plausibility %.2f, rho %+.4f\n",
+                  m.name.c_str(), member_headline(m).c_str(), m.unit.c_str(), interval_cell(m.alone_interval).c_str(), m.prior_z,
                   m.plausibility, m.correlation);
     const tools::Separation& sp = seps[fi];
     if (sp.predicted)
@@ -493,17 +793,21 @@ int run_diagnose() {
        << " are observable with this data (posterior variance <= " << cfg.max_variance_ratio
        << " x prior); the test is Wald chi-square(1) at a family-wise false-alarm rate of " << cfg.alpha
        << " (threshold z^2 = " << fmt(r.threshold_z2, "%.2f") << ").\n\n";
+    if (chained) chain_md(md, chain);
     md << "## Findings\n\n";
     if (r.findings.empty()) md << "None: the baseline model explains the data.\n\n";
     else {
-      md << "| effect | component | estimate | sigma | unit | 95% interval | z^2 | p | not separable from |\n"
-            "|---|---|---|---|---|---|---|---|---|\n";
+      md << "| effect | component | estimate | sigma | unit | 95% interval | the filter's own estimate | z^2 | p | not separable from |\n"
+            "|---|---|---|---|---|---|---|---|---|---|\n";
       for (const tools::Finding& f : r.findings) {
         std::string cw;
         for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
         md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | "
-           << (f.separable() ? fmt(f.estimate) : "group, below") << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "")
-           << " | " << f.unit << " | " << interval_cell(f.interval) << " | " << fmt(f.z2, "%.1f")
+           << (f.separable() ? fmt(f.estimate) + (f.estimate_method == "profile_maximum" ? " (profile maximum)" : "")
+                             : "group, below")
+           << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "") << " | " << f.unit << " | " << interval_cell(f.interval)
+           << " | " << (f.separable() ? fmt(f.filter_estimate) + " +- " + fmt(f.filter_sigma, "%.3g") : "") << " | "
+           << fmt(f.z2, "%.1f")
            << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
            << " | " << fmt(f.p_value, "%.2g") << " | " << cw << " |\n";
       }
@@ -525,10 +829,12 @@ int run_diagnose() {
         md << "**A group, not one cause.** The data fit each of these alone about equally well and cannot tell them "
               "apart; the finding is the group. Each member's estimate is what it alone would need; plausibility is "
               "relative, under the members' priors only.\n\n"
-              "| member | alone estimate | sigma | unit | alone 95% interval | prior sigmas | plausibility | correlation with the lead |\n"
+              "| member | alone estimate | the filter's alone estimate, sigma | unit | alone 95% interval | prior sigmas | plausibility | correlation with the lead |\n"
               "|---|---|---|---|---|---|---|---|\n";
         for (const tools::GroupMember& m : f.group)
-          md << "| " << m.name << " | " << fmt(m.alone_estimate) << " | " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
+          md << "| " << m.name << " | "
+             << (m.alone_interval.is_profile() ? fmt(m.alone_interval.estimate) + " (profile maximum)" : fmt(m.alone_estimate))
+             << " | " << fmt(m.alone_estimate) << " +- " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
              << " | " << interval_cell(m.alone_interval) << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
              << fmt(m.correlation, "%+.4f") << " |\n";
         md << "\n";
@@ -554,6 +860,7 @@ int run_diagnose() {
         md << "```toml\n" << sp.segments_toml << "```\n\n";
       }
     }
+    evidence_md(md, evidence);
     if (!r.unobservable.empty()) {
       md << "Not observable with this data (never named as a cause): ";
       for (std::size_t k = 0; k < r.unobservable.size(); ++k) md << (k ? ", " : "") << r.unobservable[k];
@@ -595,7 +902,7 @@ int run_diagnose() {
     if (rc == 0) {
       md << "![innovations](innovations.png)\n\n";
       if (r.base.nav.available) md << "![heading error](heading.png)\n\n";
-      if (!r.findings.empty()) md << "![estimates](estimates.png)\n\n";
+      if (!r.extended_model.empty()) md << "![estimates](estimates.png)\n\n";  // the last search's states
     } else {
       md << "(plots not made: plot_diagnosis.py failed)\n\n";
     }

@@ -348,7 +348,9 @@ void RecordedData::push(const fsw::InputEvent& ev) {
     array.push_back(value);
   };
   switch (ev.kind) {
-    case fsw::InputEvent::Kind::kImu: return add(Kind::kImu, imu, ev.imu);
+    case fsw::InputEvent::Kind::kImu:
+      if (ev.imu_counter >= 0) imu_counter_tags.emplace_back(ev.imu.t_s, ev.imu_counter);  // a second clock
+      return add(Kind::kImu, imu, ev.imu);
     case fsw::InputEvent::Kind::kGnssRaw: return add(Kind::kGnss, gnss, ev.gnss);
     case fsw::InputEvent::Kind::kGnssPvt: return add(Kind::kPvt, pvt, ev.pvt);
     case fsw::InputEvent::Kind::kAlmanac: return add(Kind::kAlmanac, almanac, ev.almanac);
@@ -983,11 +985,14 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
       f.group = g.info;
       for (std::size_t i = 1; i < g.info.size(); ++i) f.confounded_with.emplace_back(g.info[i].name, g.info[i].correlation);
     }
+    f.filter_estimate = f.estimate;
+    f.filter_sigma = f.sigma;
     res.findings.push_back(f);
     for (int mbr : g.members) res.extended_model.push_back(candidate_name(cands[at(mbr)]));
   }
   std::sort(res.findings.begin(), res.findings.end(), [](const Finding& x, const Finding& y) { return x.z2 > y.z2; });
   add_finding_intervals(res, data, cfg, progress);
+  set_headline_estimates(res.findings);
   return res;
 }
 

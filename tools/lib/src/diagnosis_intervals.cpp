@@ -13,6 +13,9 @@ namespace {
 
 using fsw::Effect;
 
+/// A re-timed GNSS input arrives at most this long after its own time (with_fixed_effect).
+constexpr double kMaxRetimedLateness_s = 0.05;
+
 /// A run's log-likelihood contributions, sorted by measurement key, and when it initialised.
 struct Contributions {
   std::vector<std::pair<std::uint64_t, double>> terms;
@@ -185,8 +188,18 @@ RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, dou
           prev_new = d.imu[ev.index].t_s;
           key[i] = prev_new;
           break;
-        case RecordedData::Kind::kGnss: key[i] = std::max(d.gnss[ev.index].t_s, prev_new); break;
-        case RecordedData::Kind::kPvt: key[i] = std::max(d.pvt[ev.index].t_s, prev_new); break;
+        // Capped at the input's own time + kMaxRetimedLateness_s: a log is written in time-tag
+        // order, so with IMU tags early by tau (a negative offset) an epoch sits after the IMU
+        // sample of true time t + tau; kept there on the corrected clock it arrived tau late, and
+        // at tau = 0.4 s every epoch was older than the executive's max_gnss_age_s (0.25 s) at use:
+        // stale, no update at all (the corrected -400 ms flight, issue 26). The recording's order
+        // says nothing of a latency that large; its tags are what is being corrected.
+        case RecordedData::Kind::kGnss:
+          key[i] = std::min(std::max(d.gnss[ev.index].t_s, prev_new), d.gnss[ev.index].t_s + kMaxRetimedLateness_s);
+          break;
+        case RecordedData::Kind::kPvt:
+          key[i] = std::min(std::max(d.pvt[ev.index].t_s, prev_new), d.pvt[ev.index].t_s + kMaxRetimedLateness_s);
+          break;
         case RecordedData::Kind::kAlmanac: key[i] = prev_key; break;
       }
       prev_key = key[i];
@@ -479,6 +492,21 @@ void add_finding_intervals(DiagnosisResult& res, const RecordedData& data, const
     }
     set_group_plausibility(f.group);
     f.interval = f.group.front().alone_interval;  // the group's: its lead's
+  }
+}
+
+void set_headline_estimates(std::vector<Finding>& findings) {
+  constexpr double kZ95 = 1.959963984540054;
+  for (Finding& f : findings) {
+    if (f.interval.is_profile()) {
+      f.estimate = f.interval.estimate;
+      f.sigma = (f.interval.hi - f.interval.lo) / (2.0 * kZ95);
+      f.estimate_method = "profile_maximum";
+    } else {
+      f.estimate = f.filter_estimate;
+      f.sigma = f.filter_sigma;
+      f.estimate_method = "filter";
+    }
   }
 }
 

@@ -38,6 +38,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fsw/chi_square.hpp"
@@ -73,6 +74,9 @@ struct RecordedData {
   std::vector<fsw::GnssPvtMeasurement> pvt;  ///< GNSS position/velocity solutions (GNSS_PVT)
   std::vector<Event> order;
   std::vector<TruthPoint> truth;  ///< time-ordered; empty without truth
+  /// (time tag, the sensor's own sample counter) of every IMU input that carried one (imported
+  /// recordings): a second clock, read only as evidence (tools/diagnosis_evidence.hpp).
+  std::vector<std::pair<double, std::int32_t>> imu_counter_tags;
   std::string description;
   int damaged_stretches = 0;                ///< IMU holes > kDamagedImuGap_s (exclude_damaged_stretches)
   std::uint64_t excluded_imu_samples = 0;   ///< IMU samples outside the stretch kept
@@ -316,7 +320,20 @@ struct Finding {
   std::vector<int> selection_model;
   /// The 95% interval (a group: its lead's alone interval).
   ReportedInterval interval;
+  /// The forward filter's own figure (extended model; a group: the lead's alone value), kept beside
+  /// the headline: where the interval is a profile likelihood, estimate is the profile's maximum
+  /// and sigma its half-width / 1.96 (set_headline_estimates, docs/diagnosis-intervals.md).
+  double filter_estimate = 0.0, filter_sigma = 0.0;
+  /// "profile_maximum" or "filter": where estimate comes from.
+  std::string estimate_method = "filter";
 };
+
+/// The headline of every finding: the profile likelihood's maximum (and half-width / 1.96 as its
+/// sigma) whenever the finding's interval is a profile, the filter's estimate and sigma otherwise;
+/// the filter's figure stays in filter_estimate / filter_sigma. Called by diagnose() once the
+/// intervals are set. (The drive's drift headline was the filter's 161.5 ppm above a profile
+/// interval of [205.7, 277.3]: a user reads the first number.)
+void set_headline_estimates(std::vector<Finding>& findings);
 
 /// Sets each member's prior_z (from its profile maximum where the member's interval is a profile
 /// the filter agrees with, else from alone_estimate) and the group's plausibilities.
