@@ -55,7 +55,15 @@ def imported(name, path):
     text = run("import", "ulog", path, "--log", log)
     print(text)
     with open(log + ".json") as f:
-        return log, json.load(f), text
+        side = json.load(f)
+    # Every import writes the same sidecar and a starting flight configuration (docs/own-recording.md):
+    # the configuration is one the flight software accepts on this log (no refusal at load).
+    assert side["format"] == "sdins-import-summary" and side["importer"] == "ulog", side.get("format")
+    start = os.path.join(work, name + ".filter.toml")
+    assert side["filter_config"] == start and os.path.getsize(start) > 0, side.get("filter_config")
+    p = subprocess.run([sdins, "replay", log, "--flight-config", start], capture_output=True, text=True)
+    assert p.returncode in (0, 2) and "must be" not in p.stderr, (p.returncode, p.stderr)
+    return log, side, text
 
 
 def gravity_check(log, what):

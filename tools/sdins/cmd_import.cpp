@@ -86,28 +86,28 @@ void register_import(CLI::App& app) {
 }
 
 namespace {
-/// sdins import ulog: the summary also goes beside the log (LOG.json), where replay finds the
-/// reference's label.
-int run_import_ulog() {
+/// sdins import ulog: the summary and the starting flight configuration go beside the log like
+/// every import's (tools::finish_import_outputs; LOG.json is where replay finds the reference's label).
+int run_import_ulog(const std::string& filter_out) {
   opt.ulog.path = opt.imp.path;
   opt.ulog.log_path = opt.imp.log_path;
-  const std::string sidecar = opt.imp.log_path + ".json";
-  tools::require_distinct({opt.imp.log_path, opt.json == sidecar ? std::string() : opt.json, sidecar}, {opt.imp.path});
-  const tools::UlogImportResult r = tools::import_ulog(opt.ulog);
-  tools::write_json_file(sidecar, r.summary);
-  if (!opt.json.empty() && opt.json != sidecar) tools::write_json_file(opt.json, r.summary);
+  tools::UlogImportResult r = tools::import_ulog(opt.ulog);
+  tools::finish_import_outputs(r.summary, opt.imp.log_path, filter_out,
+                               std::filesystem::path(opt.imp.log_path).stem().string(), "ulog");
+  if (!opt.json.empty()) tools::write_json_file(opt.json, r.summary);
   std::fputs(tools::ulog_import_summary_text(r.summary).c_str(), stdout);
+  std::printf("starting flight configuration: %s (edit the sensor noise from there)\n", filter_out.c_str());
   return 0;
 }
 }  // namespace
 
 int run_import() {
-  if (opt.imp.format == "ulog") return run_import_ulog();
   const std::string log = opt.imp.log_path;
   std::string filter_out = opt.filter_config;
   if (filter_out.empty()) filter_out = std::filesystem::path(log).replace_extension(".filter.toml").string();
   // docs/faults.md: no output may be (or lie inside) the recording, nor each other.
   tools::require_distinct({log, opt.json, tools::import_sidecar_path(log), filter_out}, {opt.imp.path});
+  if (opt.imp.format == "ulog") return run_import_ulog(filter_out);
   nlohmann::json summary;
   if (opt.imp.format == "describe") {
     for (const char* o : {"--axes", "--truth-max-q", "--max-fit-error", "--clip-gnss-to-imu", "--imu-clock-ratio",

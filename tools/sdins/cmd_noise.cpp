@@ -138,7 +138,7 @@ int run_noise() {
   const nlohmann::json cfg = configured_json(configured);
   print_configured(values, cfg);
 
-  const tools::RunDirectory dir(opt.out);
+  tools::RunDirectory dir(opt.out);
   const std::string source = opt.log;
   tools::write_text_file(dir.path("filter.toml"), tools::filter_config_toml(data, in, source));
   tools::write_text_file(dir.path("sim_imu.toml"), tools::scenario_imu_toml(fitted));

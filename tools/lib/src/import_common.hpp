@@ -47,6 +47,11 @@ struct Collected {
 nlohmann::json write_log(const std::string& path, const Collected& c);
 
 nlohmann::json span_json(double t_first, double t_last, std::size_t n);
+/// Ground-speed statistics of the solutions with velocity (median, p90, max, the moving share):
+/// what the starting configuration's initialisation speed is read from; null without velocities.
+nlohmann::json pvt_speed_json(const std::vector<hal::GnssPvtSample>& pvt);
+/// The same statistics of any list of speeds [m/s], labelled with their source; null when empty.
+nlohmann::json speed_stats_json(const std::vector<double>& speeds_mps, const std::string& source);
 double median(std::vector<double> v);
 /// IMU records through the IMU input validation, then the time statistics.
 nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, const AxisMap& axes);

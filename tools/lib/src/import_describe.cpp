@@ -955,23 +955,11 @@ void overlap_checks(const nlohmann::json& sum, std::vector<std::string>& warning
 
 /// Speed statistics of the solutions (or the reference) for the initialisation speed.
 nlohmann::json speed_json(const std::vector<hal::GnssPvtSample>& pvt, const std::vector<ReferenceEpoch>& ref) {
+  if (nlohmann::json j = pvt_speed_json(pvt); !j.is_null()) return j;
   std::vector<double> v;
-  for (const auto& p : pvt)
-    if (p.has_velocity()) v.push_back(p.vel_enu_mps.head<2>().norm());
-  if (v.empty())
-    for (const auto& r : ref)
-      if (std::isfinite(r.vel_enu_mps.x())) v.push_back(r.vel_enu_mps.head<2>().norm());
-  if (v.empty()) return nullptr;
-  std::vector<double> s = v;
-  std::sort(s.begin(), s.end());
-  double moving = 0;
-  for (double x : v) moving += x > 0.5 ? 1 : 0;
-  return {{"samples", v.size()},
-          {"median_mps", s[s.size() / 2]},
-          {"p90_mps", s[static_cast<std::size_t>(0.9 * static_cast<double>(s.size() - 1))]},
-          {"max_mps", s.back()},
-          {"fraction_above_0_5_mps", moving / static_cast<double>(v.size())},
-          {"source", pvt.empty() ? "reference" : "GNSS solutions"}};
+  for (const auto& r : ref)
+    if (std::isfinite(r.vel_enu_mps.x())) v.push_back(r.vel_enu_mps.head<2>().norm());
+  return speed_stats_json(v, "reference");
 }
 
 std::uint64_t total_rejected(const nlohmann::json& j) {

@@ -114,6 +114,27 @@ nlohmann::json span_json(double t_first, double t_last, std::size_t n) {
   return j;
 }
 
+nlohmann::json speed_stats_json(const std::vector<double>& v, const std::string& source) {
+  if (v.empty()) return nullptr;
+  std::vector<double> s = v;
+  std::sort(s.begin(), s.end());
+  double moving = 0;
+  for (double x : v) moving += x > 0.5 ? 1 : 0;
+  return {{"samples", v.size()},
+          {"median_mps", s[s.size() / 2]},
+          {"p90_mps", s[static_cast<std::size_t>(0.9 * static_cast<double>(s.size() - 1))]},
+          {"max_mps", s.back()},
+          {"fraction_above_0_5_mps", moving / static_cast<double>(v.size())},
+          {"source", source}};
+}
+
+nlohmann::json pvt_speed_json(const std::vector<hal::GnssPvtSample>& pvt) {
+  std::vector<double> v;
+  for (const auto& p : pvt)
+    if (p.has_velocity()) v.push_back(p.vel_enu_mps.head<2>().norm());
+  return speed_stats_json(v, "GNSS solutions");
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());

@@ -17,6 +17,7 @@
 #include "hal/time_tag_gate.hpp"
 #include "tools/gps_utc.hpp"
 #include "tools/importers.hpp"
+#include "import_common.hpp"
 
 namespace tools {
 namespace {
@@ -571,54 +572,24 @@ struct Converted {
   std::vector<double> truth_t_s;
 };
 
+/// The log through the import engine's one writer (import_common.hpp: time order; at equal times
+/// the IMU sample ending then, the solution, the reference).
 nlohmann::json write_ulog_log(const std::string& path, const Converted& c) {
-  enum Kind : int { kImu = 0, kPvt = 1, kTruth = 2 };
-  struct Ev {
-    double t;
-    int kind;
-    std::size_t i;
-  };
-  std::vector<Ev> ev;
-  ev.reserve(c.imu.size() + c.pvt.size() + c.truth.size());
-  for (std::size_t i = 0; i < c.imu.size(); ++i) ev.push_back({c.imu[i].sample.t_s, kImu, i});
-  for (std::size_t i = 0; i < c.pvt.size(); ++i) ev.push_back({c.pvt[i].t_s, kPvt, i});
-  for (std::size_t i = 0; i < c.truth.size(); ++i) ev.push_back({c.truth_t_s[i], kTruth, i});
-  // Time order; at equal times the IMU sample ending then, the solution, the reference.
-  std::stable_sort(ev.begin(), ev.end(), [](const Ev& a, const Ev& b) { return a.t != b.t ? a.t < b.t : a.kind < b.kind; });
-  hal::LcmLogSink sink;
-  hal::LcmTelemetryConfig cfg;
-  cfg.lcm_url = "none";
-  cfg.log_path = path;
-  if (sink.open(cfg) != hal::LcmLogStatus::kOk) throw std::runtime_error("cannot create the log " + sink.telemetry().log().error());
-  std::map<std::string, std::uint64_t> per_channel;
-  std::uint64_t failures = 0;
-  for (const Ev& e : ev) {
-    hal::LcmLogStatus st = hal::LcmLogStatus::kOk;
-    const char* ch = hal::kLcmChannelImu;
-    if (e.kind == kImu) {
-      st = sink.write_imu(c.imu[e.i]);
-    } else if (e.kind == kPvt) {
-      st = sink.write_pvt(c.pvt[e.i]);
-      ch = hal::kLcmChannelGnssPvt;
-    } else {
-      const RefRow& r = c.truth[e.i];
-      st = r.has_attitude ? sink.write_truth(e.t, r.llh, r.vel_enu_mps, r.C_b_n) : sink.write_reference(e.t, r.llh, r.vel_enu_mps);
-      ch = hal::kLcmChannelTruth;
-    }
-    if (st != hal::LcmLogStatus::kOk)
-      ++failures;
-    else
-      ++per_channel[ch];
+  import_detail::Collected out;
+  out.imu = c.imu;
+  out.pvt = c.pvt;
+  out.truth.reserve(c.truth.size());
+  for (std::size_t i = 0; i < c.truth.size(); ++i) {
+    const RefRow& r = c.truth[i];
+    import_detail::ReferenceEpoch e;
+    e.t_s = c.truth_t_s[i];
+    e.llh = r.llh;
+    e.vel_enu_mps = r.vel_enu_mps;
+    e.has_attitude = r.has_attitude;
+    e.C_b_n = r.C_b_n;
+    out.truth.push_back(e);
   }
-  if (failures > 0) {
-    const std::string why = sink.telemetry().log().error();
-    sink.telemetry().abort_log();  // docs/faults.md: no half-written log
-    throw std::runtime_error("writing " + path + " failed (" + std::to_string(failures) + " events" +
-                             (why.empty() ? "" : ": " + why) + "); nothing written");
-  }
-  if (sink.close() != hal::LcmLogStatus::kOk)
-    throw std::runtime_error("writing failed: " + sink.telemetry().log().error() + "; nothing written");
-  return {{"path", path}, {"events", ev.size()}, {"per_channel", per_channel}};
+  return import_detail::write_log(path, out);
 }
 
 /// IMU records and solutions through the replay's input validation (hal::from_msg): what the
@@ -834,6 +805,16 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
                   {"out_of_order_left_out", rs.out_of_order},
                   {"attitude", "vehicle_attitude.q (FRD -> NED) turned to body -> ENU"}};
   sum["reference"] = reference_label(rs, opt.reference);
+  // The keys the one starting-configuration generator reads (tools::starting_filter_config).
+  sum["imu"]["samples"] = c.imu.empty() ? import_detail::span_json(0, 0, 0)
+                                        : import_detail::span_json(c.imu.front().sample.t_s, c.imu.back().sample.t_s, c.imu.size());
+  sum["imu"]["dt_s"] = {{"median", res.streams.imu.dt_median_s}};
+  {
+    const nlohmann::json pj = import_detail::pvt_json(c.pvt, gnss_lines, gt.name());
+    sum["gnss_pvt"]["samples"] = pj["samples"];
+    sum["gnss_pvt"]["by_quality"] = pj["by_quality"];
+  }
+  sum["speed"] = import_detail::pvt_speed_json(c.pvt);
   sum["log"] = write_ulog_log(opt.log_path, c);
   sum["rejected_lines_total"] = is.lines.rejected + gnss_lines.rejected;
   res.summary = sum;
