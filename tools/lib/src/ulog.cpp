@@ -12,6 +12,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "hal/input_file.hpp"
+
 namespace tools::ulog {
 namespace {
 
@@ -589,14 +591,14 @@ File parse(std::vector<std::uint8_t> bytes, const Limits& limits) {
 }
 
 File read(const std::string& path, const Limits& limits) {
+  // docs/faults.md, bounded readers: a device, FIFO or directory is refused by kind, not read.
+  if (const std::string why = hal::check_input_file(path, limits.max_file_bytes); !why.empty())
+    throw std::runtime_error(why);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open " + path);
   in.seekg(0, std::ios::end);
   const std::streamoff n = in.tellg();
   if (n < 0) throw std::runtime_error("cannot read " + path);
-  if (static_cast<std::uint64_t>(n) > limits.max_file_bytes)
-    throw std::runtime_error(path + ": " + std::to_string(n) + " bytes, above the reader's limit of " +
-                             std::to_string(limits.max_file_bytes));
   in.seekg(0);
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(n));
   if (n > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), n)) throw std::runtime_error("cannot read " + path);
