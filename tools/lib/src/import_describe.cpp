@@ -100,15 +100,7 @@ TableRead read_table(const TableLayout& l, const std::vector<ColumnRef>& cols, L
           needed = std::max(needed, idx.back() + 1);
         }
       }
-      ++stats.lines;
-      if (s.empty()) {
-        stats.reject(line_no, "empty line");
-        continue;
-      }
-      if (!terminated) {
-        stats.reject(line_no, "partial last line (no newline)");
-        continue;
-      }
+      if (!take_data_line(stats, line_no, s, terminated)) continue;
       const auto f = fields_of(s, l);
       const std::size_t expect = l.fields > 0 ? static_cast<std::size_t>(l.fields) : l.header ? out.header.size() : 0;
       if ((expect > 0 && f.size() != expect) || f.size() < static_cast<std::size_t>(needed)) {

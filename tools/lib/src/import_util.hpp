@@ -59,6 +59,22 @@ class LineTimeGate {
   hal::TimeTagFilter<T> filter_;
 };
 
+/// The checks every line-oriented reader makes of a data line before parsing it: counts it, and
+/// rejects (counted, with its line number) an empty line and a partial last line (no newline).
+/// True when the line is to be parsed.
+inline bool take_data_line(LineStats& stats, std::uint64_t line_no, std::string_view s, bool terminated) {
+  ++stats.lines;
+  if (s.empty()) {
+    stats.reject(line_no, "empty line");
+    return false;
+  }
+  if (!terminated) {
+    stats.reject(line_no, "partial last line (no newline)");
+    return false;
+  }
+  return true;
+}
+
 inline hal::TimeTagGateConfig gate_config(double max_forward, double max_backward, bool strict) {
   hal::TimeTagGateConfig g;
   g.max_forward_s = max_forward;

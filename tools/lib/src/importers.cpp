@@ -427,15 +427,7 @@ std::vector<ImuCsvSample> read_gnss_imu_csv(std::istream& in, LineStats& stats, 
   while (getline_counted(in, line, terminated)) {
     ++line_no;
     const std::string_view s = trim(line);
-    ++stats.lines;
-    if (s.empty()) {
-      stats.reject(line_no, "empty line");
-      continue;
-    }
-    if (!terminated) {
-      stats.reject(line_no, "partial last line (no newline)");
-      continue;
-    }
+    if (!take_data_line(stats, line_no, s, terminated)) continue;
     const auto f = split(s, ',');
     if (f.size() != 7) {
       stats.reject(line_no, "wrong field count (" + std::to_string(f.size()) + ", expected 7)");
@@ -564,15 +556,7 @@ void read_csv_rows(std::istream& in, LineStats& stats, std::string& header, F&& 
       have_header = true;
       continue;
     }
-    ++stats.lines;
-    if (s.empty()) {
-      stats.reject(line_no, "empty line");
-      continue;
-    }
-    if (!terminated) {
-      stats.reject(line_no, "partial last line (no newline)");
-      continue;
-    }
+    if (!take_data_line(stats, line_no, s, terminated)) continue;
     row(line_no, split(s, ','));
   }
 }
