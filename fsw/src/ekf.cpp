@@ -212,7 +212,8 @@ void EkfTransition<Layout>::flush() {
   // Phi_nav <- A Phi_nav + (I + FT / 2) B, B the integrated sensor-error columns of the
   // navigation rows (sparse: added block by block, never formed). top_ is member scratch.
   const Mat9 half = Mat9::Identity() + 0.5 * FT;
-  top_.noalias() = A.lazyProduct(phi_nav_);
+  constexpr int K = EkfTransition<Layout>::kNavCols;  // columns K.. of phi_nav_ and top_ stay zero
+  top_.template leftCols<K>().noalias() = A.lazyProduct(phi_nav_.template leftCols<K>());
   if constexpr (Layout::has(Block::kAccelBias)) {
     top_.template middleCols<3>(Layout::offset(Block::kAccelBias)).noalias() +=
         half.template middleCols<3>(3).lazyProduct(sum_C_dt_);
@@ -247,7 +248,7 @@ void EkfTransition<Layout>::flush() {
     constexpr int o = Layout::offset(Block::kGyroGSens);
     for (int i = 0; i < 3; ++i) top_.col(o + i).noalias() -= half.template middleCols<3>(6).lazyProduct(sum_C_dv_.col(4 * i));
   }
-  phi_nav_ = top_;
+  phi_nav_.template leftCols<K>() = top_.template leftCols<K>();
 
   interval_s_ += T;
   clear_substep();
@@ -296,10 +297,30 @@ Status Ekf<Layout>::propagate(EkfTransition<Layout>& t) {
   // Gauss-Markov decays) plus the clock's bias-drift coupling. P uses it (O(9 N^2), not N^3), and
   // every N x N intermediate lives in member scratch, not on the task's stack.
   Mat& PhiP = work_;
-  PhiP.template topRows<9>().noalias() = Phi_.template topRows<9>().lazyProduct(P_);
-  for (int i = 9; i < N; ++i) PhiP.row(i) = Phi_(i, i) * P_.row(i);
-  PhiP.row(oc) += Phi_(oc, oc + 1) * P_.row(oc + 1);
-  P_.template leftCols<9>().noalias() = PhiP.lazyProduct(Phi_.template topRows<9>().transpose());
+  constexpr int K = EkfTransition<Layout>::kNavCols;
+  if constexpr (N - K >= 16) {
+    // The layouts with channel states: the navigation rows are zero beyond column K
+    // (nav_driven_columns()), so both products stop there. Written out column by column, each
+    // element summed over k = 0, 1, ... in order: what Eigen's product does at these sizes, so the
+    // results are the same bits, whatever inner size Eigen would see (it sums a short fixed-size
+    // row as a tree).
+    for (int j = 0; j < N; ++j) {
+      Eigen::Matrix<double, 9, 1> acc = Phi_.template block<9, 1>(0, 0) * P_(0, j);
+      for (int k = 1; k < K; ++k) acc += Phi_.template block<9, 1>(0, k) * P_(k, j);
+      PhiP.template block<9, 1>(0, j) = acc;
+    }
+    for (int i = 9; i < N; ++i) PhiP.row(i) = Phi_(i, i) * P_.row(i);
+    PhiP.row(oc) += Phi_(oc, oc + 1) * P_.row(oc + 1);
+    for (int j = 0; j < 9; ++j) {
+      P_.col(j) = PhiP.col(0) * Phi_(j, 0);
+      for (int k = 1; k < K; ++k) P_.col(j) += PhiP.col(k) * Phi_(j, k);
+    }
+  } else {
+    PhiP.template topRows<9>().noalias() = Phi_.template topRows<9>().lazyProduct(P_);
+    for (int i = 9; i < N; ++i) PhiP.row(i) = Phi_(i, i) * P_.row(i);
+    PhiP.row(oc) += Phi_(oc, oc + 1) * P_.row(oc + 1);
+    P_.template leftCols<9>().noalias() = PhiP.lazyProduct(Phi_.template topRows<9>().transpose());
+  }
   for (int j = 9; j < N; ++j) P_.col(j) = Phi_(j, j) * PhiP.col(j);
   P_.col(oc) += Phi_(oc, oc + 1) * PhiP.col(oc + 1);
 
@@ -363,8 +384,12 @@ bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu,
   x_ += K * nu;
   // Joseph form (I - K h) P (I - K h)^T + K r K^T, expanded for a scalar measurement.
   const Vec u = 0.5 * S * K - s;  // P - K s^T - s K^T + S K K^T = P + K u^T + u K^T
-  P_.noalias() += K * u.transpose();
-  P_.noalias() += u * K.transpose();
+  // P <- (P + K u^T) + u K^T in one pass over P (the same two additions per element, in the same
+  // order, as the two rank-one updates one after the other).
+  for (int j = 0; j < N; ++j) {
+    const double uj = u(j), kj = K(j);
+    for (int i = 0; i < N; ++i) P_(i, j) = (P_(i, j) + K(i) * uj) + u(i) * kj;
+  }
   return true;
 }
 
@@ -661,21 +686,25 @@ void Ekf<Layout>::check_covariance() {
   }
   constexpr double kMinPivot = 1e-12;
   for (int attempt = 0; ok; ++attempt) {
+    // The lower triangle (P is symmetric here): the factor overwrites it column by column.
     for (int j = 0; j < N; ++j)
-      for (int i = 0; i < N; ++i) work_(i, j) = d(i) * P_(i, j) * d(j);
+      for (int i = j; i < N; ++i) work_(i, j) = d(i) * P_(i, j) * d(j);
     for (int i = 0; i < N; ++i)
       if (d(i) == 0.0) work_(i, i) = 1.0;
+    // Left-looking by columns: column j less the columns before it, each a contiguous column
+    // operation (column-major storage), then the pivot test and the scaling.
     bool pd = true;
     for (int j = 0; j < N && pd; ++j) {
-      const double piv = work_(j, j) - work_.row(j).head(j).squaredNorm();
+      const int m = N - j;
+      for (int k = 0; k < j; ++k) work_.col(j).tail(m) -= work_(j, k) * work_.col(k).tail(m);
+      const double piv = work_(j, j);
       if (!(piv > kMinPivot)) {
         pd = false;
         break;
       }
       const double l = std::sqrt(piv);
+      work_.col(j).tail(m - 1) /= l;
       work_(j, j) = l;
-      for (int i = j + 1; i < N; ++i) work_(i, j) = (work_(i, j) - work_.row(i).head(j).dot(work_.row(j).head(j))) / l;
-      for (int i = j + 1; i < N; ++i) work_(j, i) = 0.0;
     }
     if (pd) return;
     // Not positive definite: shrink the correlations, P <- (P + delta diag(P)) / (1 + delta) off

@@ -236,10 +236,28 @@ struct EkfHealth {
 /// rows are dense; the rest of Phi is set by propagate(). The executive keeps two, so the 200 Hz
 /// group integrates the next interval while the 1 Hz group propagates with the last one
 /// (fsw/executive.hpp); Ekf keeps one of its own for accumulate()/propagate() on one thread.
+/// The columns of the navigation rows of Phi that can be non-zero: the navigation blocks and the
+/// inertial-sensor blocks that drive them (EkfTransition::flush() fills exactly these). Every other
+/// block (clock, channel errors, time offset, lever arm, delay scales) enters the measurements
+/// only, so its columns of the navigation rows stay exactly zero and the transition products
+/// stop at this column (bit-identical: the skipped terms are products with zero).
+template <class Layout>
+constexpr int nav_driven_columns() {
+  constexpr Block kDriven[] = {Block::kPosition,      Block::kVelocity,      Block::kAttitude,   Block::kAccelBias,
+                               Block::kGyroBias,      Block::kAccelMisalign, Block::kGyroMisalign,
+                               Block::kAccelScale,    Block::kGyroScale,     Block::kGyroGSens};
+  int end = 0;
+  for (Block b : kDriven)
+    if (Layout::has(b) && Layout::offset(b) + block_size(b) > end) end = Layout::offset(b) + block_size(b);
+  return end;
+}
+
 template <class Layout>
 class EkfTransition {
  public:
   static constexpr int N = Layout::kSize;
+  /// Columns 0..kNavCols-1 of the navigation rows can be non-zero (nav_driven_columns()).
+  static constexpr int kNavCols = nav_driven_columns<Layout>();
   using NavRows = Eigen::Matrix<double, 9, N>;
 
   /// Starts an empty interval (Phi = I).
