@@ -237,7 +237,10 @@ const FlightPhase& FlightMotion::phase_at(double t_s) const {
 }
 
 void FlightMotion::roll(double t_s, double& roll_rad, double& roll_rate_radps) const {
-  const FlightPhase& p = phase_at(t_s);
+  roll_in(phase_at(t_s), t_s, roll_rad, roll_rate_radps);
+}
+
+void FlightMotion::roll_in(const FlightPhase& p, double t_s, double& roll_rad, double& roll_rate_radps) {
   const double T = p.t1_s - p.t0_s;
   switch (p.kind) {
     case FlightPhase::Kind::kStraight:
@@ -302,20 +305,23 @@ void FlightMotion::crab(double t_s, double& crab_rad, double& crab_rate_radps) c
   blend(p, t_s, p.crab0_rad, p.crab1_rad, crab_rad, crab_rate_radps);
 }
 
-double FlightMotion::heading_rate(double t_s, double phi, double V) const {
-  return phase_at(t_s).coordinated ? g_coord_mps2_ * std::tan(phi) / V : 0.0;
+double FlightMotion::heading_rate(const FlightPhase& p, double phi, double V) const {
+  return p.coordinated ? g_coord_mps2_ * std::tan(phi) / V : 0.0;
 }
 
+// derivative() and eval() run ten times per 1 kHz truth sample: each finds its phase once and
+// reads roll, speed, flight path, crab and coordination from it.
 Motion::State FlightMotion::derivative(double t_s, const State& y) const {
   double phi = 0.0, phi_dot = 0.0, V = 0.0, V_dot = 0.0, gam = 0.0, gam_dot = 0.0;
-  roll(t_s, phi, phi_dot);
-  speed(t_s, V, V_dot);
-  flight_path(t_s, gam, gam_dot);
+  const FlightPhase& p = phase_at(t_s);
+  roll_in(p, t_s, phi, phi_dot);
+  blend(p, t_s, p.v0_mps, p.v1_mps, V, V_dot);
+  blend(p, t_s, p.gamma0_rad, p.gamma1_rad, gam, gam_dot);
   const double ch = V * std::cos(gam);
   const Vec3 v(ch * std::sin(y(0)), ch * std::cos(y(0)), V * std::sin(gam));
   const Vec3 rate = fsw::llh_rate(Vec3(y(1), y(2), y(3)), v);
   State d = State::Zero();
-  d(0) = heading_rate(t_s, phi, V);
+  d(0) = heading_rate(p, phi, V);
   d(1) = rate.x();
   d(2) = rate.y();
   d(3) = rate.z();
@@ -324,13 +330,14 @@ Motion::State FlightMotion::derivative(double t_s, const State& y) const {
 
 Kinematics FlightMotion::eval(double t_s, const State& y) const {
   double phi = 0.0, phi_dot = 0.0, V = 0.0, V_dot = 0.0, gam = 0.0, gam_dot = 0.0;
-  roll(t_s, phi, phi_dot);
-  speed(t_s, V, V_dot);
-  flight_path(t_s, gam, gam_dot);
+  const FlightPhase& p = phase_at(t_s);
+  roll_in(p, t_s, phi, phi_dot);
+  blend(p, t_s, p.v0_mps, p.v1_mps, V, V_dot);
+  blend(p, t_s, p.gamma0_rad, p.gamma1_rad, gam, gam_dot);
   double beta = 0.0, beta_dot = 0.0;
-  crab(t_s, beta, beta_dot);
+  blend(p, t_s, p.crab0_rad, p.crab1_rad, beta, beta_dot);
   const double psi = y(0);  // the track
-  const double psi_dot = heading_rate(t_s, phi, V);
+  const double psi_dot = heading_rate(p, phi, V);
   const double theta = start_.pitch_deg * kDegToRad + gam;
   const double sp = std::sin(psi), cp = std::cos(psi), sg = std::sin(gam), cg = std::cos(gam);
   Kinematics k;

@@ -147,8 +147,10 @@ class FlightMotion final : public Motion {
  private:
   FlightMotion() = default;
   const FlightPhase& phase_at(double t_s) const;
-  /// Heading rate [rad/s] at t for roll phi and speed V.
-  double heading_rate(double t_s, double phi, double V) const;
+  /// Heading rate [rad/s] in phase p for roll phi and speed V.
+  double heading_rate(const FlightPhase& p, double phi, double V) const;
+  /// Roll angle and rate at t within phase p (roll() once the phase is known).
+  static void roll_in(const FlightPhase& p, double t_s, double& roll_rad, double& roll_rate_radps);
 
   StartState start_{};
   double g_coord_mps2_ = 9.8;  ///< gravity used by the coordination law g tan(phi) / V
