@@ -37,7 +37,6 @@
 // <- tools/diagnosis_intervals.hpp (the 95% intervals) <- this header and diagnosis.cpp (the
 // search); the chain, the evidence and the separation are built on top.
 #pragma once
-#pragma once
 
 #include <Eigen/Core>
 #include <functional>
