@@ -39,6 +39,23 @@ const char* almanac_invalid_field(const GpsAlmanac& sat) {
 
 bool almanac_valid(const GpsAlmanac& sat) { return almanac_invalid_field(sat) == nullptr; }
 
+GpsTime gps_time(int week, double tow_s) {
+  const double weeks = std::floor(tow_s / kSecondsPerWeek);
+  GpsTime t{week + static_cast<int>(weeks), tow_s - weeks * kSecondsPerWeek};
+  // The arithmetic rounds at the boundary: a negative time so small that the quotient underflows
+  // to -0 stays below 0, and a time just before a week's start plus one week rounds to
+  // kSecondsPerWeek (-1e-12 s + 604800 s is 604800.0), which is the next week's start.
+  if (t.tow_s < 0.0) {
+    t.tow_s += kSecondsPerWeek;
+    --t.week;
+  }
+  if (t.tow_s >= kSecondsPerWeek) {
+    t.tow_s -= kSecondsPerWeek;
+    ++t.week;
+  }
+  return t;
+}
+
 int full_week(int week_mod_1024, int reference_full_week) {
   const int w = ((week_mod_1024 % 1024) + 1024) % 1024;
   const long k = std::lround(static_cast<double>(reference_full_week - w) / 1024.0);
@@ -167,12 +184,9 @@ Status gnss_epoch_from_raw(const GnssRawEpoch& raw, const GpsAlmanacTable& alman
     // Transmit time on the GPS time scale: the pseudorange includes the receiver clock bias, which
     // the receiver's own time tag shares, so tow - rho / c is the transmit time to the extent the
     // time tag is on the receiver clock (and within c * clock error / 3.9 km/s otherwise: < 1 mm).
-    double tow_tx = raw.gps_tow_s - m.pseudorange_m / kSpeedOfLight_mps;
-    int week_tx = raw.gps_week;
-    if (tow_tx < 0.0) {
-      tow_tx += kSecondsPerWeek;
-      --week_tx;
-    }
+    const GpsTime tx = gps_time(raw.gps_week, raw.gps_tow_s - m.pseudorange_m / kSpeedOfLight_mps);
+    const int week_tx = tx.week;
+    double tow_tx = tx.tow_s;
     const double dt_sat_s = satellite_clock_bias_s(*sat, week_tx, tow_tx);
     tow_tx -= dt_sat_s;
     GnssObservation& o = out.obs[static_cast<std::size_t>(n)];

@@ -157,10 +157,9 @@ void GpsModel::measure(const TruthSample& truth, fsw::GnssEpoch& out) noexcept {
   }
 
   // GPS time of the receive instant.
-  const double total_s = cfg_.start_tow_s + t;
-  const double weeks = std::floor(total_s / kSecondsPerWeek);
-  const int week = cfg_.start_week + static_cast<int>(weeks);
-  const double tow = total_s - weeks * kSecondsPerWeek;
+  const fsw::GpsTime rx = fsw::gps_time(cfg_.start_week, cfg_.start_tow_s + t);
+  const int week = rx.week;
+  const double tow = rx.tow_s;
 
   out = fsw::GnssEpoch{};
   out.t_s = t;
@@ -247,28 +246,17 @@ void GpsModel::raw(const fsw::GnssEpoch& epoch, fsw::GnssRawEpoch& out) const no
   out.t_s = epoch.t_s;
   // A receiver tags its epochs with its own clock: GPS time plus the clock bias. That is what makes
   // tow - rho / c the exact transmit time on the receiver side.
-  out.gps_week = epoch.gps_week;
-  out.gps_tow_s = epoch.gps_tow_s + clock_.bias_m / kSpeedOfLight_mps;
-  if (out.gps_tow_s < 0.0) {
-    out.gps_tow_s += kSecondsPerWeek;
-    --out.gps_week;
-  } else if (out.gps_tow_s >= kSecondsPerWeek) {
-    out.gps_tow_s -= kSecondsPerWeek;
-    ++out.gps_week;
-  }
+  const fsw::GpsTime tag = fsw::gps_time(epoch.gps_week, epoch.gps_tow_s + clock_.bias_m / kSpeedOfLight_mps);
+  out.gps_week = tag.week;
+  out.gps_tow_s = tag.tow_s;
   int n = 0;
   for (int i = 0; i < epoch.n_obs; ++i) {
     const fsw::GnssObservation& o = epoch.obs[static_cast<std::size_t>(i)];
     const auto it = std::lower_bound(almanac_.begin(), almanac_.end(), static_cast<int>(o.prn),
                                      [](const AlmanacEntry& a, int prn) { return a.prn < prn; });
     if (it == almanac_.end() || it->prn != o.prn) continue;  // cannot happen: measure() uses almanac_
-    double tow_tx = epoch.gps_tow_s - o.pseudorange_m / kSpeedOfLight_mps;
-    int week_tx = epoch.gps_week;
-    if (tow_tx < 0.0) {
-      tow_tx += kSecondsPerWeek;
-      --week_tx;
-    }
-    const double dt_sat_s = satellite_clock_bias_s(*it, week_tx, tow_tx);
+    const fsw::GpsTime tx = fsw::gps_time(epoch.gps_week, epoch.gps_tow_s - o.pseudorange_m / kSpeedOfLight_mps);
+    const double dt_sat_s = satellite_clock_bias_s(*it, tx.week, tx.tow_s);
     fsw::GnssRawMeasurement& m = out.meas[static_cast<std::size_t>(n++)];
     m.prn = o.prn;
     m.pseudorange_m = o.pseudorange_m - kSpeedOfLight_mps * dt_sat_s;

@@ -18,10 +18,12 @@ if [ $rc -ne 0 ] && [ $rc -ne 3 ]; then
   echo "sdins audit stack failed (exit $rc)"
   exit 1
 fi
-/usr/bin/python3 - "$out/stack.json" "$rc" <<'PY'
-import json, sys
+source_dir=$(cd "$(dirname "$0")/../.." && pwd)
+/usr/bin/python3 - "$out/stack.json" "$rc" "$source_dir" <<'PY'
+import json, os, re, sys
 j = json.load(open(sys.argv[1]))
 rc = int(sys.argv[2])
+source_dir = sys.argv[3]
 layouts = ["Layout15", "Layout24", "Layout15Full", "Layout24Full"]
 names = [t["name"] for t in j["tasks"]]
 want = [f"{k}/{l}" for l in layouts for k in ("mech_200hz", "ekf_1hz")] + [f"{k}/{l}" for l in layouts[2:] for k in ("imu_input", "gnss_input", "pvt_input", "event_input")]
@@ -63,4 +65,27 @@ if failing:
         print("      deepest path: " + " -> ".join(f"{s['short'][:60]} {s['frame_bytes']}" for s in t["deepest_path"]))
     sys.exit(1)
 print("all tasks bounded and within budget")
+# The docs restate the worst task's stack (the one dispatch, event_input): each place must say
+# what the audit measures, so that they cannot drift apart (issue 28: 5472 B in one, 4816 B in
+# another). When the code changes it, update these places (and the table in docs/audits.md).
+worst = max(t["stack_bytes"] for t in j["tasks"])
+claims = [
+    ("README.md", r"at most (\d+) B of stack"),
+    ("docs/README.md", r"at most (\d+) B of stack"),
+    ("docs/audits.md", r"\| `event_input/Layout15Full`, `/Layout24Full` \| (\d+) \|"),
+    ("docs/architecture-data-path.md", r"event_input (\d+) B for both"),
+    ("docs/architecture-data-path.md", r"entries, (\d+) B for Layout15Full and Layout24Full"),
+    ("docs/baremetal-qemu.md", r"the host stack audit's worst task is (\d+) B"),
+]
+stale = []
+for doc, pattern in claims:
+    text = " ".join(open(os.path.join(source_dir, doc), encoding="utf-8").read().split())
+    found = [int(v) for v in re.findall(pattern, text)]
+    if not found:
+        stale.append(f"{doc}: no longer states the worst-case stack as /{pattern}/ (update this test with it)")
+    stale += [f"{doc}: says {v} B, the audit measures {worst} B" for v in found if v != worst]
+if stale:
+    print("DOCS RESTATE THE WORST-CASE STACK WRONGLY:\n  " + "\n  ".join(stale))
+    sys.exit(1)
+print(f"the docs' worst-case stack agrees with the audit: {worst} B")
 PY

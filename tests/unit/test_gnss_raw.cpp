@@ -156,6 +156,63 @@ TEST(GnssRaw, TransmitTimeBeforeTheWeekStartUsesThePreviousWeek) {
   EXPECT_LT((r - out.obs[0].sat_pos_ecef_m).norm(), 1e-3);
 }
 
+// The one week wrap (fsw::gps_time): the flight software's transmit times and the simulator's
+// receive times, receiver time tags and transmit times.
+TEST(GpsTime, WithinAWeekUnchanged) {
+  const fsw::GpsTime a = fsw::gps_time(1455, 12345.678);
+  EXPECT_EQ(a.week, 1455);
+  EXPECT_EQ(a.tow_s, 12345.678);  // bit for bit: the digests depend on it
+  const fsw::GpsTime b = fsw::gps_time(1455, 0.0);
+  EXPECT_EQ(b.week, 1455);
+  EXPECT_EQ(b.tow_s, 0.0);
+  const double last = std::nextafter(fsw::kSecondsPerWeek, 0.0);
+  const fsw::GpsTime c = fsw::gps_time(1455, last);
+  EXPECT_EQ(c.week, 1455);
+  EXPECT_EQ(c.tow_s, last);
+}
+
+TEST(GpsTime, CrossingTheWeekEndCarriesIntoTheNextWeek) {
+  constexpr double kW = fsw::kSecondsPerWeek;
+  const fsw::GpsTime end = fsw::gps_time(1455, kW);  // the week's end is the next week's start
+  EXPECT_EQ(end.week, 1456);
+  EXPECT_EQ(end.tow_s, 0.0);
+  const fsw::GpsTime after = fsw::gps_time(1455, kW + 0.05);
+  EXPECT_EQ(after.week, 1456);
+  EXPECT_NEAR(after.tow_s, 0.05, 1e-9);
+  const fsw::GpsTime weeks = fsw::gps_time(1023, 3.0 * kW + 5.0);  // across the 1024-week rollover too
+  EXPECT_EQ(weeks.week, 1026);
+  EXPECT_EQ(weeks.tow_s, 5.0);
+}
+
+TEST(GpsTime, NegativeTimeBelongsToThePreviousWeeks) {
+  constexpr double kW = fsw::kSecondsPerWeek;
+  // A transmit time 70 ms before the week's start (tow - rho / c at tow 0.01 s).
+  const fsw::GpsTime tx = fsw::gps_time(2000, 0.01 - 0.08);
+  EXPECT_EQ(tx.week, 1999);
+  EXPECT_NEAR(tx.tow_s, kW - 0.07, 1e-9);
+  const fsw::GpsTime two = fsw::gps_time(2000, -2.0 * kW + 5.0);
+  EXPECT_EQ(two.week, 1998);
+  EXPECT_EQ(two.tow_s, 5.0);
+  const fsw::GpsTime more = fsw::gps_time(2000, -2.0 * kW - 5.0);
+  EXPECT_EQ(more.week, 1997);
+  EXPECT_EQ(more.tow_s, kW - 5.0);
+}
+
+TEST(GpsTime, RoundingAtTheBoundaryStaysInsideTheWeek) {
+  constexpr double kW = fsw::kSecondsPerWeek;
+  // -1e-12 s plus a week rounds to 604800.0: the time is the week's start at this resolution.
+  const fsw::GpsTime tiny = fsw::gps_time(100, -1e-12);
+  EXPECT_EQ(tiny.week, 100);
+  EXPECT_EQ(tiny.tow_s, 0.0);
+  for (const double x : {-1e-12, -1e-300, -std::numeric_limits<double>::denorm_min(), -0.0, std::nextafter(kW, 0.0),
+                         std::nextafter(2.0 * kW, 0.0), std::nextafter(-kW, 0.0), -kW, 52.0 * kW - 1e-6}) {
+    const fsw::GpsTime t = fsw::gps_time(100, x);
+    EXPECT_GE(t.tow_s, 0.0) << x;
+    EXPECT_LT(t.tow_s, kW) << x;
+    EXPECT_NEAR((t.week - 100) * kW + t.tow_s, x, 1e-6) << x;  // the same instant
+  }
+}
+
 TEST(GnssRaw, AlmanacTableRejectsCorruptElements) {
   const auto alm = shipped();
   fsw::GpsAlmanacTable t;

@@ -49,6 +49,19 @@ bool almanac_valid(const GpsAlmanac& sat);
 /// simulator's almanac reader (sim::parse_yuma_text) both use it (docs/faults.md).
 const char* almanac_invalid_field(const GpsAlmanac& sat);
 
+/// A time on the GPS time scale: the full week and the seconds of that week.
+struct GpsTime {
+  int week = 0;
+  double tow_s = 0.0;  ///< in [0, kSecondsPerWeek)
+};
+
+/// (week, tow_s) with the seconds of week brought into [0, kSecondsPerWeek) and the whole weeks
+/// carried into the week: a time before the week's start (a transmit time tow - rho / c in the
+/// first 0.09 s of a week, a receiver clock running behind) or any number of weeks past its end.
+/// The one week wrap of the project: the flight software's transmit times and the simulator's
+/// receive times, receiver time tags and transmit times all use it. tow_s must be finite.
+GpsTime gps_time(int week, double tow_s);
+
 /// Full GPS week for a week modulo 1024: the rollover candidate nearest reference_full_week.
 int full_week(int week_mod_1024, int reference_full_week);
 

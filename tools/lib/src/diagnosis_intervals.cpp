@@ -495,6 +495,17 @@ void add_finding_intervals(DiagnosisResult& res, const RecordedData& data, const
   }
 }
 
+void set_group_plausibility(std::vector<GroupMember>& group) {
+  double sum = 0.0;
+  for (GroupMember& m : group) {
+    const bool profile = m.alone_interval.is_profile() && m.alone_interval.model_agrees;
+    const double x = profile ? m.alone_interval.estimate : m.alone_estimate;
+    m.prior_z = m.prior_sigma > 0.0 ? x / m.prior_sigma : 0.0;
+    sum += std::exp(-0.5 * m.prior_z * m.prior_z);
+  }
+  for (GroupMember& m : group) m.plausibility = sum > 0.0 ? std::exp(-0.5 * m.prior_z * m.prior_z) / sum : 0.0;
+}
+
 void set_headline_estimates(std::vector<Finding>& findings) {
   constexpr double kZ95 = 1.959963984540054;
   for (Finding& f : findings) {

@@ -39,7 +39,7 @@ inline constexpr std::array<HarnessWiring, 8> kHarnessWiring{{
     {"`sdins audit timing`", "tools/lib/src/timing_audit.cpp", "sim::SensorStream",
      "the Monte Carlo's stream, run 0's seed", "fsw::FlightDriver", "15, 24, 15Full, 24Full",
      "`FrameTimer`: every call timed, the 1 Hz group run apart"},
-    {"`sdins diagnose`", "tools/lib/src/diagnosis.cpp", "tools::RecordedSource",
+    {"`sdins diagnose`", "tools/lib/src/diagnosis_model.cpp", "tools::RecordedSource",
      "a recording in memory (`tools::RecordedData`), less the GNSS not taken and the outage windows",
      "fsw::FlightDriver", "Diag", "the scoring: innovations, navigation error, outages"},
     {"target replay (`sdins audit target`: QEMU image, host `sdins_target`)", "fsw/baremetal/replay.cpp",
