@@ -49,18 +49,29 @@ void TruthGenerator::set_current(double t, double dt, const Point& p) {
   cur_.phase = motion_.phase(t);
 }
 
-TruthGenerator::Point TruthGenerator::evaluate(double t, const Motion::State& y) const {
+const Motion::Instant& TruthGenerator::instant(double t) {
+  for (int i = 0; i < 2; ++i)
+    if (inst_valid_[i] && inst_[i].t_s == t) return inst_[i];
+  Motion::Instant& in = inst_[inst_next_];
+  inst_valid_[inst_next_] = true;
+  inst_next_ ^= 1;
+  motion_.instant(t, in);
+  return in;
+}
+
+TruthGenerator::Point TruthGenerator::evaluate(double t, const Motion::State& y) {
   Point p;
-  p.k = motion_.eval(t, y);
+  p.k = motion_.eval(instant(t), y);
   imu_from_kinematics(p.k, p.omega_ib_b, p.f_b);
   return p;
 }
 
 void TruthGenerator::rk4(double t, double h) {
-  const Motion::State k1 = motion_.derivative(t, y_);
-  const Motion::State k2 = motion_.derivative(t + 0.5 * h, y_ + 0.5 * h * k1);
-  const Motion::State k3 = motion_.derivative(t + 0.5 * h, y_ + 0.5 * h * k2);
-  const Motion::State k4 = motion_.derivative(t + h, y_ + h * k3);
+  const Motion::State k1 = motion_.derivative(instant(t), y_);
+  const Motion::Instant& mid = instant(t + 0.5 * h);
+  const Motion::State k2 = motion_.derivative(mid, y_ + 0.5 * h * k1);
+  const Motion::State k3 = motion_.derivative(mid, y_ + 0.5 * h * k2);
+  const Motion::State k4 = motion_.derivative(instant(t + h), y_ + h * k3);
   y_ += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
 }
 
@@ -309,19 +320,34 @@ double FlightMotion::heading_rate(const FlightPhase& p, double phi, double V) co
   return p.coordinated ? g_coord_mps2_ * std::tan(phi) / V : 0.0;
 }
 
-// derivative() and eval() run ten times per 1 kHz truth sample: each finds its phase once and
-// reads roll, speed, flight path, crab and coordination from it.
-Motion::State FlightMotion::derivative(double t_s, const State& y) const {
-  double phi = 0.0, phi_dot = 0.0, V = 0.0, V_dot = 0.0, gam = 0.0, gam_dot = 0.0;
+// derivative() and eval() run ten times per 1 kHz truth sample at four to six distinct instants:
+// everything that depends on t alone is computed once per instant, from its phase found once.
+void FlightMotion::instant(double t_s, Instant& in) const {
   const FlightPhase& p = phase_at(t_s);
-  roll_in(p, t_s, phi, phi_dot);
-  blend(p, t_s, p.v0_mps, p.v1_mps, V, V_dot);
-  blend(p, t_s, p.gamma0_rad, p.gamma1_rad, gam, gam_dot);
-  const double ch = V * std::cos(gam);
-  const Vec3 v(ch * std::sin(y(0)), ch * std::cos(y(0)), V * std::sin(gam));
+  double* v = in.v;
+  in.t_s = t_s;
+  roll_in(p, t_s, v[0], v[1]);
+  blend(p, t_s, p.v0_mps, p.v1_mps, v[2], v[3]);
+  blend(p, t_s, p.gamma0_rad, p.gamma1_rad, v[4], v[5]);
+  blend(p, t_s, p.crab0_rad, p.crab1_rad, v[6], v[7]);
+  v[8] = heading_rate(p, v[0], v[2]);
+  v[9] = std::sin(v[4]);
+  v[10] = std::cos(v[4]);
+}
+
+Motion::State FlightMotion::derivative(double t_s, const State& y) const {
+  Instant in;
+  instant(t_s, in);
+  return derivative(in, y);
+}
+
+Motion::State FlightMotion::derivative(const Instant& in, const State& y) const {
+  const double V = in.v[2], sg = in.v[9], cg = in.v[10];
+  const double ch = V * cg;
+  const Vec3 v(ch * std::sin(y(0)), ch * std::cos(y(0)), V * sg);
   const Vec3 rate = fsw::llh_rate(Vec3(y(1), y(2), y(3)), v);
   State d = State::Zero();
-  d(0) = heading_rate(p, phi, V);
+  d(0) = in.v[8];
   d(1) = rate.x();
   d(2) = rate.y();
   d(3) = rate.z();
@@ -329,17 +355,17 @@ Motion::State FlightMotion::derivative(double t_s, const State& y) const {
 }
 
 Kinematics FlightMotion::eval(double t_s, const State& y) const {
-  double phi = 0.0, phi_dot = 0.0, V = 0.0, V_dot = 0.0, gam = 0.0, gam_dot = 0.0;
-  const FlightPhase& p = phase_at(t_s);
-  roll_in(p, t_s, phi, phi_dot);
-  blend(p, t_s, p.v0_mps, p.v1_mps, V, V_dot);
-  blend(p, t_s, p.gamma0_rad, p.gamma1_rad, gam, gam_dot);
-  double beta = 0.0, beta_dot = 0.0;
-  blend(p, t_s, p.crab0_rad, p.crab1_rad, beta, beta_dot);
+  Instant in;
+  instant(t_s, in);
+  return eval(in, y);
+}
+
+Kinematics FlightMotion::eval(const Instant& in, const State& y) const {
+  const double phi = in.v[0], phi_dot = in.v[1], V = in.v[2], V_dot = in.v[3], gam = in.v[4], gam_dot = in.v[5];
+  const double beta = in.v[6], beta_dot = in.v[7], psi_dot = in.v[8], sg = in.v[9], cg = in.v[10];
   const double psi = y(0);  // the track
-  const double psi_dot = heading_rate(p, phi, V);
   const double theta = start_.pitch_deg * kDegToRad + gam;
-  const double sp = std::sin(psi), cp = std::cos(psi), sg = std::sin(gam), cg = std::cos(gam);
+  const double sp = std::sin(psi), cp = std::cos(psi);
   Kinematics k;
   k.llh = Vec3(y(1), y(2), y(3));
   k.vel_enu_mps = V * Vec3(cg * sp, cg * cp, sg);

@@ -98,6 +98,8 @@ class ProfileMotion final : public Motion {
   State initial_state() const override;
   State derivative(double t_s, const State& y) const override;
   Kinematics eval(double t_s, const State& y) const override;
+  using Motion::derivative;
+  using Motion::eval;
 
   const std::vector<ProfileRow>& rows() const { return rows_; }
   /// Profile time of motion time 0 (the first row's time).

@@ -46,11 +46,23 @@ class Motion {
   static constexpr int kMaxStates = 6;
   using State = Eigen::Matrix<double, kMaxStates, 1>;
 
+  /// What derivative() and eval() need of the time alone (a motion's own values: the flight's
+  /// roll, speed and flight path at t), computed once per instant: the TruthGenerator asks for
+  /// ten evaluations per sample at four to six distinct instants. Default: just the time.
+  struct Instant {
+    double t_s = 0.0;
+    double v[12] = {};
+  };
   virtual ~Motion() = default;
   virtual State initial_state() const = 0;
   virtual State derivative(double t_s, const State& y) const = 0;
   virtual Kinematics eval(double t_s, const State& y) const = 0;
   virtual MotionPhase phase(double /*t_s*/) const { return {}; }
+  /// The instant t's time-only terms; derivative(in, y) and eval(in, y) give exactly what
+  /// derivative(t, y) and eval(t, y) give.
+  virtual void instant(double t_s, Instant& in) const { in.t_s = t_s; }
+  virtual State derivative(const Instant& in, const State& y) const { return derivative(in.t_s, y); }
+  virtual Kinematics eval(const Instant& in, const State& y) const { return eval(in.t_s, y); }
 };
 
 /// One truth sample: the state at t_s and the ideal IMU increments over (t_s - dt_s, t_s].
@@ -83,8 +95,11 @@ class TruthGenerator {
     Vec3 omega_ib_b;
     Vec3 f_b;
   };
-  Point evaluate(double t, const Motion::State& y) const;
+  Point evaluate(double t, const Motion::State& y);
   void rk4(double t, double h);
+  /// The motion's Instant of t: the last two are kept (an RK4 step asks for its middle twice, and
+  /// a step's end is the next one's start and the sample's evaluation).
+  const Motion::Instant& instant(double t);
   void set_current(double t, double dt, const Point& p);
 
   const Motion& motion_;
@@ -93,6 +108,9 @@ class TruthGenerator {
   Motion::State y_;
   TruthSample cur_{};
   Point p_cur_{};
+  Motion::Instant inst_[2]{};
+  bool inst_valid_[2] = {false, false};
+  int inst_next_ = 0;  ///< the slot the next new instant goes into
 };
 
 /// Specific force and inertial body rate from kinematics (the equations above).
@@ -133,6 +151,11 @@ class FlightMotion final : public Motion {
   State derivative(double t_s, const State& y) const override;
   Kinematics eval(double t_s, const State& y) const override;
   MotionPhase phase(double t_s) const override;
+  /// v = roll, roll rate, speed, its rate, flight path, its rate, crab, its rate, heading rate,
+  /// sin and cos of the flight path (the one computation derivative() and eval() use).
+  void instant(double t_s, Instant& in) const override;
+  State derivative(const Instant& in, const State& y) const override;
+  Kinematics eval(const Instant& in, const State& y) const override;
 
   const std::vector<FlightPhase>& timeline() const { return phases_; }
   /// Roll angle [rad] and roll rate [rad/s] at t.
@@ -180,6 +203,8 @@ class TableMotion final : public Motion {
   State initial_state() const override { return State::Zero(); }
   State derivative(double, const State&) const override { return State::Zero(); }
   Kinematics eval(double t_s, const State& y) const override;
+  using Motion::derivative;
+  using Motion::eval;
 
  private:
   Vec3 llh_;
