@@ -27,15 +27,7 @@ assert 0 < us < 1000, us
 print("bench JSON ok: mc1 %.3f us/frame" % us)
 PY
 # Refusals: each names what it refuses and leaves no JSON behind.
-expect_error() {
-  local want=$1
-  shift
-  if "$@" > "$work/err.txt" 2>&1; then
-    echo "expected a refusal: $*"
-    exit 1
-  fi
-  grep -q -- "$want" "$work/err.txt" || { echo "the refusal does not name '$want':"; cat "$work/err.txt"; exit 1; }
-}
+. "$root/tests/e2e/expect.sh"  # expect_error
 expect_error "unknown figure 'nope'" "$root/tools/perf/bench" --sdins "$sdins" --only nope --json "$work/bad.json"
 expect_error "is not an executable file" "$root/tools/perf/bench" --sdins "$work/missing" --json "$work/bad.json"
 expect_error "--repeat 0" "$root/tools/perf/bench" --sdins "$sdins" --repeat 0 --json "$work/bad.json"

@@ -12,15 +12,7 @@ root="$(cd "$(dirname "$0")/../.." && pwd)"
 script="$root/tools/perf/peer-intnavlib"
 rm -rf "$work" && mkdir -p "$work"
 
-expect_error() {
-  local want=$1
-  shift
-  if "$@" > "$work/err.txt" 2>&1; then
-    echo "expected a refusal: $*"
-    exit 1
-  fi
-  grep -qF -- "$want" "$work/err.txt" || { echo "the refusal does not name '$want':"; cat "$work/err.txt"; exit 1; }
-}
+. "$root/tests/e2e/expect.sh"  # expect_error
 expect_error "checkout '$work/no-such-checkout': no such directory" \
   "$script" "$work/no-such-checkout" --sdins "$sdins" --json "$work/bad.json"
 mkdir -p "$work/not-the-peer"
