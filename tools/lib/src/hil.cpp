@@ -1,6 +1,6 @@
 #include "tools/hil.hpp"
 
-#include "tools/timing_audit.hpp"
+#include "tools/timing_stats.hpp"
 
 #include <algorithm>
 #include <cmath>
