@@ -107,27 +107,161 @@ double multiple_correlation(const Eigen::MatrixXd& R, int a, const std::vector<i
   return std::sqrt(std::clamp(r2, 0.0, 1.0));
 }
 
-DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
-                         const std::function<void(const std::string&)>& progress) {
-  const std::vector<Candidate>& cands = diagnosis_candidates();
-  const int nc = static_cast<int>(cands.size());
-  const auto at = [](int c) { return static_cast<std::size_t>(c); };
-  auto say = [&progress](const std::string& s) {
-    if (progress) progress(s);
-  };
-  DiagnosisResult res;
-  res.baseline = fsw::to_string(cfg.baseline);
-  const std::vector<int>& base = cfg.baseline_states;
-  auto in = [](const std::vector<int>& v, int c) { return std::find(v.begin(), v.end(), c) != v.end(); };
-  std::vector<Group> groups;
-  // The model searched from: the baseline and every member of every finding (a group's whole subspace).
-  const auto model = [&]() {
-    std::vector<int> m = base;
-    for (const Group& g : groups) m.insert(m.end(), g.members.begin(), g.members.end());
-    return m;
-  };
-  const auto member = [&](int c, const Group& g, double rho, double multiple) {
-    const Candidate& cand = cands[at(c)];
+namespace {
+
+using Progress = std::function<void(const std::string&)>;
+
+std::size_t at(int c) { return static_cast<std::size_t>(c); }
+
+/// The model searched from: the baseline and every member of every finding (a group's whole subspace).
+std::vector<int> search_model(const std::vector<int>& base, const std::vector<Group>& groups) {
+  std::vector<int> m = base;
+  for (const Group& g : groups) m.insert(m.end(), g.members.begin(), g.members.end());
+  return m;
+}
+
+/// One step's results for the candidates run on top of the model.
+struct StepScores {
+  std::vector<double> est, sig, z2v;  ///< per candidate: alone on top of the model
+  int best = -1;                      ///< the strongest candidate that joined no group
+  double best_z2 = 0.0;
+  std::string grown;                  ///< the candidates that joined a group in this step
+};
+
+/// The stepwise search of diagnose(): each step runs every candidate not yet in the model on top of
+/// it; the first step screens them (unobservable ones are left out and the threshold is set); a
+/// candidate explained by a baseline state or not separable from a finding's subspace is excluded
+/// (joining that group); otherwise the strongest significant candidate becomes a new finding.
+class GroupSearch {
+ public:
+  GroupSearch(const RecordedData& data, const DiagnosisConfig& cfg, DiagnosisResult& res, const Progress& say)
+      : data_(data), cfg_(cfg), res_(res), say_(say), cands_(diagnosis_candidates()),
+        nc_(static_cast<int>(cands_.size())), excluded_(at(nc_), false) {}
+
+  /// Each step adds a finding, grows a group (then runs again on the larger subspace) or ends.
+  std::vector<Group> run() {
+    const int max_steps = cfg_.max_findings + nc_ + 1;
+    for (int step = 1; step <= max_steps; ++step)
+      if (!run_step(step)) break;
+    return groups_;
+  }
+
+ private:
+  /// One step; false when the search ends.
+  bool run_step(int step) {
+    const std::vector<int>& base = cfg_.baseline_states;
+    const std::vector<int> m0 = search_model(base, groups_);
+    std::vector<std::vector<int>> models;
+    std::vector<int> which;
+    for (int c = 0; c < nc_; ++c) {
+      if (excluded_[at(c)] || std::find(m0.begin(), m0.end(), c) != m0.end()) continue;
+      std::vector<int> m = m0;
+      m.push_back(c);
+      models.push_back(m);
+      which.push_back(c);
+    }
+    if (models.empty()) return false;
+    say_("step " + std::to_string(step) + ": " + std::to_string(models.size()) + " candidate models of " +
+         std::to_string(m0.size() - base.size() + 1) + " extension states");
+    std::vector<DiagnosisRun> runs = run_models(data_, cfg_, models);
+    if (!screened_) {
+      res_.screening_z2.assign(at(nc_), 0.0);
+      res_.screening_ratio.assign(at(nc_), 1.0);
+    }
+    StepScores sc;
+    sc.est.assign(at(nc_), 0.0);
+    sc.sig.assign(at(nc_), 0.0);
+    sc.z2v.assign(at(nc_), 0.0);
+    for (std::size_t k = 0; k < runs.size(); ++k) score_candidate(which[k], runs[k], sc);
+    if (!screened_) {
+      res_.threshold_z2 =
+          res_.tested > 0 ? chi2_1_upper_quantile(cfg_.alpha / static_cast<double>(res_.tested)) : INFINITY;
+      screened_ = true;
+    }
+    if (!sc.grown.empty()) {  // the search continues from the groups' whole subspace
+      say_("step " + std::to_string(step) + ": not separable: " + sc.grown + "; searching again with the group");
+      return true;
+    }
+    if (sc.best < 0 || !(sc.best_z2 > res_.threshold_z2)) {
+      say_("step " + std::to_string(step) + ": no further significant component");
+      return false;
+    }
+    if (static_cast<int>(groups_.size()) >= cfg_.max_findings) return false;
+    std::ostringstream s;
+    s << "step " << step << ": " << candidate_name(cands_[at(sc.best)]) << " z^2 " << sc.best_z2 << " (threshold "
+      << res_.threshold_z2 << ")";
+    say_(s.str());
+    Group g;
+    g.lead = sc.best;
+    g.members = {sc.best};
+    g.alone_est = sc.est;
+    g.alone_sig = sc.sig;
+    g.alone_z2 = sc.z2v;
+    g.selection_model = m0;
+    g.info = {member(sc.best, g, 1.0, 1.0)};
+    groups_.push_back(g);
+    return true;
+  }
+
+  /// Candidate c's run on top of the model: screened (first step), excluded when explained by a
+  /// baseline state or when it joins a group, else a contender for the step's best.
+  void score_candidate(int c, const DiagnosisRun& r, StepScores& sc) {
+    const int a = position(r, c);
+    if (!r.initialised || a < 0) return;
+    const std::size_t ua = static_cast<std::size_t>(a);
+    sc.est[at(c)] = r.estimate[ua];
+    sc.sig[at(c)] = r.sigma[ua];
+    sc.z2v[at(c)] = r.z2[ua];
+    const double ratio = r.sigma[ua] * r.sigma[ua] / (r.prior_sigma[ua] * r.prior_sigma[ua]);
+    if (!screened_) {
+      res_.screening_z2[at(c)] = r.z2[ua];
+      res_.screening_ratio[at(c)] = ratio;
+      if (ratio > cfg_.max_variance_ratio) {
+        excluded_[at(c)] = true;
+        res_.unobservable.push_back(candidate_name(cands_[at(c)]));
+        return;
+      }
+      ++res_.tested;
+    }
+    // Explained by a baseline state: named with it, never on its own.
+    bool confound = false;
+    for (int s : cfg_.baseline_states) {
+      const double rho = r.correlation(a, position(r, s));
+      if (std::abs(rho) > cfg_.max_correlation) {
+        res_.confounded_with_baseline.push_back(candidate_name(cands_[at(c)]) + " ~ " + candidate_name(cands_[at(s)]));
+        confound = true;
+      }
+    }
+    // Not separable from a finding's subspace: joins that group.
+    for (std::size_t gi = 0; !confound && gi < groups_.size(); ++gi) {
+      Group& g = groups_[gi];
+      // The members this run carries: one that joined earlier in this step is not in this
+      // step's models (m0 + c), and has no row in r.correlation (reading it overran the matrix;
+      // found by ASan on a whole diagnosis).
+      std::vector<int> pos;
+      for (int mbr : g.members)
+        if (const int p = position(r, mbr); p >= 0) pos.push_back(p);
+      const double R = multiple_correlation(r.correlation, a, pos);
+      if (R > cfg_.max_correlation) {
+        g.info.push_back(member(c, g, r.correlation(a, position(r, g.lead)), R));
+        g.members.push_back(c);
+        sc.grown += (sc.grown.empty() ? "" : ", ") + candidate_name(cands_[at(c)]) + " joins " +
+                    candidate_name(cands_[at(g.lead)]);
+        confound = true;
+      }
+    }
+    if (confound) {
+      excluded_[at(c)] = true;
+      return;
+    }
+    if (r.z2[ua] > sc.best_z2) {
+      sc.best_z2 = r.z2[ua];
+      sc.best = c;
+    }
+  }
+
+  GroupMember member(int c, const Group& g, double rho, double multiple) const {
+    const Candidate& cand = cands_[at(c)];
     const fsw::EffectInfo& info = fsw::effect_info(cand.effect);
     GroupMember gm;
     gm.name = candidate_name(cand);
@@ -139,155 +273,71 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     gm.alone_estimate = g.alone_est[at(c)];
     gm.alone_sigma = g.alone_sig[at(c)];
     gm.alone_z2 = g.alone_z2[at(c)];
-    gm.prior_sigma = cfg.prior[static_cast<std::size_t>(cand.effect)];
+    gm.prior_sigma = cfg_.prior[static_cast<std::size_t>(cand.effect)];
     return gm;
-  };
-  std::vector<bool> excluded(at(nc), false);  // unobservable, explained by the baseline, or in a group
-  bool screened = false;
-  // Each step adds a finding, grows a group (then runs again on the larger subspace) or ends.
-  const int max_steps = cfg.max_findings + nc + 1;
-  for (int step = 1; step <= max_steps; ++step) {
-    const std::vector<int> m0 = model();
-    std::vector<std::vector<int>> models;
-    std::vector<int> which;
-    for (int c = 0; c < nc; ++c) {
-      if (excluded[at(c)] || in(m0, c)) continue;
-      std::vector<int> m = m0;
-      m.push_back(c);
-      models.push_back(m);
-      which.push_back(c);
-    }
-    if (models.empty()) break;
-    say("step " + std::to_string(step) + ": " + std::to_string(models.size()) + " candidate models of " +
-        std::to_string(m0.size() - base.size() + 1) + " extension states");
-    std::vector<DiagnosisRun> runs = run_models(data, cfg, models);
-    if (!screened) {
-      res.screening_z2.assign(at(nc), 0.0);
-      res.screening_ratio.assign(at(nc), 1.0);
-    }
-    std::vector<double> est(at(nc), 0.0), sig(at(nc), 0.0), z2v(at(nc), 0.0);
-    int best = -1;
-    double best_z2 = 0.0;
-    std::string grown;
-    for (std::size_t k = 0; k < runs.size(); ++k) {
-      const int c = which[k];
-      const DiagnosisRun& r = runs[k];
-      const int a = position(r, c);
-      if (!r.initialised || a < 0) continue;
-      const std::size_t ua = static_cast<std::size_t>(a);
-      est[at(c)] = r.estimate[ua];
-      sig[at(c)] = r.sigma[ua];
-      z2v[at(c)] = r.z2[ua];
-      const double ratio = r.sigma[ua] * r.sigma[ua] / (r.prior_sigma[ua] * r.prior_sigma[ua]);
-      if (!screened) {
-        res.screening_z2[at(c)] = r.z2[ua];
-        res.screening_ratio[at(c)] = ratio;
-        if (ratio > cfg.max_variance_ratio) {
-          excluded[at(c)] = true;
-          res.unobservable.push_back(candidate_name(cands[at(c)]));
-          continue;
-        }
-        ++res.tested;
-      }
-      // Explained by a baseline state: named with it, never on its own.
-      bool confound = false;
-      for (int s : base) {
-        const double rho = r.correlation(a, position(r, s));
-        if (std::abs(rho) > cfg.max_correlation) {
-          res.confounded_with_baseline.push_back(candidate_name(cands[at(c)]) + " ~ " + candidate_name(cands[at(s)]));
-          confound = true;
-        }
-      }
-      // Not separable from a finding's subspace: joins that group.
-      for (std::size_t gi = 0; !confound && gi < groups.size(); ++gi) {
-        Group& g = groups[gi];
-        // The members this run carries: one that joined earlier in this step is not in this
-        // step's models (m0 + c), and has no row in r.correlation (reading it overran the matrix;
-        // found by ASan on a whole diagnosis).
-        std::vector<int> pos;
-        for (int mbr : g.members)
-          if (const int p = position(r, mbr); p >= 0) pos.push_back(p);
-        const double R = multiple_correlation(r.correlation, a, pos);
-        if (R > cfg.max_correlation) {
-          g.info.push_back(member(c, g, r.correlation(a, position(r, g.lead)), R));
-          g.members.push_back(c);
-          grown += (grown.empty() ? "" : ", ") + candidate_name(cands[at(c)]) + " joins " +
-                   candidate_name(cands[at(g.lead)]);
-          confound = true;
-        }
-      }
-      if (confound) {
-        excluded[at(c)] = true;
-        continue;
-      }
-      if (r.z2[ua] > best_z2) {
-        best_z2 = r.z2[ua];
-        best = c;
-      }
-    }
-    if (!screened) {
-      res.threshold_z2 =
-          res.tested > 0 ? chi2_1_upper_quantile(cfg.alpha / static_cast<double>(res.tested)) : INFINITY;
-      screened = true;
-    }
-    if (!grown.empty()) {  // the search continues from the groups' whole subspace
-      say("step " + std::to_string(step) + ": not separable: " + grown + "; searching again with the group");
-      continue;
-    }
-    if (best < 0 || !(best_z2 > res.threshold_z2)) {
-      say("step " + std::to_string(step) + ": no further significant component");
-      break;
-    }
-    if (static_cast<int>(groups.size()) >= cfg.max_findings) break;
-    std::ostringstream s;
-    s << "step " << step << ": " << candidate_name(cands[at(best)]) << " z^2 " << best_z2 << " (threshold "
-      << res.threshold_z2 << ")";
-    say(s.str());
-    Group g;
-    g.lead = best;
-    g.members = {best};
-    g.alone_est = est;
-    g.alone_sig = sig;
-    g.alone_z2 = z2v;
-    g.selection_model = m0;
-    g.info = {member(best, g, 1.0, 1.0)};
-    groups.push_back(g);
   }
 
-  // The extended model: confirmed in one run with every finding, each by its joint statistic.
-  const double alpha_each = res.tested > 0 ? cfg.alpha / static_cast<double>(res.tested) : 0.0;
+  const RecordedData& data_;
+  const DiagnosisConfig& cfg_;
+  DiagnosisResult& res_;
+  const Progress& say_;
+  const std::vector<Candidate>& cands_;
+  const int nc_;
+  std::vector<bool> excluded_;  ///< unobservable, explained by the baseline, or in a group
+  bool screened_ = false;
+  std::vector<Group> groups_;
+};
+
+/// A group's joint Wald statistic in the extended run (g.z2, g.dof); false when the run lacks a member.
+bool joint_statistic(const DiagnosisRun& ext, const DiagnosisConfig& cfg, Group& g) {
+  const Eigen::Index k = static_cast<Eigen::Index>(g.members.size());
+  Eigen::VectorXd x(k), s0(k);
+  Eigen::MatrixXd P(k, k);
+  std::vector<int> pos;
+  for (int mbr : g.members) pos.push_back(position(ext, mbr));
+  bool ok = ext.initialised;
+  for (int p : pos) ok = ok && p >= 0;
+  if (!ok) return false;
+  for (Eigen::Index i = 0; i < k; ++i) {
+    const std::size_t pi = static_cast<std::size_t>(pos[static_cast<std::size_t>(i)]);
+    x(i) = ext.estimate[pi];
+    s0(i) = ext.prior_sigma[pi];
+    for (Eigen::Index j = 0; j < k; ++j) {
+      const std::size_t pj = static_cast<std::size_t>(pos[static_cast<std::size_t>(j)]);
+      P(i, j) = ext.correlation(static_cast<Eigen::Index>(pi), static_cast<Eigen::Index>(pj)) *
+                ext.sigma[pi] * ext.sigma[pj];
+    }
+  }
+  g.z2 = joint_wald_z2(x, P, s0, cfg.max_variance_ratio, g.dof);
+  return true;
+}
+
+/// The extended model: confirmed in one run with every finding, each by its joint statistic; the
+/// findings below their threshold are dropped and the rest run again (at most
+/// cfg.max_confirmation_passes times).
+void confirm_groups(const RecordedData& data, const DiagnosisConfig& cfg, double alpha_each, std::vector<Group>& groups,
+                    DiagnosisResult& res, const Progress& say) {
   for (int pass = 0; !groups.empty(); ++pass) {
     say("extended model: baseline + " + std::to_string(groups.size()) + " findings");
-    res.extended = run_diagnosis_model(data, cfg, model());
+    res.extended = run_diagnosis_model(data, cfg, search_model(cfg.baseline_states, groups));
     std::vector<Group> keep;
     for (Group& g : groups) {
-      const Eigen::Index k = static_cast<Eigen::Index>(g.members.size());
-      Eigen::VectorXd x(k), s0(k);
-      Eigen::MatrixXd P(k, k);
-      std::vector<int> pos;
-      for (int mbr : g.members) pos.push_back(position(res.extended, mbr));
-      bool ok = res.extended.initialised;
-      for (int p : pos) ok = ok && p >= 0;
-      if (!ok) continue;
-      for (Eigen::Index i = 0; i < k; ++i) {
-        const std::size_t pi = static_cast<std::size_t>(pos[static_cast<std::size_t>(i)]);
-        x(i) = res.extended.estimate[pi];
-        s0(i) = res.extended.prior_sigma[pi];
-        for (Eigen::Index j = 0; j < k; ++j) {
-          const std::size_t pj = static_cast<std::size_t>(pos[static_cast<std::size_t>(j)]);
-          P(i, j) = res.extended.correlation(static_cast<Eigen::Index>(pi), static_cast<Eigen::Index>(pj)) *
-                    res.extended.sigma[pi] * res.extended.sigma[pj];
-        }
-      }
-      g.z2 = joint_wald_z2(x, P, s0, cfg.max_variance_ratio, g.dof);
+      if (!joint_statistic(res.extended, cfg, g)) continue;
       if (g.z2 > chi2_upper_quantile(alpha_each, std::max(g.dof, 1))) keep.push_back(g);
     }
     if (keep.size() == groups.size() || pass + 1 >= cfg.max_confirmation_passes) break;
     groups = keep;
   }
+}
+
+/// The baseline's run, the likelihoods on common measurements, and both models coasting through
+/// the GNSS outages.
+void score_baseline_and_outages(const RecordedData& data, const DiagnosisConfig& cfg, bool no_findings,
+                                DiagnosisResult& res, const Progress& say) {
+  const std::vector<int>& base = cfg.baseline_states;
   say("baseline model");
   res.base = run_diagnosis_model(data, cfg, base);
-  if (groups.empty()) res.extended = res.base;
+  if (no_findings) res.extended = res.base;
   compare_likelihood(res.base, res.extended);
   if (cfg.outage_length_s > 0.0) {  // with a reference: the coasting error; always: the re-acquisition NIS
     say("GNSS outages: " + std::to_string(cfg.outage_length_s) + " s every " + std::to_string(cfg.outage_period_s) +
@@ -296,8 +346,12 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     res.base.outages = o[0].outages;
     res.extended.outages = o[1].outages;
   }
+}
 
-  for (Group& g : groups) {
+/// The findings of the confirmed groups, strongest first.
+void findings_from_groups(const std::vector<Group>& groups, double alpha_each, DiagnosisResult& res) {
+  const std::vector<Candidate>& cands = diagnosis_candidates();
+  for (const Group& g : groups) {
     const int a = position(res.extended, g.lead);
     if (a < 0) continue;
     const std::size_t ua = static_cast<std::size_t>(a);
@@ -327,6 +381,22 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
     for (int mbr : g.members) res.extended_model.push_back(candidate_name(cands[at(mbr)]));
   }
   std::sort(res.findings.begin(), res.findings.end(), [](const Finding& x, const Finding& y) { return x.z2 > y.z2; });
+}
+
+}  // namespace
+
+DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
+                         const std::function<void(const std::string&)>& progress) {
+  const Progress say = [&progress](const std::string& s) {
+    if (progress) progress(s);
+  };
+  DiagnosisResult res;
+  res.baseline = fsw::to_string(cfg.baseline);
+  std::vector<Group> groups = GroupSearch(data, cfg, res, say).run();
+  const double alpha_each = res.tested > 0 ? cfg.alpha / static_cast<double>(res.tested) : 0.0;
+  confirm_groups(data, cfg, alpha_each, groups, res, say);
+  score_baseline_and_outages(data, cfg, groups.empty(), res, say);
+  findings_from_groups(groups, alpha_each, res);
   add_finding_intervals(res, data, cfg, progress);
   set_headline_estimates(res.findings);
   return res;
