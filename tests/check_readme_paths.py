@@ -21,7 +21,8 @@ TOP_FOLDERS = ["fsw", "hal", "sim", "tools", "tests", "cfg", "docs", "bench", "f
 SOURCE_EXTENSIONS = (".hpp", ".cpp", ".h", ".c", ".py", ".sh", ".lcm", ".dbc", ".alm", ".ld", ".cmake")
 HEADERS = (".hpp", ".h")
 # Where `<lib>/<name>.hpp` (the include spelling) lives.
-INCLUDE_DIRS = ["fsw/include", "hal/include", "sim/include", "cfg/include", "tools/lib/include"]
+INCLUDE_DIRS = ["fsw/include", "hal/include", "sim/include", "cfg/include", "tools/run/include",
+                "tools/import/include", "tools/diagnosis/include", "tools/paper/include", "tools/audit/include"]
 NOT_IN_TREE = ("build/", "../", "/", "~", "$", "-")
 
 

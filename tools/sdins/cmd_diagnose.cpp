@@ -472,31 +472,62 @@ void register_diagnose(CLI::App& app) {
                   "shipped flight configuration <data dir>/config/default.toml (default: none, the shipped file alone)");
 }
 
-int run_diagnose() {
-  tools::require_distinct({opt.json, opt.report}, {opt.log, opt.flight_config});
-  const tools::InterruptPolling polling;
-  // The shipped config/default.toml with --flight-config on top, validated before the log is read:
-  // filter, GNSS input, priors, outages.
+namespace {
+
+/// One diagnose invocation's state, handed from step to step of run_diagnose.
+struct Diagnosis {
   tools::DiagnosisConfig cfg;
+  tools::RecordedData data;  ///< as loaded; after a chained search the chain's corrected recording
+  std::string load_report;
+  tools::RecordingEvidence evidence;  ///< what the recording as given says of itself
+  tools::DiagnosisResult r;
+  tools::DiagnosisChain chain;
+  bool chained = false;
+  nlohmann::json profiles;
+  std::vector<tools::Separation> seps;
+  std::vector<tools::SeparationTrial> trials;
+  std::vector<std::string> applied_names;  ///< the corrections the chain applied, each once
+  std::string ext_name;                    ///< the extended model's name
+};
+
+double rms(const tools::InnovationStats& i, bool pvt) { return pvt ? i.pos_rms_m : i.pr_rms_m; }
+double rms_rate(const tools::InnovationStats& i, bool pvt) { return pvt ? i.vel_rms_mps : i.prr_rms_mps; }
+std::string heading_text(const tools::NavErrorStats& n) {
+  char b[64] = "";
+  if (n.attitude_samples > 0) std::snprintf(b, sizeof b, ", heading %.4f deg", n.heading_rms_deg);
+  return std::string(b);
+}
+
+/// The configuration (the shipped config/default.toml with --flight-config on top, validated before
+/// the log is read: filter, GNSS input, priors, outages), the recording and its own evidence.
+void load(Diagnosis& d) {
+  tools::DiagnosisConfig& cfg = d.cfg;
+  tools::RecordedData& data = d.data;
+  std::string& load_report = d.load_report;
   tools::apply_flight_config(cfg, cfg::flight_config(opt.flight_config));
-  tools::RecordedData data;
-  std::string err, load_report;
+  std::string err;
   if (!tools::load_recorded_data(opt.log, data, err, load_report)) throw std::runtime_error(err);
   std::printf("diagnose: %s: %s\n", opt.log.c_str(), load_report.c_str());
   // What the recording as given says of itself (before any correction of the chain).
-  tools::RecordingEvidence evidence = tools::recording_evidence(data, opt.log);
+  d.evidence = tools::recording_evidence(data, opt.log);
   cfg.alpha = opt.alpha;
   cfg.profile_intervals = opt.intervals == "profile";
   if (!tools::set_diagnosis_baseline(cfg, parse_model(opt.baseline, "--baseline", kFlightModels)))
     throw std::runtime_error("--baseline: " + opt.baseline + " is not a diagnosis baseline");
+}
+
+/// The search: the baseline alone (--profile-only), one search (--no-chain) or the chain.
+void search(Diagnosis& d) {
+  tools::DiagnosisConfig& cfg = d.cfg;
+  tools::RecordedData& data = d.data;
+  tools::DiagnosisResult& r = d.r;
+  tools::DiagnosisChain& chain = d.chain;
   const auto progress = [](const std::string& m) {
     std::printf("  %s\n", m.c_str());
     tools::throw_if_interrupted("diagnose stopped (" + m + "); no output written");
   };
   if (opt.profile_only && opt.profile.empty()) throw std::runtime_error("--profile-only needs at least one --profile");
-  tools::DiagnosisResult r;
-  tools::DiagnosisChain chain;
-  const bool chained = !opt.profile_only && !opt.no_chain;
+  d.chained = !opt.profile_only && !opt.no_chain;
   if (opt.profile_only) {
     r.baseline = fsw::to_string(cfg.baseline);
     r.base = tools::run_diagnosis_model(data, cfg, cfg.baseline_states);
@@ -516,6 +547,13 @@ int run_diagnose() {
   }
   tools::throw_if_interrupted("diagnose stopped; no output written");
   if (!r.base.initialised) throw std::runtime_error("the flight software never initialised on this log");
+}
+
+/// The --profile components: each one's profile-likelihood interval on top of the extended model.
+nlohmann::json profile_components(const Diagnosis& d) {
+  const tools::DiagnosisConfig& cfg = d.cfg;
+  const tools::RecordedData& data = d.data;
+  const tools::DiagnosisResult& r = d.r;
   nlohmann::json profiles = nlohmann::json::array();
   for (const std::string& name : opt.profile) {
     const int c = tools::candidate_index(name);
@@ -542,50 +580,62 @@ int run_diagnose() {
                         {"curve", {{"value", pi.theta}, {"deviance", pi.deviance}}}});
     profiles.back()["interval_95"]["measurements"] = pi.measurements;
   }
-  // The manoeuvre that separates each confounded group (docs/diagnosis-separation.md).
+  return profiles;
+}
+
+/// The manoeuvre that separates each confounded group (docs/diagnosis-separation.md).
+void separate_groups(Diagnosis& d) {
+  const tools::DiagnosisResult& r = d.r;
   const tools::FlownScenario flown = tools::scenario_from_sidecar(opt.log);
-  std::vector<tools::SeparationTrial> trials;
   const auto t_sep = std::chrono::steady_clock::now();
-  const std::vector<tools::Separation> seps =
-      tools::suggest_separations(r, cfg, flown, [](const std::string& m) {
+  d.seps = tools::suggest_separations(r, d.cfg, flown, [](const std::string& m) {
         std::printf("  %s\n", m.c_str());
         tools::throw_if_interrupted("diagnose stopped (" + m + "); no output written");
-      }, &trials);
+      }, &d.trials);
   tools::throw_if_interrupted("diagnose stopped; no output written");
   const double sep_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_sep).count();
   bool any_group = false;
   for (const tools::Finding& f : r.findings) any_group = any_group || !f.separable();
   if (any_group) std::printf("  separation suggestions: %.1f s\n", sep_s);
+}
 
-  const auto& cands = tools::diagnosis_candidates();
-  nlohmann::json j;
-  j["baseline"] = opt.baseline;
-  j["log"] = opt.log;
-  j["filter_config"] = opt.flight_config;
-  j["gnss_source"] = cfg::to_string(cfg.gnss_source);
-  j["data"] = {{"imu_samples", data.imu.size()},
-               {"gnss_epochs", data.gnss.size()},
-               {"gnss_solutions", data.pvt.size()},
-               {"truth_samples", data.truth.size()},
-               {"damaged_stretches_excluded", data.damaged_stretches},
-               {"imu_samples_excluded", data.excluded_imu_samples},
-               {"summary", load_report}};
-  j["method"] = {{"statistic", "wald_chi2_1"},
-                 {"alpha", cfg.alpha},
-                 {"tested_components", r.tested},
-                 {"threshold", r.threshold_z2},
-                 {"max_variance_ratio", cfg.max_variance_ratio},
-                 {"max_correlation", cfg.max_correlation},
-                 {"intervals", opt.intervals}};
-  nlohmann::json screening = nlohmann::json::array();
-  for (std::size_t c = 0; c < cands.size() && c < r.screening_z2.size(); ++c)
-    if (std::find(cfg.baseline_states.begin(), cfg.baseline_states.end(), static_cast<int>(c)) == cfg.baseline_states.end())
-      screening.push_back({{"candidate", tools::candidate_name(cands[c])},
-                         {"statistic", r.screening_z2[c]},
-                         {"variance_ratio", r.screening_ratio[c]}});
-  j["screening"] = screening;
-  j["unobservable"] = r.unobservable;
-  j["confounded_with_baseline"] = r.confounded_with_baseline;
+/// The evidence checked against the findings; after the chain, the reference lag on the corrected
+/// recording. Then the extended model's name: the corrections the chain applied to the data or the
+/// antenna, then the states added in its last search.
+void check_evidence_and_name_model(Diagnosis& d) {
+  tools::RecordingEvidence& evidence = d.evidence;
+  const tools::DiagnosisChain& chain = d.chain;
+  const tools::RecordedData& data = d.data;
+  if (d.chained && evidence.has_reference_lag) {
+    // The lag on the corrected recording (the drift's re-timing included) plus the offset applied:
+    // the frame in which the chain states its offset.
+    double offset_applied_s = 0.0;
+    for (const tools::AppliedCorrection& a : chain.applied)
+      if (a.name == "imu_gnss_time_offset") offset_applied_s += a.value;
+    const double as_given_s = evidence.reference_lag_s;
+    tools::reference_lag(evidence, data);  // data: the chain's corrected recording here
+    evidence.reference_lag_s += offset_applied_s;
+    char b[200];
+    std::snprintf(b, sizeof b,
+                  "measured on the recording with the chain's corrections applied, plus the %+.4f s offset applied "
+                  "(on the recording as given: %+.4f s)",
+                  offset_applied_s, as_given_s);
+    evidence.reference_note = b;
+  }
+  tools::check_findings(evidence, d.r.findings);
+  std::vector<std::string>& applied_names = d.applied_names;
+  for (const tools::AppliedCorrection& a : chain.applied)
+    if (std::find(applied_names.begin(), applied_names.end(), a.name) == applied_names.end()) applied_names.push_back(a.name);
+  std::string& ext_name = d.ext_name;
+  ext_name = opt.baseline;
+  for (const std::string& s : applied_names) ext_name += "+" + s + "(applied)";
+  for (const std::string& s : d.r.extended_model) ext_name += "+" + s;
+}
+
+nlohmann::json findings_json(const Diagnosis& d) {
+  const tools::DiagnosisResult& r = d.r;
+  const std::vector<tools::Separation>& seps = d.seps;
+  const std::vector<tools::SeparationTrial>& trials = d.trials;
   nlohmann::json findings = nlohmann::json::array();
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
     const tools::Finding& f = r.findings[fi];
@@ -625,36 +675,12 @@ int run_diagnose() {
                         {"group", group}});
     if (!f.separable()) findings.back()["separation"] = separation_json(seps[fi], trials, fi);
   }
-  j["findings"] = findings;
-  if (chained && evidence.has_reference_lag) {
-    // The lag on the corrected recording (the drift's re-timing included) plus the offset applied:
-    // the frame in which the chain states its offset.
-    double offset_applied_s = 0.0;
-    for (const tools::AppliedCorrection& a : chain.applied)
-      if (a.name == "imu_gnss_time_offset") offset_applied_s += a.value;
-    const double as_given_s = evidence.reference_lag_s;
-    tools::reference_lag(evidence, data);  // data: the chain's corrected recording here
-    evidence.reference_lag_s += offset_applied_s;
-    char b[200];
-    std::snprintf(b, sizeof b,
-                  "measured on the recording with the chain's corrections applied, plus the %+.4f s offset applied "
-                  "(on the recording as given: %+.4f s)",
-                  offset_applied_s, as_given_s);
-    evidence.reference_note = b;
-  }
-  tools::check_findings(evidence, r.findings);
-  j["evidence"] = evidence_json(evidence);
-  j["chain"] = chained ? chain_json(chain) : nlohmann::json(nullptr);
-  j["profiles"] = profiles;
-  // The extended model's name: the corrections the chain applied to the data or the antenna, then
-  // the states added in its last search.
-  std::vector<std::string> applied_names;
-  for (const tools::AppliedCorrection& a : chain.applied)
-    if (std::find(applied_names.begin(), applied_names.end(), a.name) == applied_names.end()) applied_names.push_back(a.name);
-  std::string ext_name = opt.baseline;
-  for (const std::string& s : applied_names) ext_name += "+" + s + "(applied)";
-  for (const std::string& s : r.extended_model) ext_name += "+" + s;
-  j["extended_model"] = {{"name", ext_name}, {"added_states", r.extended_model}, {"applied_corrections", applied_names}};
+  return findings;
+}
+
+nlohmann::json gain_json(const Diagnosis& d) {
+  const tools::DiagnosisConfig& cfg = d.cfg;
+  const tools::DiagnosisResult& r = d.r;
   nlohmann::json gain;
   gain["innovations"] = {{"before", innovations_json(r.base.innovations)},
                          {"after", innovations_json(r.extended.innovations)},
@@ -688,20 +714,68 @@ int run_diagnose() {
   } else {
     gain["outages"] = nullptr;
   }
-  j["gain"] = gain;
-  tools::write_json_file(opt.json, j);
+  return gain;
+}
 
+/// The JSON of --json (docs/diagnosis.md).
+nlohmann::json diagnosis_json(const Diagnosis& d) {
+  const tools::DiagnosisConfig& cfg = d.cfg;
+  const tools::RecordedData& data = d.data;
+  const tools::DiagnosisResult& r = d.r;
+  const std::string& load_report = d.load_report;
+  const auto& cands = tools::diagnosis_candidates();
+  nlohmann::json j;
+  j["baseline"] = opt.baseline;
+  j["log"] = opt.log;
+  j["filter_config"] = opt.flight_config;
+  j["gnss_source"] = cfg::to_string(cfg.gnss_source);
+  j["data"] = {{"imu_samples", data.imu.size()},
+               {"gnss_epochs", data.gnss.size()},
+               {"gnss_solutions", data.pvt.size()},
+               {"truth_samples", data.truth.size()},
+               {"damaged_stretches_excluded", data.damaged_stretches},
+               {"imu_samples_excluded", data.excluded_imu_samples},
+               {"summary", load_report}};
+  j["method"] = {{"statistic", "wald_chi2_1"},
+                 {"alpha", cfg.alpha},
+                 {"tested_components", r.tested},
+                 {"threshold", r.threshold_z2},
+                 {"max_variance_ratio", cfg.max_variance_ratio},
+                 {"max_correlation", cfg.max_correlation},
+                 {"intervals", opt.intervals}};
+  nlohmann::json screening = nlohmann::json::array();
+  for (std::size_t c = 0; c < cands.size() && c < r.screening_z2.size(); ++c)
+    if (std::find(cfg.baseline_states.begin(), cfg.baseline_states.end(), static_cast<int>(c)) == cfg.baseline_states.end())
+      screening.push_back({{"candidate", tools::candidate_name(cands[c])},
+                         {"statistic", r.screening_z2[c]},
+                         {"variance_ratio", r.screening_ratio[c]}});
+  j["screening"] = screening;
+  j["unobservable"] = r.unobservable;
+  j["confounded_with_baseline"] = r.confounded_with_baseline;
+  j["findings"] = findings_json(d);
+  j["evidence"] = evidence_json(d.evidence);
+  j["chain"] = d.chained ? chain_json(d.chain) : nlohmann::json(nullptr);
+  j["profiles"] = d.profiles;
+  j["extended_model"] = {{"name", d.ext_name}, {"added_states", r.extended_model}, {"applied_corrections", d.applied_names}};
+  j["gain"] = gain_json(d);
+  return j;
+}
+
+
+/// What the command prints: the baseline, the chain, the evidence, each finding, the extended model,
+/// the coasting through the outages.
+void print_summary(const Diagnosis& d) {
+  const tools::DiagnosisConfig& cfg = d.cfg;
+  const tools::DiagnosisResult& r = d.r;
+  const tools::DiagnosisChain& chain = d.chain;
+  const bool chained = d.chained;
+  const tools::RecordingEvidence& evidence = d.evidence;
+  const std::vector<tools::Separation>& seps = d.seps;
+  const std::string& ext_name = d.ext_name;
   const bool pvt = cfg.gnss_source == cfg::GnssSource::kPvt;
-  const auto heading_text = [](const tools::NavErrorStats& n) {
-    char b[64] = "";
-    if (n.attitude_samples > 0) std::snprintf(b, sizeof b, ", heading %.4f deg", n.heading_rms_deg);
-    return std::string(b);
-  };
-  const auto rms = [pvt](const tools::InnovationStats& i) { return pvt ? i.pos_rms_m : i.pr_rms_m; };
-  const auto rms_rate = [pvt](const tools::InnovationStats& i) { return pvt ? i.vel_rms_mps : i.prr_rms_mps; };
   std::printf("baseline %s: NIS %.3f, %s innovation RMS %.3f m / %.4f m/s", opt.baseline.c_str(),
-              r.base.innovations.nis_mean, pvt ? "position/velocity" : "pseudorange/rate", rms(r.base.innovations),
-              rms_rate(r.base.innovations));
+              r.base.innovations.nis_mean, pvt ? "position/velocity" : "pseudorange/rate", rms(r.base.innovations, pvt),
+              rms_rate(r.base.innovations, pvt));
   if (r.base.nav.available)
     std::printf("; position %.2f m, velocity %.3f m/s%s RMS", r.base.nav.pos_rms_m, r.base.nav.vel_rms_mps,
                 heading_text(r.base.nav).c_str());
@@ -745,7 +819,7 @@ int run_diagnose() {
   }
   if (!r.findings.empty()) {
     std::printf("extended %s: NIS %.3f, innovation RMS %.3f m / %.4f m/s, log-likelihood %+.1f", ext_name.c_str(),
-                r.extended.innovations.nis_mean, rms(r.extended.innovations), rms_rate(r.extended.innovations),
+                r.extended.innovations.nis_mean, rms(r.extended.innovations, pvt), rms_rate(r.extended.innovations, pvt),
                 r.extended.innovations.log_likelihood - r.base.innovations.log_likelihood);
     if (r.extended.nav.available)
       std::printf("; position %.2f m, velocity %.3f m/s%s RMS", r.extended.nav.pos_rms_m, r.extended.nav.vel_rms_mps,
@@ -768,153 +842,194 @@ int run_diagnose() {
                 "extended (1 if the model explains its coasting error)\n",
                 r.base.outages.reacquisitions, cfg.outage_length_s, pvt ? "position scalar" : "pseudorange",
                 r.base.outages.reacquisition_nis_mean, r.extended.outages.reacquisition_nis_mean);
+}
 
-  bool plots_failed = false;
-  if (!opt.report.empty()) {
-    tools::RunDirectory run_dir(opt.report);  // docs/faults.md: summary.json removed now, written last
-    write_traces(run_dir.path("baseline.csv"), r.base);
-    write_traces(run_dir.path("extended.csv"), r.extended);
-    std::vector<std::string> files = {"diagnosis.json", "report.md", "baseline.csv", "extended.csv"};
-    for (std::size_t fi = 0; fi < seps.size(); ++fi) {
-      if (seps[fi].scenario_toml.empty()) continue;
-      const std::string file = "separation-" + std::to_string(fi + 1) + ".toml";
-      tools::write_text_file(run_dir.path(file), seps[fi].scenario_toml);
-      files.push_back(file);
-    }
-    tools::write_json_file(run_dir.path("diagnosis.json"), j);
-    const int rc = run_plot_script("plot_diagnosis.py", "'" + opt.report + "'");
-    plots_failed = rc != 0;
-    tools::TextOutput md_out(run_dir.path("report.md"));
-    std::ostream& md = md_out.os();
-    md << "# Diagnosis of `" << opt.log << "`\n\n";
-    md << "Data: " << load_report << ".\n\n";
-    md << "Baseline model: " << opt.baseline << " states (+ clock, + Gauss-Markov GPS errors). Each of the "
-       << cands.size() << " catalogue components was tried as one extra state; " << r.tested
-       << " are observable with this data (posterior variance <= " << cfg.max_variance_ratio
-       << " x prior); the test is Wald chi-square(1) at a family-wise false-alarm rate of " << cfg.alpha
-       << " (threshold z^2 = " << fmt(r.threshold_z2, "%.2f") << ").\n\n";
-    if (chained) chain_md(md, chain);
-    md << "## Findings\n\n";
-    if (r.findings.empty()) md << "None: the baseline model explains the data.\n\n";
-    else {
-      md << "| effect | component | estimate | sigma | unit | 95% interval | the filter's own estimate | z^2 | p | not separable from |\n"
-            "|---|---|---|---|---|---|---|---|---|---|\n";
-      for (const tools::Finding& f : r.findings) {
-        std::string cw;
-        for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
-        md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | "
-           << (f.separable() ? fmt(f.estimate) + (f.estimate_method == "profile_maximum" ? " (profile maximum)" : "")
-                             : "group, below")
-           << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "") << " | " << f.unit << " | " << interval_cell(f.interval)
-           << " | " << (f.separable() ? fmt(f.filter_estimate) + " +- " + fmt(f.filter_sigma, "%.3g") : "") << " | "
-           << fmt(f.z2, "%.1f")
-           << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
-           << " | " << fmt(f.p_value, "%.2g") << " | " << cw << " |\n";
-      }
-      md << "\n";
-      bool disagree = false;
-      for (const tools::Finding& f : r.findings) {
-        disagree = disagree || !f.interval.model_agrees;
-        for (const tools::GroupMember& m : f.group) disagree = disagree || !m.alone_interval.model_agrees;
-      }
-      if (disagree)
-        md << "**Not calibrated** (marked above): the filter's estimate lies where the profile likelihood's deviance "
-              "is above "
-           << fmt(tools::kModelAgreementDeviance, "%.2f")
-           << " (p < 0.001). The filter and the profile then disagree about the component, so the model does not "
-              "describe its effect on these data (an unmodelled effect, a wrong noise model), and the interval, which "
-              "assumes it does, is not a calibrated 95% statement (docs/diagnosis-intervals.md).\n\n";
-      for (const tools::Finding& f : r.findings) {
-        if (f.separable()) continue;
-        md << "**A group, not one cause.** The data fit each of these alone about equally well and cannot tell them "
-              "apart; the finding is the group. Each member's estimate is what it alone would need; plausibility is "
-              "relative, under the members' priors only.\n\n"
-              "| member | alone estimate | the filter's alone estimate, sigma | unit | alone 95% interval | prior sigmas | plausibility | correlation with the lead |\n"
-              "|---|---|---|---|---|---|---|---|\n";
-        for (const tools::GroupMember& m : f.group)
-          md << "| " << m.name << " | "
-             << (m.alone_interval.is_profile() ? fmt(m.alone_interval.estimate) + " (profile maximum)" : fmt(m.alone_estimate))
-             << " | " << fmt(m.alone_estimate) << " +- " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
-             << " | " << interval_cell(m.alone_interval) << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
-             << fmt(m.correlation, "%+.4f") << " |\n";
-        md << "\n";
-        const std::size_t fi = static_cast<std::size_t>(&f - r.findings.data());
-        const tools::Separation& sp = seps[fi];
-        md << "**The manoeuvre that separates them.** ";
-        if (sp.predicted) {
-          const std::string file = "separation-" + std::to_string(fi + 1) + ".toml";
-          md << "Fly on with *" << sp.label << "* (" << fmt(sp.added_s, "%.0f") << " s more): the members' "
-             << "correlation goes from " << fmt(sp.flown_correlation, "%.4f") << " to " << fmt(sp.predicted_correlation, "%.3f")
-             << " predicted, " << (sp.separates ? "below" : "**not** below") << " the " << fmt(sp.max_correlation, "%.2f")
-             << " at which members are not told apart. " << sp.note << ".";
-          if (!sp.scenario_toml.empty()) md << " The whole scenario: [" << file << "](" << file << ").";
-          md << "\n\n| appended | more flight [s] | predicted correlation |\n|---|---|---|\n";
-          for (const tools::SeparationTrial& t : trials)
-            md << "| " << t.label << " | " << fmt(t.added_s, "%.0f") << " | "
-               << (t.evaluated && fi < t.correlation.size() ? fmt(t.correlation[fi], "%.3f") : "(" + t.error + ")")
-               << " |\n";
-          md << "\n";
-        } else {
-          md << sp.note << ". Fly: " << sp.label << ".\n\n";
-        }
-        md << "```toml\n" << sp.segments_toml << "```\n\n";
-      }
-    }
-    evidence_md(md, evidence);
-    if (!r.unobservable.empty()) {
-      md << "Not observable with this data (never named as a cause): ";
-      for (std::size_t k = 0; k < r.unobservable.size(); ++k) md << (k ? ", " : "") << r.unobservable[k];
-      md << ".\n\n";
-    }
-    md << "## Gain (extended model " << ext_name << ")\n\n| | baseline | extended |\n|---|---|---|\n";
-    md << "| NIS per measurement | " << fmt(r.base.innovations.nis_mean, "%.3f") << " | "
-       << fmt(r.extended.innovations.nis_mean, "%.3f") << " |\n";
-    md << "| " << (pvt ? "position" : "pseudorange") << " innovation RMS [m] | "
-       << fmt(rms(r.base.innovations), "%.3f") << " | " << fmt(rms(r.extended.innovations), "%.3f") << " |\n";
-    md << "| " << (pvt ? "velocity" : "pseudorange-rate") << " innovation RMS [m/s] | "
-       << fmt(rms_rate(r.base.innovations), "%.4f") << " | " << fmt(rms_rate(r.extended.innovations), "%.4f") << " |\n";
-    md << "| log-likelihood (common measurements) | " << fmt(r.base.innovations.log_likelihood, "%.1f") << " | "
-       << fmt(r.extended.innovations.log_likelihood, "%.1f") << " |\n";
-    if (r.base.nav.available) {
-      md << "| position RMS [m] | " << fmt(r.base.nav.pos_rms_m, "%.2f") << " | " << fmt(r.extended.nav.pos_rms_m, "%.2f") << " |\n";
-      md << "| velocity RMS [m/s] | " << fmt(r.base.nav.vel_rms_mps, "%.3f") << " | " << fmt(r.extended.nav.vel_rms_mps, "%.3f") << " |\n";
-      if (r.base.nav.attitude_samples > 0) {  // a reference without attitude scores position and velocity only
-        md << "| tilt RMS [deg] | " << fmt(r.base.nav.tilt_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.tilt_rms_deg, "%.4f") << " |\n";
-        md << "| heading RMS [deg] | " << fmt(r.base.nav.heading_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.heading_rms_deg, "%.4f") << " |\n";
-      }
-    }
-    if (r.base.outages.windows > 0) {
-      md << "| horizontal error after " << fmt(cfg.outage_length_s, "%.0f") << " s GNSS outages, RMS of "
-         << r.base.outages.windows << " [m] | " << fmt(r.base.outages.horizontal_rms_m, "%.2f") << " | "
-         << fmt(r.extended.outages.horizontal_rms_m, "%.2f") << " |\n";
-      md << "| ... max [m] | " << fmt(r.base.outages.horizontal_max_m, "%.2f") << " | "
-         << fmt(r.extended.outages.horizontal_max_m, "%.2f") << " |\n";
-      md << "| ... the filter's own 1-sigma there, RMS [m] | " << fmt(r.base.outages.predicted_horizontal_rms_m, "%.2f")
-         << " | " << fmt(r.extended.outages.predicted_horizontal_rms_m, "%.2f") << " |\n";
-      md << "| ... horizontal NEES, mean (2 if consistent) | " << fmt(r.base.outages.horizontal_nees_mean, "%.1f")
-         << " | " << fmt(r.extended.outages.horizontal_nees_mean, "%.1f") << " |\n";
-    }
-    if (r.base.outages.reacquisitions > 0)
-      md << "| NIS per scalar of the first update after each of " << r.base.outages.reacquisitions
-         << " outages (1 if consistent; no reference needed) | " << fmt(r.base.outages.reacquisition_nis_mean, "%.1f")
-         << " | " << fmt(r.extended.outages.reacquisition_nis_mean, "%.1f") << " |\n";
-    md << "\n";
-    if (rc == 0) {
-      md << "![innovations](innovations.png)\n\n";
-      if (r.base.nav.available) md << "![heading error](heading.png)\n\n";
-      if (!r.extended_model.empty()) md << "![estimates](estimates.png)\n\n";  // the last search's states
-    } else {
-      md << "(plots not made: plot_diagnosis.py failed)\n\n";
-    }
-    md_out.commit();
-    run_dir.finish({{"command", "diagnose"},
-                    {"log", opt.log},
-                    {"complete", true},
-                    {"findings", r.findings.size()},
-                    {"plots", rc == 0},
-                    {"files", files}});
-    std::printf("report: %s/report.md\n", opt.report.c_str());
+/// The report's findings: the table, and for each group its members and the manoeuvre that
+/// separates them.
+void findings_md(std::ostream& md, const Diagnosis& d) {
+  const tools::DiagnosisResult& r = d.r;
+  const std::vector<tools::Separation>& seps = d.seps;
+  const std::vector<tools::SeparationTrial>& trials = d.trials;
+  md << "## Findings\n\n";
+  if (r.findings.empty()) {
+    md << "None: the baseline model explains the data.\n\n";
+    return;
   }
+  md << "| effect | component | estimate | sigma | unit | 95% interval | the filter's own estimate | z^2 | p | not separable from |\n"
+        "|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const tools::Finding& f : r.findings) {
+    std::string cw;
+    for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
+    md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | "
+       << (f.separable() ? fmt(f.estimate) + (f.estimate_method == "profile_maximum" ? " (profile maximum)" : "")
+                         : "group, below")
+       << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "") << " | " << f.unit << " | " << interval_cell(f.interval)
+       << " | " << (f.separable() ? fmt(f.filter_estimate) + " +- " + fmt(f.filter_sigma, "%.3g") : "") << " | "
+       << fmt(f.z2, "%.1f")
+       << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
+       << " | " << fmt(f.p_value, "%.2g") << " | " << cw << " |\n";
+  }
+  md << "\n";
+  bool disagree = false;
+  for (const tools::Finding& f : r.findings) {
+    disagree = disagree || !f.interval.model_agrees;
+    for (const tools::GroupMember& m : f.group) disagree = disagree || !m.alone_interval.model_agrees;
+  }
+  if (disagree)
+    md << "**Not calibrated** (marked above): the filter's estimate lies where the profile likelihood's deviance "
+          "is above "
+       << fmt(tools::kModelAgreementDeviance, "%.2f")
+       << " (p < 0.001). The filter and the profile then disagree about the component, so the model does not "
+          "describe its effect on these data (an unmodelled effect, a wrong noise model), and the interval, which "
+          "assumes it does, is not a calibrated 95% statement (docs/diagnosis-intervals.md).\n\n";
+  for (const tools::Finding& f : r.findings) {
+    if (f.separable()) continue;
+    md << "**A group, not one cause.** The data fit each of these alone about equally well and cannot tell them "
+          "apart; the finding is the group. Each member's estimate is what it alone would need; plausibility is "
+          "relative, under the members' priors only.\n\n"
+          "| member | alone estimate | the filter's alone estimate, sigma | unit | alone 95% interval | prior sigmas | plausibility | correlation with the lead |\n"
+          "|---|---|---|---|---|---|---|---|\n";
+    for (const tools::GroupMember& m : f.group)
+      md << "| " << m.name << " | "
+         << (m.alone_interval.is_profile() ? fmt(m.alone_interval.estimate) + " (profile maximum)" : fmt(m.alone_estimate))
+         << " | " << fmt(m.alone_estimate) << " +- " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
+         << " | " << interval_cell(m.alone_interval) << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
+         << fmt(m.correlation, "%+.4f") << " |\n";
+    md << "\n";
+    const std::size_t fi = static_cast<std::size_t>(&f - r.findings.data());
+    const tools::Separation& sp = seps[fi];
+    md << "**The manoeuvre that separates them.** ";
+    if (sp.predicted) {
+      const std::string file = "separation-" + std::to_string(fi + 1) + ".toml";
+      md << "Fly on with *" << sp.label << "* (" << fmt(sp.added_s, "%.0f") << " s more): the members' "
+         << "correlation goes from " << fmt(sp.flown_correlation, "%.4f") << " to " << fmt(sp.predicted_correlation, "%.3f")
+         << " predicted, " << (sp.separates ? "below" : "**not** below") << " the " << fmt(sp.max_correlation, "%.2f")
+         << " at which members are not told apart. " << sp.note << ".";
+      if (!sp.scenario_toml.empty()) md << " The whole scenario: [" << file << "](" << file << ").";
+      md << "\n\n| appended | more flight [s] | predicted correlation |\n|---|---|---|\n";
+      for (const tools::SeparationTrial& t : trials)
+        md << "| " << t.label << " | " << fmt(t.added_s, "%.0f") << " | "
+           << (t.evaluated && fi < t.correlation.size() ? fmt(t.correlation[fi], "%.3f") : "(" + t.error + ")")
+           << " |\n";
+      md << "\n";
+    } else {
+      md << sp.note << ". Fly: " << sp.label << ".\n\n";
+    }
+    md << "```toml\n" << sp.segments_toml << "```\n\n";
+  }
+}
+
+/// The report's gain table: baseline against extended model.
+void gain_md(std::ostream& md, const Diagnosis& d) {
+  const tools::DiagnosisConfig& cfg = d.cfg;
+  const tools::DiagnosisResult& r = d.r;
+  const bool pvt = cfg.gnss_source == cfg::GnssSource::kPvt;
+  md << "## Gain (extended model " << d.ext_name << ")\n\n| | baseline | extended |\n|---|---|---|\n";
+  md << "| NIS per measurement | " << fmt(r.base.innovations.nis_mean, "%.3f") << " | "
+     << fmt(r.extended.innovations.nis_mean, "%.3f") << " |\n";
+  md << "| " << (pvt ? "position" : "pseudorange") << " innovation RMS [m] | "
+     << fmt(rms(r.base.innovations, pvt), "%.3f") << " | " << fmt(rms(r.extended.innovations, pvt), "%.3f") << " |\n";
+  md << "| " << (pvt ? "velocity" : "pseudorange-rate") << " innovation RMS [m/s] | "
+     << fmt(rms_rate(r.base.innovations, pvt), "%.4f") << " | " << fmt(rms_rate(r.extended.innovations, pvt), "%.4f") << " |\n";
+  md << "| log-likelihood (common measurements) | " << fmt(r.base.innovations.log_likelihood, "%.1f") << " | "
+     << fmt(r.extended.innovations.log_likelihood, "%.1f") << " |\n";
+  if (r.base.nav.available) {
+    md << "| position RMS [m] | " << fmt(r.base.nav.pos_rms_m, "%.2f") << " | " << fmt(r.extended.nav.pos_rms_m, "%.2f") << " |\n";
+    md << "| velocity RMS [m/s] | " << fmt(r.base.nav.vel_rms_mps, "%.3f") << " | " << fmt(r.extended.nav.vel_rms_mps, "%.3f") << " |\n";
+    if (r.base.nav.attitude_samples > 0) {  // a reference without attitude scores position and velocity only
+      md << "| tilt RMS [deg] | " << fmt(r.base.nav.tilt_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.tilt_rms_deg, "%.4f") << " |\n";
+      md << "| heading RMS [deg] | " << fmt(r.base.nav.heading_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.heading_rms_deg, "%.4f") << " |\n";
+    }
+  }
+  if (r.base.outages.windows > 0) {
+    md << "| horizontal error after " << fmt(cfg.outage_length_s, "%.0f") << " s GNSS outages, RMS of "
+       << r.base.outages.windows << " [m] | " << fmt(r.base.outages.horizontal_rms_m, "%.2f") << " | "
+       << fmt(r.extended.outages.horizontal_rms_m, "%.2f") << " |\n";
+    md << "| ... max [m] | " << fmt(r.base.outages.horizontal_max_m, "%.2f") << " | "
+       << fmt(r.extended.outages.horizontal_max_m, "%.2f") << " |\n";
+    md << "| ... the filter's own 1-sigma there, RMS [m] | " << fmt(r.base.outages.predicted_horizontal_rms_m, "%.2f")
+       << " | " << fmt(r.extended.outages.predicted_horizontal_rms_m, "%.2f") << " |\n";
+    md << "| ... horizontal NEES, mean (2 if consistent) | " << fmt(r.base.outages.horizontal_nees_mean, "%.1f")
+       << " | " << fmt(r.extended.outages.horizontal_nees_mean, "%.1f") << " |\n";
+  }
+  if (r.base.outages.reacquisitions > 0)
+    md << "| NIS per scalar of the first update after each of " << r.base.outages.reacquisitions
+       << " outages (1 if consistent; no reference needed) | " << fmt(r.base.outages.reacquisition_nis_mean, "%.1f")
+       << " | " << fmt(r.extended.outages.reacquisition_nis_mean, "%.1f") << " |\n";
+  md << "\n";
+}
+
+/// --report: the traces, the separation scenarios, the JSON, the plots and report.md. Returns
+/// whether the plots were made.
+bool write_report(const Diagnosis& d, const nlohmann::json& j) {
+  const tools::DiagnosisConfig& cfg = d.cfg;
+  const tools::DiagnosisResult& r = d.r;
+  const std::vector<tools::Separation>& seps = d.seps;
+  const auto& cands = tools::diagnosis_candidates();
+  tools::RunDirectory run_dir(opt.report);  // docs/faults.md: summary.json removed now, written last
+  write_traces(run_dir.path("baseline.csv"), r.base);
+  write_traces(run_dir.path("extended.csv"), r.extended);
+  std::vector<std::string> files = {"diagnosis.json", "report.md", "baseline.csv", "extended.csv"};
+  for (std::size_t fi = 0; fi < seps.size(); ++fi) {
+    if (seps[fi].scenario_toml.empty()) continue;
+    const std::string file = "separation-" + std::to_string(fi + 1) + ".toml";
+    tools::write_text_file(run_dir.path(file), seps[fi].scenario_toml);
+    files.push_back(file);
+  }
+  tools::write_json_file(run_dir.path("diagnosis.json"), j);
+  const int rc = run_plot_script("plot_diagnosis.py", "'" + opt.report + "'");
+  tools::TextOutput md_out(run_dir.path("report.md"));
+  std::ostream& md = md_out.os();
+  md << "# Diagnosis of `" << opt.log << "`\n\n";
+  md << "Data: " << d.load_report << ".\n\n";
+  md << "Baseline model: " << opt.baseline << " states (+ clock, + Gauss-Markov GPS errors). Each of the "
+     << cands.size() << " catalogue components was tried as one extra state; " << r.tested
+     << " are observable with this data (posterior variance <= " << cfg.max_variance_ratio
+     << " x prior); the test is Wald chi-square(1) at a family-wise false-alarm rate of " << cfg.alpha
+     << " (threshold z^2 = " << fmt(r.threshold_z2, "%.2f") << ").\n\n";
+  if (d.chained) chain_md(md, d.chain);
+  findings_md(md, d);
+  evidence_md(md, d.evidence);
+  if (!r.unobservable.empty()) {
+    md << "Not observable with this data (never named as a cause): ";
+    for (std::size_t k = 0; k < r.unobservable.size(); ++k) md << (k ? ", " : "") << r.unobservable[k];
+    md << ".\n\n";
+  }
+  gain_md(md, d);
+  if (rc == 0) {
+    md << "![innovations](innovations.png)\n\n";
+    if (r.base.nav.available) md << "![heading error](heading.png)\n\n";
+    if (!r.extended_model.empty()) md << "![estimates](estimates.png)\n\n";  // the last search's states
+  } else {
+    md << "(plots not made: plot_diagnosis.py failed)\n\n";
+  }
+  md_out.commit();
+  run_dir.finish({{"command", "diagnose"},
+                  {"log", opt.log},
+                  {"complete", true},
+                  {"findings", r.findings.size()},
+                  {"plots", rc == 0},
+                  {"files", files}});
+  std::printf("report: %s/report.md\n", opt.report.c_str());
+  return rc == 0;
+}
+
+}  // namespace
+
+int run_diagnose() {
+  tools::require_distinct({opt.json, opt.report}, {opt.log, opt.flight_config});
+  const tools::InterruptPolling polling;
+  Diagnosis d;
+  load(d);
+  search(d);
+  d.profiles = profile_components(d);
+  separate_groups(d);
+  check_evidence_and_name_model(d);
+  const nlohmann::json j = diagnosis_json(d);
+  tools::write_json_file(opt.json, j);
+  print_summary(d);
+  bool plots_failed = false;
+  if (!opt.report.empty()) plots_failed = !write_report(d, j);
   if (plots_failed) {  // docs/faults.md: an output not written fails the command; the rest is complete
     std::fprintf(stderr, "sdins diagnose: error: the report's figures could not be made (plot_diagnosis.py's message "
                          "above); the JSON and report.md are complete\n");

@@ -1,4 +1,4 @@
-// What the import paths share (private to tools/lib): the collected inputs of a log, the log
+// What the import paths share (private to tools/import): the collected inputs of a log, the log
 // writer, the per-stream summaries, raw epochs, the almanac fit, files and the convbin run. One
 // import engine (import_describe.cpp) uses them; the rtklib and psins formats are presets of it
 // (import_presets.cpp).

@@ -1,6 +1,6 @@
 #include "tools/hil.hpp"
 
-#include "tools/timing_audit.hpp"
+#include "tools/timing_stats.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -120,194 +120,245 @@ std::string fmt(const char* f, double a) {
 
 // ---- bus simulator ------------------------------------------------------------------------------
 
-BusSimResult run_bus_sim(hal::CanBus& bus, sim::SensorStream& stream, const BusSimConfig& cfg,
-                         const std::atomic<bool>* stop) {
-  BusSimResult r;
-  const double t_begin = hal::mono_now_s();
-  r.run_id = cfg.run_id != 0 ? cfg.run_id : draw_run_id();
-  const can::SimMode mode = cfg.lockstep ? can::SimMode::kLockstep : can::SimMode::kRealtime;
-  const long long window = std::max(1, cfg.window_imu);
-  long long acked_imu = 0;
-  bool started = false;
-  double last_progress = hal::mono_now_s();
-  auto stopped = [&] { return stop != nullptr && stop->load(); };
-  auto fail = [&](const std::string& why) {
-    r.ok = false;
-    r.error = why;
-    r.wall_s = hal::mono_now_s() - t_begin;
-    return r;
-  };
+namespace {
 
-  // Takes what the bus holds (waiting up to wait_s for the first frame): our run's FSW_ACKs.
-  auto pump = [&](double wait_s) {
+/// One run of the bus simulator: SIM_CONTROL start, the stream's steps as CAN frames (lockstep
+/// window or real-time pacing), SIM_CONTROL end; the FSW_ACKs read in between. Each step returns
+/// false when the run failed (the result says why).
+class BusSimRun {
+ public:
+  BusSimRun(hal::CanBus& bus, sim::SensorStream& stream, const BusSimConfig& cfg, const std::atomic<bool>* stop)
+      : bus_(bus), stream_(stream), cfg_(cfg), stop_(stop), t_begin_(hal::mono_now_s()),
+        mode_(cfg.lockstep ? can::SimMode::kLockstep : can::SimMode::kRealtime), window_(std::max(1, cfg.window_imu)),
+        last_progress_(hal::mono_now_s()) {
+    r_.run_id = cfg.run_id != 0 ? cfg.run_id : draw_run_id();
+  }
+
+  BusSimResult run() {
+    if (!start() || !send_stream() || !end()) return r_;
+    r_.wall_s = hal::mono_now_s() - t_begin_;
+    if (cfg_.lockstep && (r_.last_ack.imu_frames != r_.imu_sent || r_.last_ack.frames != r_.frames_sent))
+      return fail("lockstep: the flight software took " + std::to_string(r_.last_ack.frames) + " of " +
+                  std::to_string(r_.frames_sent) + " frames (" + std::to_string(r_.last_ack.imu_frames) + " of " +
+                  std::to_string(r_.imu_sent) + " IMU frames)");
+    r_.ok = true;
+    return r_;
+  }
+
+ private:
+  bool stopped() const { return stop_ != nullptr && stop_->load(); }
+
+  BusSimResult fail(const std::string& why) {
+    r_.ok = false;
+    r_.error = why;
+    r_.wall_s = hal::mono_now_s() - t_begin_;
+    return r_;
+  }
+  bool failed(const std::string& why) {
+    fail(why);
+    return false;
+  }
+
+  /// Takes what the bus holds (waiting up to wait_s for the first frame): our run's FSW_ACKs.
+  void pump(double wait_s) {
     CanFrame f;
     double w = wait_s;
-    while (bus.receive(f, w) == CanBusStatus::kOk) {
+    while (bus_.receive(f, w) == CanBusStatus::kOk) {
       w = 0.0;
       can::FswAckFrame a;
-      if (can::decode_fsw_ack(f, a) != can::CodecStatus::kOk || a.run_id != r.run_id) {
-        ++r.foreign_frames;
+      if (can::decode_fsw_ack(f, a) != can::CodecStatus::kOk || a.run_id != r_.run_id) {
+        ++r_.foreign_frames;
         continue;
       }
-      ++r.acks_received;
-      r.last_ack = a;
-      if (!started) {
-        started = true;
-        last_progress = hal::mono_now_s();
+      ++r_.acks_received;
+      r_.last_ack = a;
+      if (!started_) {
+        started_ = true;
+        last_progress_ = hal::mono_now_s();
       }
-      if (static_cast<long long>(a.imu_frames) > acked_imu) {
-        acked_imu = a.imu_frames;
-        last_progress = hal::mono_now_s();
+      if (static_cast<long long>(a.imu_frames) > acked_imu_) {
+        acked_imu_ = a.imu_frames;
+        last_progress_ = hal::mono_now_s();
       }
     }
-  };
-  // Sends one frame; a full transmit queue is retried (never dropped) while acks keep coming.
-  auto send = [&](const CanFrame& f) -> bool {
+  }
+
+  /// Sends one frame; a full transmit queue is retried (never dropped) while acks keep coming.
+  bool send(const CanFrame& f) {
     const double t0 = hal::mono_now_s();
     for (;;) {
-      const CanBusStatus st = bus.send(f);
+      const CanBusStatus st = bus_.send(f);
       if (st == CanBusStatus::kOk) return true;
-      if (st != CanBusStatus::kTxBusy || hal::mono_now_s() - t0 > cfg.ack_timeout_s) {
-        r.error = std::string("send on ") + bus.name() + ": " + hal::to_string(st) + ": " + bus.last_error();
+      if (st != CanBusStatus::kTxBusy || hal::mono_now_s() - t0 > cfg_.ack_timeout_s) {
+        r_.error = std::string("send on ") + bus_.name() + ": " + hal::to_string(st) + ": " + bus_.last_error();
         return false;
       }
-      ++r.tx_busy_retries;
+      ++r_.tx_busy_retries;
       pump(0.001);
     }
-  };
-  auto send_control = [&](can::SimCommand cmd, std::uint32_t steps, std::uint32_t imu, std::uint32_t frames) {
+  }
+
+  bool send_control(can::SimCommand cmd, std::uint32_t steps, std::uint32_t imu, std::uint32_t frames) {
     can::SimControlFrame c;
     c.command = cmd;
-    c.mode = mode;
-    c.window_imu = static_cast<std::uint16_t>(std::min<long long>(window, 65535));
-    c.run_id = r.run_id;
-    c.seed = cfg.seed;
+    c.mode = mode_;
+    c.window_imu = static_cast<std::uint16_t>(std::min<long long>(window_, 65535));
+    c.run_id = r_.run_id;
+    c.seed = cfg_.seed;
     c.steps = steps;
     c.imu_samples = imu;
     c.frames = frames;
     CanFrame f;
     can::encode_sim_control(c, f);
     if (!send(f)) return false;
-    ++r.control_sent;
+    ++r_.control_sent;
     return true;
-  };
+  }
 
-  // Start: repeated until the flight software answers (so it may start before or after us).
-  const int spe = std::max(1, stream.samples_per_epoch());
-  const long long planned_imu = stream.total_samples();
-  const long long planned_steps = (planned_imu + spe - 1) / spe;
-  {
+  /// Start: repeated until the flight software answers (so it may start before or after us).
+  bool start() {
+    const int spe = std::max(1, stream_.samples_per_epoch());
+    const long long planned_imu = stream_.total_samples();
+    const long long planned_steps = (planned_imu + spe - 1) / spe;
     const double t0 = hal::mono_now_s();
     double next_try = t0;
-    while (!started) {
-      if (stopped()) return fail("stopped");
+    while (!started_) {
+      if (stopped()) return failed("stopped");
       if (hal::mono_now_s() >= next_try) {
         if (!send_control(can::SimCommand::kStart, static_cast<std::uint32_t>(planned_steps),
                           static_cast<std::uint32_t>(planned_imu), 0))
-          return fail(r.error);
-        next_try = hal::mono_now_s() + cfg.start_retry_s;
+          return failed(r_.error);
+        next_try = hal::mono_now_s() + cfg_.start_retry_s;
       }
       pump(0.02);
-      if (!started && hal::mono_now_s() - t0 > cfg.ack_timeout_s)
-        return fail("no flight software answered the SIM_CONTROL start on " + bus.name() + " within " +
-                    fmt("%g", cfg.ack_timeout_s) + " s (is `sdins fsw --can " + bus.name() + "` running?)");
+      if (!started_ && hal::mono_now_s() - t0 > cfg_.ack_timeout_s)
+        return failed("no flight software answered the SIM_CONTROL start on " + bus_.name() + " within " +
+                      fmt("%g", cfg_.ack_timeout_s) + " s (is `sdins fsw --can " + bus_.name() + "` running?)");
+    }
+    return true;
+  }
+
+  /// Lockstep: waits while `window` IMU samples are not yet acknowledged.
+  bool wait_for_window() {
+    bool waited = false;
+    double w0 = 0.0;
+    while (r_.imu_sent - acked_imu_ >= window_) {
+      if (!waited) {
+        waited = true;
+        w0 = hal::mono_now_s();
+        ++r_.window_waits;
+      }
+      if (stopped()) return failed("stopped");
+      pump(0.05);
+      if (hal::mono_now_s() - last_progress_ > cfg_.ack_timeout_s)
+        return failed("no FSW_ACK progress for " + fmt("%g", cfg_.ack_timeout_s) + " s (acknowledged " +
+                      std::to_string(acked_imu_) + " of " + std::to_string(r_.imu_sent) +
+                      " IMU samples sent): has the flight software stopped?");
+    }
+    if (waited) r_.window_wait_s += hal::mono_now_s() - w0;
+    return true;
+  }
+
+  /// Real time: every pace_every-th IMU sample waits for its time on CLOCK_MONOTONIC.
+  void pace(const CanFrame& f) {
+    can::ImuFrame d;
+    if (can::decode_imu(f, d) != can::CodecStatus::kOk) return;
+    if (!have_t0_) {
+      have_t0_ = true;
+      mono0_ = hal::mono_now_s();
+      t0_s_ = d.sample.t_s;
+    }
+    if (r_.imu_sent % std::max(1, cfg_.pace_every) == 0) {
+      const double late = hal::sleep_until_mono_s(mono0_ + (d.sample.t_s - t0_s_) / cfg_.speed);
+      ++r_.paced;
+      late_sum_ += late;
+      r_.late_max_s = std::max(r_.late_max_s, late);
     }
   }
 
-  StepProducer producer(stream, stop);
-  EncodedStep step;
-  bool have_t0 = false;
-  double mono0 = 0.0, t0_s = 0.0, late_sum = 0.0;
-  while (producer.next(step)) {
-    if (stopped()) return fail("stopped");
-    ++r.steps;
-    r.imu_rejected += step.r.imu_rejected;
-    r.imu_flagged += step.r.imu_flagged;
-    r.gps_skipped += step.r.gps_skipped;
-    r.gps_rejected += step.r.gps_rejected;
-    r.almanac_rejected += step.r.almanac_rejected;
-    for (const CanFrame& f : step.frames) {
-      const bool is_imu = f.id == can::kIdImuSample;
-      if (is_imu && cfg.lockstep) {
-        bool waited = false;
-        double w0 = 0.0;
-        while (r.imu_sent - acked_imu >= window) {
-          if (!waited) {
-            waited = true;
-            w0 = hal::mono_now_s();
-            ++r.window_waits;
-          }
-          if (stopped()) return fail("stopped");
-          pump(0.05);
-          if (hal::mono_now_s() - last_progress > cfg.ack_timeout_s)
-            return fail("no FSW_ACK progress for " + fmt("%g", cfg.ack_timeout_s) + " s (acknowledged " +
-                        std::to_string(acked_imu) + " of " + std::to_string(r.imu_sent) +
-                        " IMU samples sent): has the flight software stopped?");
-        }
-        if (waited) r.window_wait_s += hal::mono_now_s() - w0;
-      }
-      if (is_imu && !cfg.lockstep) {
-        can::ImuFrame d;
-        if (can::decode_imu(f, d) == can::CodecStatus::kOk) {
-          if (!have_t0) {
-            have_t0 = true;
-            mono0 = hal::mono_now_s();
-            t0_s = d.sample.t_s;
-          }
-          if (r.imu_sent % std::max(1, cfg.pace_every) == 0) {
-            const double late = hal::sleep_until_mono_s(mono0 + (d.sample.t_s - t0_s) / cfg.speed);
-            ++r.paced;
-            late_sum += late;
-            r.late_max_s = std::max(r.late_max_s, late);
-          }
-        }
-      }
-      if (!send(f)) return fail(r.error);
-      ++r.frames_sent;
-      if (is_imu) {
-        ++r.imu_sent;
-        r.max_ahead_imu = std::max(r.max_ahead_imu, r.imu_sent - acked_imu);
-      } else if (f.id == can::kIdGpsEpoch) {
-        ++r.gps_epochs;
-      } else if (f.id == can::kIdGpsAlmanac) {
-        ++r.almanac_sent;
-      }
-      pump(0.0);
+  bool send_frame(const CanFrame& f) {
+    const bool is_imu = f.id == can::kIdImuSample;
+    if (is_imu && cfg_.lockstep && !wait_for_window()) return false;
+    if (is_imu && !cfg_.lockstep) pace(f);
+    if (!send(f)) return failed(r_.error);
+    ++r_.frames_sent;
+    if (is_imu) {
+      ++r_.imu_sent;
+      r_.max_ahead_imu = std::max(r_.max_ahead_imu, r_.imu_sent - acked_imu_);
+    } else if (f.id == can::kIdGpsEpoch) {
+      ++r_.gps_epochs;
+    } else if (f.id == can::kIdGpsAlmanac) {
+      ++r_.almanac_sent;
     }
+    pump(0.0);
+    return true;
   }
-  if (!producer.error().empty()) return fail("simulator: " + producer.error());
-  if (r.paced > 0) r.late_mean_s = late_sum / static_cast<double>(r.paced);
 
-  // End: repeated until the flight software confirms it with the final counts.
-  {
+  /// The stream's steps, each encoded into its frames.
+  bool send_stream() {
+    StepProducer producer(stream_, stop_);
+    EncodedStep step;
+    while (producer.next(step)) {
+      if (stopped()) return failed("stopped");
+      ++r_.steps;
+      r_.imu_rejected += step.r.imu_rejected;
+      r_.imu_flagged += step.r.imu_flagged;
+      r_.gps_skipped += step.r.gps_skipped;
+      r_.gps_rejected += step.r.gps_rejected;
+      r_.almanac_rejected += step.r.almanac_rejected;
+      for (const CanFrame& f : step.frames)
+        if (!send_frame(f)) return false;
+    }
+    if (!producer.error().empty()) return failed("simulator: " + producer.error());
+    if (r_.paced > 0) r_.late_mean_s = late_sum_ / static_cast<double>(r_.paced);
+    return true;
+  }
+
+  /// End: repeated until the flight software confirms it with the final counts.
+  bool end() {
     const double t0 = hal::mono_now_s();
     double next_try = t0;
     for (;;) {
-      if (stopped()) return fail("stopped");
+      if (stopped()) return failed("stopped");
       if (hal::mono_now_s() >= next_try) {
-        if (!send_control(can::SimCommand::kEnd, static_cast<std::uint32_t>(r.steps),
-                          static_cast<std::uint32_t>(r.imu_sent), static_cast<std::uint32_t>(r.frames_sent)))
-          return fail(r.error);
-        next_try = hal::mono_now_s() + cfg.start_retry_s;
+        if (!send_control(can::SimCommand::kEnd, static_cast<std::uint32_t>(r_.steps),
+                          static_cast<std::uint32_t>(r_.imu_sent), static_cast<std::uint32_t>(r_.frames_sent)))
+          return failed(r_.error);
+        next_try = hal::mono_now_s() + cfg_.start_retry_s;
       }
       pump(0.02);
-      if ((r.last_ack.flags & can::kAckEndReceived) != 0) {
-        r.final_ack = true;
-        break;
+      if ((r_.last_ack.flags & can::kAckEndReceived) != 0) {
+        r_.final_ack = true;
+        return true;
       }
-      if (hal::mono_now_s() - t0 > cfg.ack_timeout_s)
-        return fail("the flight software did not acknowledge the SIM_CONTROL end within " +
-                    fmt("%g", cfg.ack_timeout_s) + " s (last ack: " + std::to_string(r.last_ack.imu_frames) + " of " +
-                    std::to_string(r.imu_sent) + " IMU frames)");
+      if (hal::mono_now_s() - t0 > cfg_.ack_timeout_s)
+        return failed("the flight software did not acknowledge the SIM_CONTROL end within " +
+                      fmt("%g", cfg_.ack_timeout_s) + " s (last ack: " + std::to_string(r_.last_ack.imu_frames) +
+                      " of " + std::to_string(r_.imu_sent) + " IMU frames)");
     }
   }
-  r.wall_s = hal::mono_now_s() - t_begin;
-  if (cfg.lockstep && (r.last_ack.imu_frames != r.imu_sent || r.last_ack.frames != r.frames_sent))
-    return fail("lockstep: the flight software took " + std::to_string(r.last_ack.frames) + " of " +
-                std::to_string(r.frames_sent) + " frames (" + std::to_string(r.last_ack.imu_frames) + " of " +
-                std::to_string(r.imu_sent) + " IMU frames)");
-  r.ok = true;
-  return r;
+
+  hal::CanBus& bus_;
+  sim::SensorStream& stream_;
+  const BusSimConfig& cfg_;
+  const std::atomic<bool>* stop_;
+  BusSimResult r_;
+  const double t_begin_;
+  const can::SimMode mode_;
+  const long long window_;
+  long long acked_imu_ = 0;
+  bool started_ = false;
+  double last_progress_;
+  // Real-time pacing: the monotonic time and stream time of the first IMU sample.
+  bool have_t0_ = false;
+  double mono0_ = 0.0, t0_s_ = 0.0, late_sum_ = 0.0;
+};
+
+}  // namespace
+
+BusSimResult run_bus_sim(hal::CanBus& bus, sim::SensorStream& stream, const BusSimConfig& cfg,
+                         const std::atomic<bool>* stop) {
+  return BusSimRun(bus, stream, cfg, stop).run();
 }
 
 nlohmann::json to_json(const BusSimResult& r) {
@@ -357,6 +408,102 @@ const char* to_string(FswExit e) {
   return "unknown";
 }
 
+namespace {
+
+/// Real time: each IMU frame's lateness against the first one's arrival, and each minor frame's
+/// execution (the handling of every frame since the previous minor frame completed).
+class RealtimeMeter {
+ public:
+  RealtimeMeter(const FswRunConfig& cfg, double budget_s, FswRunResult& r) : cfg_(cfg), budget_s_(budget_s), r_(r) {}
+
+  void imu_arrived(const CanFrame& f, double arrival) {
+    can::ImuFrame d;
+    if (can::decode_imu(f, d) != can::CodecStatus::kOk) return;
+    if (!have_base_) {
+      have_base_ = true;
+      base_mono_ = arrival;
+      base_t_ = d.sample.t_s;
+    }
+    imu_t_s_ = d.sample.t_s;
+    const double late = arrival - (base_mono_ + (d.sample.t_s - base_t_));
+    r_.imu_lateness_max_s = r_.imu_lateness_n == 0 ? late : std::max(r_.imu_lateness_max_s, late);
+    ++r_.imu_lateness_n;
+    late_sum_ += late;
+    if (late > cfg_.late_threshold_s) ++r_.imu_late;
+  }
+
+  /// A minor frame's execution: the handling of every frame since the previous one completed,
+  /// as the flight application closes them (FrameOutput::frame_closed: before initialisation
+  /// a frame's worth of levelling samples and the initialisation attempts on the GNSS epochs).
+  void frame_handled(hal::FswNode& node, double arrival, double arrival_cpu, std::uint64_t nav_before,
+                     std::uint64_t minor_before) {
+    exec_acc_ += hal::mono_now_s() - arrival;
+    exec_cpu_acc_ += hal::thread_cpu_now_s() - arrival_cpu;
+    const bool nav_frame = node.summary().nav_frames != nav_before;
+    if (node.summary().minor_frames == minor_before) return;
+    node.set_prev_tick_exec_s(exec_acc_);
+    ++r_.minor_frames_timed;
+    r_.frame_exec_s.push_back(exec_acc_);
+    exec_sum_ += exec_acc_;
+    if (exec_acc_ > r_.exec_max_s) {
+      const fsw::FrameOutput& fo = node.last_frame();
+      r_.exec_max_s = exec_acc_;
+      r_.exec_max_t_s = nav_frame ? fo.nav.t_s : imu_t_s_;
+      r_.exec_max_work = !nav_frame                    ? "before initialisation (levelling, initialisation attempts)"
+                         : fo.ekf_released             ? "released the 1 Hz group"
+                         : fo.ekf_ran                  ? "landed a 1 Hz correction"
+                                                       : "200 Hz group only";
+    }
+    r_.exec_cpu_max_s = std::max(r_.exec_cpu_max_s, exec_cpu_acc_);
+    if (exec_acc_ > budget_s_) ++(exec_cpu_acc_ > budget_s_ ? r_.overruns_execution : r_.overruns_stalled);
+    exec_acc_ = 0.0;
+    exec_cpu_acc_ = 0.0;
+  }
+
+  void finish() {
+    if (r_.minor_frames_timed > 0) r_.exec_mean_s = exec_sum_ / static_cast<double>(r_.minor_frames_timed);
+    if (r_.imu_lateness_n > 0) r_.imu_lateness_mean_s = late_sum_ / static_cast<double>(r_.imu_lateness_n);
+  }
+
+ private:
+  const FswRunConfig& cfg_;
+  const double budget_s_;  ///< the executive's overrun threshold
+  FswRunResult& r_;
+  double exec_acc_ = 0.0, exec_cpu_acc_ = 0.0, exec_sum_ = 0.0, late_sum_ = 0.0;
+  double imu_t_s_ = 0.0;  ///< the last IMU sample's time
+  bool have_base_ = false;
+  double base_mono_ = 0.0, base_t_ = 0.0;
+};
+
+/// The run's final counts: the node's, the receive side's, the bus's and the telemetry's.
+void read_final_counts(FswRunResult& r, const hal::FswNode& node, const hal::CanFswInput& in, const hal::CanBus& bus) {
+  r.summary = node.summary();
+  r.exec = node.exec_health();
+  r.app = node.app_health();
+  r.rx = in.health();
+  r.bus = bus.stats();
+  r.run_started = in.run_started();
+  r.end_received = in.end_received();
+  r.run = in.run();
+  r.end = in.end();
+  r.data_frames = in.data_frames();
+  r.imu_frames = in.imu_frames();
+  r.imu_delivered = in.imu_delivered();
+  r.control_frames = in.control_frames();
+  r.control_rejected = in.control_rejected();
+  r.foreign_acks = in.foreign_acks();
+  if (r.end_received)
+    r.counts_match_end = r.last_ack.imu_frames == r.end.imu_samples && r.last_ack.frames == r.end.frames;
+  const hal::LcmTelemetry& t = node.sink().telemetry();
+  r.lcm_network = t.network_active();
+  r.lcm_published = t.published();
+  r.lcm_send_failures = t.send_failures();
+  r.lcm_logged = t.logged();
+  r.lcm_log_failures = t.log_failures();
+}
+
+}  // namespace
+
 FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomic<bool>* stop,
                      void (*warn)(const std::string&)) {
   FswRunResult r;
@@ -397,11 +544,7 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
     last_ack_imu = a.imu_frames;
   };
 
-  double exec_acc = 0.0, exec_cpu_acc = 0.0, exec_sum = 0.0, late_sum = 0.0;
-  const double budget_s = ncfg.app.exec.frame_budget_s;  // the executive's overrun threshold
-  double imu_t_s = 0.0;  // the last IMU sample's time
-  bool have_base = false;
-  double base_mono = 0.0, base_t = 0.0;
+  RealtimeMeter meter(cfg, ncfg.app.exec.frame_budget_s, r);
   for (;;) {
     if (stop != nullptr && stop->load()) {
       r.exit = FswExit::kStopped;
@@ -430,52 +573,11 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
     const double arrival_cpu = cfg.realtime ? hal::thread_cpu_now_s() : 0.0;
     last_frame = arrival;
     ++r.frames_received;
-    if (cfg.realtime && !f.extended && f.id == can::kIdImuSample) {
-      can::ImuFrame d;
-      if (can::decode_imu(f, d) == can::CodecStatus::kOk) {
-        if (!have_base) {
-          have_base = true;
-          base_mono = arrival;
-          base_t = d.sample.t_s;
-        }
-        imu_t_s = d.sample.t_s;
-        const double late = arrival - (base_mono + (d.sample.t_s - base_t));
-        r.imu_lateness_max_s = r.imu_lateness_n == 0 ? late : std::max(r.imu_lateness_max_s, late);
-        ++r.imu_lateness_n;
-        late_sum += late;
-        if (late > cfg.late_threshold_s) ++r.imu_late;
-      }
-    }
+    if (cfg.realtime && !f.extended && f.id == can::kIdImuSample) meter.imu_arrived(f, arrival);
     const std::uint64_t nav_before = node.summary().nav_frames, minor_before = node.summary().minor_frames;
     in.push(f, f.timestamp_s);
     fsw::drive(in, node);
-    if (cfg.realtime) {
-      // A minor frame's execution: the handling of every frame since the previous one completed,
-      // as the flight application closes them (FrameOutput::frame_closed: before initialisation
-      // a frame's worth of levelling samples and the initialisation attempts on the GNSS epochs).
-      exec_acc += hal::mono_now_s() - arrival;
-      exec_cpu_acc += hal::thread_cpu_now_s() - arrival_cpu;
-      const bool nav_frame = node.summary().nav_frames != nav_before;
-      if (node.summary().minor_frames != minor_before) {
-        node.set_prev_tick_exec_s(exec_acc);
-        ++r.minor_frames_timed;
-        r.frame_exec_s.push_back(exec_acc);
-        exec_sum += exec_acc;
-        if (exec_acc > r.exec_max_s) {
-          const fsw::FrameOutput& fo = node.last_frame();
-          r.exec_max_s = exec_acc;
-          r.exec_max_t_s = nav_frame ? fo.nav.t_s : imu_t_s;
-          r.exec_max_work = !nav_frame                    ? "before initialisation (levelling, initialisation attempts)"
-                            : fo.ekf_released             ? "released the 1 Hz group"
-                            : fo.ekf_ran                  ? "landed a 1 Hz correction"
-                                                          : "200 Hz group only";
-        }
-        r.exec_cpu_max_s = std::max(r.exec_cpu_max_s, exec_cpu_acc);
-        if (exec_acc > budget_s) ++(exec_cpu_acc > budget_s ? r.overruns_execution : r.overruns_stalled);
-        exec_acc = 0.0;
-        exec_cpu_acc = 0.0;
-      }
-    }
+    if (cfg.realtime) meter.frame_handled(node, arrival, arrival_cpu, nav_before, minor_before);
     if (in.control_changed()) {
       if (in.end_received()) {
         in.finish();
@@ -496,32 +598,8 @@ FswRunResult run_fsw(hal::CanBus& bus, const FswRunConfig& cfg, const std::atomi
     if (in.run_started()) send_ack();
   }
   r.wall_s = hal::mono_now_s() - t_begin;
-  if (r.minor_frames_timed > 0) r.exec_mean_s = exec_sum / static_cast<double>(r.minor_frames_timed);
-  if (r.imu_lateness_n > 0) r.imu_lateness_mean_s = late_sum / static_cast<double>(r.imu_lateness_n);
-
-  r.summary = node.summary();
-  r.exec = node.exec_health();
-  r.app = node.app_health();
-  r.rx = in.health();
-  r.bus = bus.stats();
-  r.run_started = in.run_started();
-  r.end_received = in.end_received();
-  r.run = in.run();
-  r.end = in.end();
-  r.data_frames = in.data_frames();
-  r.imu_frames = in.imu_frames();
-  r.imu_delivered = in.imu_delivered();
-  r.control_frames = in.control_frames();
-  r.control_rejected = in.control_rejected();
-  r.foreign_acks = in.foreign_acks();
-  if (r.end_received)
-    r.counts_match_end = r.last_ack.imu_frames == r.end.imu_samples && r.last_ack.frames == r.end.frames;
-  const hal::LcmTelemetry& t = node.sink().telemetry();
-  r.lcm_network = t.network_active();
-  r.lcm_published = t.published();
-  r.lcm_send_failures = t.send_failures();
-  r.lcm_logged = t.logged();
-  r.lcm_log_failures = t.log_failures();
+  meter.finish();
+  read_final_counts(r, node, in, bus);
   if (!node.close(err) && r.exit != FswExit::kError) {
     r.exit = FswExit::kError;
     r.error = err;

@@ -343,13 +343,14 @@ RecordedData record_scenario(const sim::Scenario& sc, std::uint64_t seed, double
 }
 
 // ---------------------------------------------------------------------------------------------
-DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
-                             bool with_outages) {
-  const std::vector<Candidate>& cands = diagnosis_candidates();
-  DiagnosisRun run;
-  run.active = active;
-  const int na = static_cast<int>(active.size());
+namespace {
 
+/// The flight configuration of one diagnosis run: the diagnosis' priors become EKF sigmas on top of
+/// the loaded (validated) configuration, and every candidate outside `active` is frozen. The
+/// result is checked against the same rules, so a refusal names the prior instead of reading as a
+/// flight software that never initialised.
+fsw::FlightAppConfig diagnosis_app_config(const DiagnosisConfig& cfg, const std::vector<int>& active) {
+  const std::vector<Candidate>& cands = diagnosis_candidates();
   fsw::FlightAppConfig app_cfg = cfg.app;
   fsw::EkfConfig& e = app_cfg.exec.ekf;
   e.gyro_misalign_sigma_rad = prior_sigma_si(cfg, Effect::kGyroMisalignment);
@@ -366,163 +367,178 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
   for (std::size_t i = 0; i < cands.size(); ++i)
     if (std::find(active.begin(), active.end(), static_cast<int>(i)) == active.end())
       e.frozen_states |= std::uint64_t{1} << cands[i].state;
-
-  // The diagnosis' priors become EKF sigmas on top of the loaded (validated) configuration: the
-  // result is checked against the same rules, so a refusal names the prior instead of reading as
-  // a flight software that never initialised.
   if (const fsw::ConfigCheck check = fsw::check_config(app_cfg); !check.ok())
     throw std::runtime_error("the diagnosis' priors on the flight configuration: " +
                              cfg::describe(check, app_cfg, cfg::FlightConfig{}));
-  auto driver = std::make_unique<fsw::FlightDriver<LayoutDiag>>();  // the 56-state application: not on the stack
-  const App& app = driver->app();
-  if (driver->init(app_cfg) != fsw::Status::kOk) return run;
-  run.prior_sigma.resize(static_cast<std::size_t>(na));
-  for (int a = 0; a < na; ++a)
-    run.prior_sigma[static_cast<std::size_t>(a)] = cfg.prior[static_cast<std::size_t>(cands[active[a]].effect)];
+  return app_cfg;
+}
 
-  double pr_ss = 0.0, prr_ss = 0.0, pos_ss = 0.0, vel_ss = 0.0, nis = 0.0;
-  constexpr double kScoreInterval_s = 0.1;
-  double next_score_t_s = -1e300;
-  double nav_pos_ss = 0.0, nav_vel_ss = 0.0, nav_tilt_ss = 0.0, nav_head_ss = 0.0;
-  // GNSS outages (with_outages): window k covers [t0 + k period, t0 + k period + length), GNSS time.
-  const auto outage_window = [&](double t) -> long {
-    if (!with_outages || !run.initialised) return -1;
-    const double t0 = run.init_t_s + cfg.outage_first_s;
-    if (t < t0) return -1;
-    const long k = static_cast<long>(std::floor((t - t0) / cfg.outage_period_s));
-    return t - t0 - static_cast<double>(k) * cfg.outage_period_s < cfg.outage_length_s ? k : -1;
-  };
-  bool in_outage = false, await_reacquisition = false;
-  double reacq_nis_sum = 0.0;
-  long window_open = -1;
-  double window_err_h = 0.0, window_err_v = 0.0, window_var_h = 0.0, window_nees_h = 0.0;
-  double out_h_ss = 0.0, out_v_ss = 0.0, out_var_h_sum = 0.0, out_nees_sum = 0.0;
-  const auto close_window = [&]() {
-    if (window_open < 0) return;
-    ++run.outages.windows;
-    out_h_ss += window_err_h * window_err_h;
-    out_v_ss += window_err_v * window_err_v;
-    out_var_h_sum += window_var_h;
-    out_nees_sum += window_nees_h;
-    run.outages.horizontal_max_m = std::max(run.outages.horizontal_max_m, window_err_h);
-    window_open = -1;
-  };
-  // The likelihood's keys are the GNSS measurement times (the last epoch fed), not the IMU clock:
-  // runs on re-timed IMU data (diagnosis_intervals.cpp) compare the same measurements.
-  double last_gnss_t_s = 0.0;
-  // The inputs the configuration takes, in arrival order: the almanac, the IMU samples and the GNSS
-  // input of cfg.gnss_source (raw epochs or solutions; the other is not fed), less the epochs an
-  // outage window withholds.
-  const auto keep = [&](const fsw::InputEvent& in) {
+/// The scoring of one diagnosis run: which inputs the run takes (keep) and, after every navigation
+/// frame, what it scores (score: an observer of the driver, fsw/driver.hpp); finish() turns the
+/// sums into the run's statistics.
+class RunScoring {
+ public:
+  RunScoring(const RecordedData& data, const DiagnosisConfig& cfg, const App& app, double nav_rate_hz,
+             bool with_outages, DiagnosisRun& run)
+      : data_(data), cfg_(cfg), app_(app), nav_rate_hz_(nav_rate_hz), with_outages_(with_outages), run_(run) {}
+
+  /// The inputs the configuration takes, in arrival order: the almanac, the IMU samples and the GNSS
+  /// input of cfg.gnss_source (raw epochs or solutions; the other is not fed), less the epochs an
+  /// outage window withholds.
+  bool keep(const fsw::InputEvent& in) {
     const bool raw = in.kind == fsw::InputEvent::Kind::kGnssRaw, pvt = in.kind == fsw::InputEvent::Kind::kGnssPvt;
     if (!raw && !pvt) return true;
-    if (cfg.gnss_source != (raw ? cfg::GnssSource::kRaw : cfg::GnssSource::kPvt)) return false;
-    last_gnss_t_s = in.t_s;
+    if (cfg_.gnss_source != (raw ? cfg::GnssSource::kRaw : cfg::GnssSource::kPvt)) return false;
+    last_gnss_t_s_ = in.t_s;
     if (outage_window(in.t_s) >= 0) {
-      ++run.outages.epochs_withheld;
-      in_outage = true;
+      ++run_.outages.epochs_withheld;
+      in_outage_ = true;
       return false;
     }
-    if (in_outage) await_reacquisition = true;
-    in_outage = false;
+    if (in_outage_) await_reacquisition_ = true;
+    in_outage_ = false;
     return true;
-  };
-  // The scoring, after every navigation frame (an observer of the driver, fsw/driver.hpp).
-  const auto score = [&](const fsw::InputEvent& in, fsw::Status st, const fsw::FrameOutput& out) {
+  }
+
+  void score(const fsw::InputEvent& in, fsw::Status st, const fsw::FrameOutput& out) {
     if (in.kind != fsw::InputEvent::Kind::kImu || st != fsw::Status::kOk || !out.nav_valid) return;
-    if (!run.initialised && app.initialised()) {
-      run.initialised = true;
-      run.init_t_s = app.health().init_t_s;
+    if (!run_.initialised && app_.initialised()) {
+      run_.initialised = true;
+      run_.init_t_s = app_.health().init_t_s;
     }
-    const auto& ekf = app.executive().ekf();
-    // Navigation error against truth; the solution's time tag is on the IMU clock: the model's own
-    // offset estimate puts it on GNSS time. A reference without attitude is a GNSS solution (what
-    // `sdins import` writes from an RTK .pos): it is of the antenna, so the model's antenna (its
-    // IMU point moved by its own lever-arm estimate) is scored against it; a simulator's truth
-    // (with attitude) is of the IMU point.
-    const auto scored_error_enu_m = [&](const TruthPoint& t) {
-      const fsw::Vec3 llh =
-          t.has_attitude ? out.nav.llh
-                         : fsw::Vec3(out.nav.llh + fsw::llh_delta_from_enu(out.nav.llh, out.nav.C_b_n() * ekf.lever_arm_b_m()));
-      return fsw::Vec3(fsw::enu_difference_m(llh, t.llh));
-    };
-    if (with_outages && !data.truth.empty()) {
-      // Every navigation frame: the error at the last frame inside a window is the error after the
-      // whole outage, whatever the navigation rate.
-      const double tg = out.nav.t_s - ekf.time_offset_at(out.nav.t_s);
-      const long w = outage_window(tg);
-      if (w != window_open) close_window();
-      TruthPoint t;
-      if (w >= 0 && truth_at(data.truth, tg, t)) {
-        window_open = w;
-        const fsw::Vec3 dp = scored_error_enu_m(t);
-        window_err_h = dp.head<2>().norm();
-        window_err_v = (out.nav.vel_enu_mps - t.vel_enu_mps).norm();
-        const Eigen::Matrix2d P_h = ekf.P().template block<2, 2>(fsw::LayoutDiag::offset(fsw::Block::kPosition), fsw::LayoutDiag::offset(fsw::Block::kPosition));
-        window_var_h = P_h.trace();
-        window_nees_h = dp.head<2>().dot(P_h.ldlt().solve(dp.head<2>()));
-      }
-    }
-    // The RMS over the run: 10 Hz in time (the first frame at or after each multiple of 0.1 s), from
-    // init + gain_skip_s, so that runs at different navigation rates are scored alike.
-    if (!with_outages && !data.truth.empty() && out.nav.t_s >= run.init_t_s + cfg.gain_skip_s &&
-        out.nav.t_s >= next_score_t_s) {
-      next_score_t_s = (std::floor(out.nav.t_s / kScoreInterval_s + 1e-9) + 1.0) * kScoreInterval_s;
-      TruthPoint t;
-      if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_at(out.nav.t_s), t)) {
-        const fsw::Vec3 dp = scored_error_enu_m(t);
-        const sim::NavErrors err = sim::nav_errors(out.nav, t);
-        const fsw::Vec3& dv = err.vel_enu_mps;
-        nav_pos_ss += dp.squaredNorm();
-        nav_vel_ss += dv.squaredNorm();
-        ++run.nav.samples;
-        if (t.has_attitude) {
-          const fsw::Vec3& phi = err.att_phi_enu_rad;
-          nav_tilt_ss += phi.head<2>().squaredNorm();
-          nav_head_ss += phi.z() * phi.z();
-          ++run.nav.attitude_samples;
-          run.nav.heading_final_deg = phi.z() * fsw::kRadToDeg;
-        }
-      }
-    }
+    if (with_outages_ && !data_.truth.empty()) score_outage_error(out);
+    if (!with_outages_ && !data_.truth.empty()) score_navigation_error(out);
     if (!out.ekf_ran || !out.ekf_updated) return;
-    const fsw::EkfUpdateReport& rep = out.report;
-    if (await_reacquisition) {
-      // The first update after an outage: its position scalars / pseudoranges, used or gated.
-      double z2 = 0.0;
-      int n = 0;
-      const auto add = [&](fsw::InnovationOutcome o, double nu, double S) {
-        if ((o == fsw::InnovationOutcome::kUsed || o == fsw::InnovationOutcome::kGated) && S > 0.0) {
-          z2 += nu * nu / S;
-          ++n;
-        }
-      };
-      if (rep.pvt)
-        for (std::size_t i = 0; i < 3; ++i) add(rep.pvt_obs[i].outcome, rep.pvt_obs[i].innovation, rep.pvt_obs[i].variance);
-      for (int k = 0; k < rep.n_obs; ++k) {
-        const fsw::ObservationInnovation& o = rep.obs[static_cast<std::size_t>(k)];
-        add(o.pr_outcome, o.pr_innovation_m, o.pr_variance_m2);
-      }
-      if (n > 0) {
-        reacq_nis_sum += z2 / n;
-        ++run.outages.reacquisitions;
-        await_reacquisition = false;
-      }
+    if (await_reacquisition_) score_reacquisition(out.report);
+    score_innovations(out);
+    record_traces(out);
+  }
+
+  void finish() {
+    close_window();
+    finish_outages();
+    finish_innovations();
+    finish_navigation();
+  }
+
+ private:
+  /// GNSS outages (with_outages): window k covers [t0 + k period, t0 + k period + length), GNSS time.
+  long outage_window(double t) const {
+    if (!with_outages_ || !run_.initialised) return -1;
+    const double t0 = run_.init_t_s + cfg_.outage_first_s;
+    if (t < t0) return -1;
+    const long k = static_cast<long>(std::floor((t - t0) / cfg_.outage_period_s));
+    return t - t0 - static_cast<double>(k) * cfg_.outage_period_s < cfg_.outage_length_s ? k : -1;
+  }
+
+  void close_window() {
+    if (window_open_ < 0) return;
+    ++run_.outages.windows;
+    out_h_ss_ += window_err_h_ * window_err_h_;
+    out_v_ss_ += window_err_v_ * window_err_v_;
+    out_var_h_sum_ += window_var_h_;
+    out_nees_sum_ += window_nees_h_;
+    run_.outages.horizontal_max_m = std::max(run_.outages.horizontal_max_m, window_err_h_);
+    window_open_ = -1;
+  }
+
+  /// Navigation error against truth; the solution's time tag is on the IMU clock: the model's own
+  /// offset estimate puts it on GNSS time. A reference without attitude is a GNSS solution (what
+  /// `sdins import` writes from an RTK .pos): it is of the antenna, so the model's antenna (its
+  /// IMU point moved by its own lever-arm estimate) is scored against it; a simulator's truth
+  /// (with attitude) is of the IMU point.
+  fsw::Vec3 scored_error_enu_m(const fsw::FrameOutput& out, const TruthPoint& t) const {
+    const auto& ekf = app_.executive().ekf();
+    const fsw::Vec3 llh =
+        t.has_attitude ? out.nav.llh
+                       : fsw::Vec3(out.nav.llh + fsw::llh_delta_from_enu(out.nav.llh, out.nav.C_b_n() * ekf.lever_arm_b_m()));
+    return fsw::Vec3(fsw::enu_difference_m(llh, t.llh));
+  }
+
+  /// Every navigation frame: the error at the last frame inside a window is the error after the
+  /// whole outage, whatever the navigation rate.
+  void score_outage_error(const fsw::FrameOutput& out) {
+    const auto& ekf = app_.executive().ekf();
+    const double tg = out.nav.t_s - ekf.time_offset_at(out.nav.t_s);
+    const long w = outage_window(tg);
+    if (w != window_open_) close_window();
+    TruthPoint t;
+    if (w >= 0 && truth_at(data_.truth, tg, t)) {
+      window_open_ = w;
+      const fsw::Vec3 dp = scored_error_enu_m(out, t);
+      window_err_h_ = dp.head<2>().norm();
+      window_err_v_ = (out.nav.vel_enu_mps - t.vel_enu_mps).norm();
+      const Eigen::Matrix2d P_h = ekf.P().template block<2, 2>(LayoutDiag::offset(Block::kPosition), LayoutDiag::offset(Block::kPosition));
+      window_var_h_ = P_h.trace();
+      window_nees_h_ = dp.head<2>().dot(P_h.ldlt().solve(dp.head<2>()));
     }
-    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(last_gnss_t_s * app_cfg.exec.nav_rate_hz));
+  }
+
+  /// The RMS over the run: 10 Hz in time (the first frame at or after each multiple of 0.1 s), from
+  /// init + gain_skip_s, so that runs at different navigation rates are scored alike.
+  void score_navigation_error(const fsw::FrameOutput& out) {
+    constexpr double kScoreInterval_s = 0.1;
+    if (!(out.nav.t_s >= run_.init_t_s + cfg_.gain_skip_s && out.nav.t_s >= next_score_t_s_)) return;
+    next_score_t_s_ = (std::floor(out.nav.t_s / kScoreInterval_s + 1e-9) + 1.0) * kScoreInterval_s;
+    TruthPoint t;
+    if (!truth_at(data_.truth, out.nav.t_s - app_.executive().ekf().time_offset_at(out.nav.t_s), t)) return;
+    const fsw::Vec3 dp = scored_error_enu_m(out, t);
+    const sim::NavErrors err = sim::nav_errors(out.nav, t);
+    const fsw::Vec3& dv = err.vel_enu_mps;
+    nav_pos_ss_ += dp.squaredNorm();
+    nav_vel_ss_ += dv.squaredNorm();
+    ++run_.nav.samples;
+    if (t.has_attitude) {
+      const fsw::Vec3& phi = err.att_phi_enu_rad;
+      nav_tilt_ss_ += phi.head<2>().squaredNorm();
+      nav_head_ss_ += phi.z() * phi.z();
+      ++run_.nav.attitude_samples;
+      run_.nav.heading_final_deg = phi.z() * fsw::kRadToDeg;
+    }
+  }
+
+  /// The first update after an outage: its position scalars / pseudoranges, used or gated.
+  void score_reacquisition(const fsw::EkfUpdateReport& rep) {
+    double z2 = 0.0;
+    int n = 0;
+    const auto add = [&](fsw::InnovationOutcome o, double nu, double S) {
+      if ((o == fsw::InnovationOutcome::kUsed || o == fsw::InnovationOutcome::kGated) && S > 0.0) {
+        z2 += nu * nu / S;
+        ++n;
+      }
+    };
+    if (rep.pvt)
+      for (std::size_t i = 0; i < 3; ++i) add(rep.pvt_obs[i].outcome, rep.pvt_obs[i].innovation, rep.pvt_obs[i].variance);
+    for (int k = 0; k < rep.n_obs; ++k) {
+      const fsw::ObservationInnovation& o = rep.obs[static_cast<std::size_t>(k)];
+      add(o.pr_outcome, o.pr_innovation_m, o.pr_variance_m2);
+    }
+    if (n > 0) {
+      reacq_nis_sum_ += z2 / n;
+      ++run_.outages.reacquisitions;
+      await_reacquisition_ = false;
+    }
+  }
+
+  /// An update's innovations: the likelihood's scalars (keyed by the GNSS measurement time, the last
+  /// epoch fed, not the IMU clock: runs on re-timed IMU data, diagnosis_intervals.cpp, compare the
+  /// same measurements), the gated ones, the sums and the per-epoch RMS traces.
+  void score_innovations(const fsw::FrameOutput& out) {
+    const fsw::EkfUpdateReport& rep = out.report;
+    const std::uint64_t frame = static_cast<std::uint64_t>(std::llround(last_gnss_t_s_ * nav_rate_hz_));
     double epr = 0.0, eprr = 0.0, epos = 0.0, evel = 0.0;
     int npr = 0, nprr = 0, npos = 0, nvel = 0;
     if (rep.pvt) {
       for (int i = 0; i < 6; ++i) {
         const fsw::PvtInnovation& o = rep.pvt_obs[static_cast<std::size_t>(i)];
         if (o.outcome == fsw::InnovationOutcome::kGated) {
-          ++run.innovations.rejected;
-          run.gated.emplace_back(frame, std::uint8_t{0});
+          ++run_.innovations.rejected;
+          run_.gated.emplace_back(frame, std::uint8_t{0});
         }
         if (o.outcome != fsw::InnovationOutcome::kUsed) continue;
         // Keys above the raw observations' (k < kMaxGnssChannels = 16).
-        run.scalars.push_back({DiagnosisRun::frame_key(frame) | (static_cast<std::uint64_t>(16 + i) << 1), o.innovation, o.variance});
-        nis += o.innovation * o.innovation / o.variance;
+        run_.scalars.push_back({DiagnosisRun::frame_key(frame) | (static_cast<std::uint64_t>(16 + i) << 1), o.innovation, o.variance});
+        nis_ += o.innovation * o.innovation / o.variance;
         (i < 3 ? epos : evel) += o.innovation * o.innovation;
         ++(i < 3 ? npos : nvel);
       }
@@ -531,88 +547,122 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
       const fsw::ObservationInnovation& o = rep.obs[static_cast<std::size_t>(k)];
       const std::uint64_t key = DiagnosisRun::frame_key(frame) | (static_cast<std::uint64_t>(k) << 1);
       if (o.pr_outcome == fsw::InnovationOutcome::kUsed) {
-        run.scalars.push_back({key, o.pr_innovation_m, o.pr_variance_m2});
+        run_.scalars.push_back({key, o.pr_innovation_m, o.pr_variance_m2});
         epr += o.pr_innovation_m * o.pr_innovation_m;
-        nis += o.pr_innovation_m * o.pr_innovation_m / o.pr_variance_m2;
+        nis_ += o.pr_innovation_m * o.pr_innovation_m / o.pr_variance_m2;
         ++npr;
       } else if (o.pr_outcome == fsw::InnovationOutcome::kGated) {
-        ++run.innovations.rejected;
-        run.gated.emplace_back(frame, o.prn);
+        ++run_.innovations.rejected;
+        run_.gated.emplace_back(frame, o.prn);
       }
       if (o.prr_outcome == fsw::InnovationOutcome::kUsed) {
-        run.scalars.push_back({key | 1u, o.prr_innovation_mps, o.prr_variance_m2ps2});
+        run_.scalars.push_back({key | 1u, o.prr_innovation_mps, o.prr_variance_m2ps2});
         eprr += o.prr_innovation_mps * o.prr_innovation_mps;
-        nis += o.prr_innovation_mps * o.prr_innovation_mps / o.prr_variance_m2ps2;
+        nis_ += o.prr_innovation_mps * o.prr_innovation_mps / o.prr_variance_m2ps2;
         ++nprr;
       } else if (o.prr_outcome == fsw::InnovationOutcome::kGated) {
-        ++run.innovations.rejected;
-        if (o.pr_outcome != fsw::InnovationOutcome::kGated) run.gated.emplace_back(frame, o.prn);
+        ++run_.innovations.rejected;
+        if (o.pr_outcome != fsw::InnovationOutcome::kGated) run_.gated.emplace_back(frame, o.prn);
       }
     }
-    pr_ss += epr;
-    prr_ss += eprr;
-    pos_ss += epos;
-    vel_ss += evel;
-    run.innovations.pr_used += npr;
-    run.innovations.prr_used += nprr;
-    run.innovations.pos_used += npos;
-    run.innovations.vel_used += nvel;
-    ++run.innovations.epochs;
-    run.t_s.push_back(out.nav.t_s);
-    run.pr_rms_m.push_back(npr > 0 ? std::sqrt(epr / npr) : 0.0);
-    run.prr_rms_mps.push_back(nprr > 0 ? std::sqrt(eprr / nprr) : 0.0);
-    run.pos_rms_m.push_back(npos > 0 ? std::sqrt(epos / npos) : 0.0);
-    run.vel_rms_mps.push_back(nvel > 0 ? std::sqrt(evel / nvel) : 0.0);
+    pr_ss_ += epr;
+    prr_ss_ += eprr;
+    pos_ss_ += epos;
+    vel_ss_ += evel;
+    run_.innovations.pr_used += npr;
+    run_.innovations.prr_used += nprr;
+    run_.innovations.pos_used += npos;
+    run_.innovations.vel_used += nvel;
+    ++run_.innovations.epochs;
+    run_.t_s.push_back(out.nav.t_s);
+    run_.pr_rms_m.push_back(npr > 0 ? std::sqrt(epr / npr) : 0.0);
+    run_.prr_rms_mps.push_back(nprr > 0 ? std::sqrt(eprr / nprr) : 0.0);
+    run_.pos_rms_m.push_back(npos > 0 ? std::sqrt(epos / npos) : 0.0);
+    run_.vel_rms_mps.push_back(nvel > 0 ? std::sqrt(evel / nvel) : 0.0);
+  }
+
+  /// At each update: the heading error against truth and the active candidates' estimates and sigmas.
+  void record_traces(const fsw::FrameOutput& out) {
+    const std::vector<Candidate>& cands = diagnosis_candidates();
+    const auto& ekf = app_.executive().ekf();
     double head = NAN;
-    if (!data.truth.empty()) {
+    if (!data_.truth.empty()) {
       TruthPoint t;
-      if (truth_at(data.truth, out.nav.t_s - ekf.time_offset_s(), t) && t.has_attitude)
+      if (truth_at(data_.truth, out.nav.t_s - ekf.time_offset_s(), t) && t.has_attitude)
         head = sim::nav_errors(out.nav, t).att_phi_enu_rad.z() * fsw::kRadToDeg;
     }
-    run.heading_err_deg.push_back(head);
+    run_.heading_err_deg.push_back(head);
+    const int na = static_cast<int>(run_.active.size());
     std::vector<double> est(static_cast<std::size_t>(na)), sig(static_cast<std::size_t>(na));
     for (int a = 0; a < na; ++a) {
-      const Candidate& c = cands[static_cast<std::size_t>(active[a])];
+      const Candidate& c = cands[static_cast<std::size_t>(run_.active[a])];
       const double u = fsw::effect_info(c.effect).unit_to_si;
-      est[static_cast<std::size_t>(a)] = estimate_si(app, c) / u;
+      est[static_cast<std::size_t>(a)] = estimate_si(app_, c) / u;
       sig[static_cast<std::size_t>(a)] = std::sqrt(ekf.P()(c.state, c.state)) / u;
     }
-    run.est_trace.push_back(std::move(est));
-    run.sigma_trace.push_back(std::move(sig));
-  };
-  RecordedSource recording(data);
-  auto inputs = fsw::filtered(recording, keep);
-  auto scoring = fsw::after_each(score);
-  fsw::drive(inputs, *driver, scoring);
-  close_window();
-  if (run.outages.windows > 0) {
-    run.outages.horizontal_rms_m = std::sqrt(out_h_ss / run.outages.windows);
-    run.outages.velocity_rms_mps = std::sqrt(out_v_ss / run.outages.windows);
-    run.outages.predicted_horizontal_rms_m = std::sqrt(out_var_h_sum / run.outages.windows);
-    run.outages.horizontal_nees_mean = out_nees_sum / run.outages.windows;
+    run_.est_trace.push_back(std::move(est));
+    run_.sigma_trace.push_back(std::move(sig));
   }
-  if (run.outages.reacquisitions > 0) run.outages.reacquisition_nis_mean = reacq_nis_sum / run.outages.reacquisitions;
-  const int nused =
-      run.innovations.pr_used + run.innovations.prr_used + run.innovations.pos_used + run.innovations.vel_used;
-  run.innovations.nis_mean = nused > 0 ? nis / nused : 0.0;
-  run.innovations.pr_rms_m = run.innovations.pr_used > 0 ? std::sqrt(pr_ss / run.innovations.pr_used) : 0.0;
-  run.innovations.prr_rms_mps = run.innovations.prr_used > 0 ? std::sqrt(prr_ss / run.innovations.prr_used) : 0.0;
-  run.innovations.pos_rms_m = run.innovations.pos_used > 0 ? std::sqrt(pos_ss / run.innovations.pos_used) : 0.0;
-  run.innovations.vel_rms_mps = run.innovations.vel_used > 0 ? std::sqrt(vel_ss / run.innovations.vel_used) : 0.0;
-  run.innovations.log_likelihood = 0.0;
-  for (const DiagnosisRun::Scalar& s : run.scalars)
-    run.innovations.log_likelihood -= 0.5 * (std::log(2.0 * fsw::kPi * s.S) + s.nu * s.nu / s.S);
-  run.innovations.common = static_cast<int>(run.scalars.size());
-  if (run.nav.samples > 0) {
-    const double n = run.nav.samples;
-    run.nav.available = true;
-    run.nav.pos_rms_m = std::sqrt(nav_pos_ss / n);
-    run.nav.vel_rms_mps = std::sqrt(nav_vel_ss / n);
-    const double n_att = std::max(1, run.nav.attitude_samples);
-    run.nav.tilt_rms_deg = run.nav.attitude_samples > 0 ? std::sqrt(nav_tilt_ss / n_att) * fsw::kRadToDeg : NAN;
-    run.nav.heading_rms_deg = run.nav.attitude_samples > 0 ? std::sqrt(nav_head_ss / n_att) * fsw::kRadToDeg : NAN;
+
+  void finish_outages() {
+    if (run_.outages.windows > 0) {
+      run_.outages.horizontal_rms_m = std::sqrt(out_h_ss_ / run_.outages.windows);
+      run_.outages.velocity_rms_mps = std::sqrt(out_v_ss_ / run_.outages.windows);
+      run_.outages.predicted_horizontal_rms_m = std::sqrt(out_var_h_sum_ / run_.outages.windows);
+      run_.outages.horizontal_nees_mean = out_nees_sum_ / run_.outages.windows;
+    }
+    if (run_.outages.reacquisitions > 0) run_.outages.reacquisition_nis_mean = reacq_nis_sum_ / run_.outages.reacquisitions;
   }
-  // Final estimates, Wald statistics and the posterior correlation of the active candidates.
+
+  void finish_innovations() {
+    InnovationStats& s = run_.innovations;
+    const int nused = s.pr_used + s.prr_used + s.pos_used + s.vel_used;
+    s.nis_mean = nused > 0 ? nis_ / nused : 0.0;
+    s.pr_rms_m = s.pr_used > 0 ? std::sqrt(pr_ss_ / s.pr_used) : 0.0;
+    s.prr_rms_mps = s.prr_used > 0 ? std::sqrt(prr_ss_ / s.prr_used) : 0.0;
+    s.pos_rms_m = s.pos_used > 0 ? std::sqrt(pos_ss_ / s.pos_used) : 0.0;
+    s.vel_rms_mps = s.vel_used > 0 ? std::sqrt(vel_ss_ / s.vel_used) : 0.0;
+    s.log_likelihood = 0.0;
+    for (const DiagnosisRun::Scalar& x : run_.scalars) s.log_likelihood -= 0.5 * (std::log(2.0 * fsw::kPi * x.S) + x.nu * x.nu / x.S);
+    s.common = static_cast<int>(run_.scalars.size());
+  }
+
+  void finish_navigation() {
+    if (run_.nav.samples <= 0) return;
+    const double n = run_.nav.samples;
+    run_.nav.available = true;
+    run_.nav.pos_rms_m = std::sqrt(nav_pos_ss_ / n);
+    run_.nav.vel_rms_mps = std::sqrt(nav_vel_ss_ / n);
+    const double n_att = std::max(1, run_.nav.attitude_samples);
+    run_.nav.tilt_rms_deg = run_.nav.attitude_samples > 0 ? std::sqrt(nav_tilt_ss_ / n_att) * fsw::kRadToDeg : NAN;
+    run_.nav.heading_rms_deg = run_.nav.attitude_samples > 0 ? std::sqrt(nav_head_ss_ / n_att) * fsw::kRadToDeg : NAN;
+  }
+
+  const RecordedData& data_;
+  const DiagnosisConfig& cfg_;
+  const App& app_;
+  const double nav_rate_hz_;
+  const bool with_outages_;
+  DiagnosisRun& run_;
+  // Innovations: sums of squares and of the NIS.
+  double pr_ss_ = 0.0, prr_ss_ = 0.0, pos_ss_ = 0.0, vel_ss_ = 0.0, nis_ = 0.0;
+  // Navigation error against truth.
+  double next_score_t_s_ = -1e300;
+  double nav_pos_ss_ = 0.0, nav_vel_ss_ = 0.0, nav_tilt_ss_ = 0.0, nav_head_ss_ = 0.0;
+  // Outages: the open window, its error, and the sums over closed windows.
+  bool in_outage_ = false, await_reacquisition_ = false;
+  double reacq_nis_sum_ = 0.0;
+  long window_open_ = -1;
+  double window_err_h_ = 0.0, window_err_v_ = 0.0, window_var_h_ = 0.0, window_nees_h_ = 0.0;
+  double out_h_ss_ = 0.0, out_v_ss_ = 0.0, out_var_h_sum_ = 0.0, out_nees_sum_ = 0.0;
+  double last_gnss_t_s_ = 0.0;
+};
+
+/// Final estimates, Wald statistics and the posterior correlation of the active candidates.
+void final_estimates(const App& app, const DiagnosisConfig& cfg, DiagnosisRun& run) {
+  const std::vector<Candidate>& cands = diagnosis_candidates();
+  const std::vector<int>& active = run.active;
+  const int na = static_cast<int>(active.size());
   const auto& P = app.executive().ekf().P();
   run.estimate.resize(static_cast<std::size_t>(na));
   run.sigma.resize(static_cast<std::size_t>(na));
@@ -633,6 +683,33 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
       if (a != b) run.correlation(a, b) = d > 0.0 ? P(c.state, sb) / d : 0.0;
     }
   }
+}
+
+}  // namespace
+
+DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
+                             bool with_outages) {
+  const std::vector<Candidate>& cands = diagnosis_candidates();
+  DiagnosisRun run;
+  run.active = active;
+  const int na = static_cast<int>(active.size());
+  const fsw::FlightAppConfig app_cfg = diagnosis_app_config(cfg, active);
+  auto driver = std::make_unique<fsw::FlightDriver<LayoutDiag>>();  // the 56-state application: not on the stack
+  const App& app = driver->app();
+  if (driver->init(app_cfg) != fsw::Status::kOk) return run;
+  run.prior_sigma.resize(static_cast<std::size_t>(na));
+  for (int a = 0; a < na; ++a)
+    run.prior_sigma[static_cast<std::size_t>(a)] = cfg.prior[static_cast<std::size_t>(cands[active[a]].effect)];
+
+  RunScoring scoring(data, cfg, app, app_cfg.exec.nav_rate_hz, with_outages, run);
+  RecordedSource recording(data);
+  auto inputs = fsw::filtered(recording, [&scoring](const fsw::InputEvent& in) { return scoring.keep(in); });
+  auto observer = fsw::after_each([&scoring](const fsw::InputEvent& in, fsw::Status st, const fsw::FrameOutput& out) {
+    scoring.score(in, st, out);
+  });
+  fsw::drive(inputs, *driver, observer);
+  scoring.finish();
+  final_estimates(app, cfg, run);
   run.exec_health = app.executive().health();
   return run;
 }

@@ -255,6 +255,204 @@ FlownScenario scenario_from_sidecar(const std::string& log_path) {
   return out;
 }
 
+namespace {
+
+/// What every step of suggest_separations shares: the diagnosis, the flight flown, the groups
+/// (indices into r.findings) and each group's member candidates.
+struct SeparationContext {
+  const DiagnosisResult& r;
+  const DiagnosisConfig& cfg;
+  const FlownScenario& flown;
+  std::size_t nf = 0;                      ///< findings
+  std::vector<std::vector<int>> members;   ///< per finding: its group's member candidates
+  std::vector<std::size_t> groups;         ///< the findings that are groups
+};
+
+/// The groups among the findings, each with its members and their correlation as flown.
+void collect_groups(SeparationContext& ctx, std::vector<Separation>& out) {
+  for (std::size_t i = 0; i < ctx.nf; ++i) {
+    const Finding& f = ctx.r.findings[i];
+    if (f.separable()) continue;
+    Separation& s = out[i];
+    for (const GroupMember& m : f.group) s.members.push_back(m.name);
+    s.max_correlation = ctx.cfg.max_correlation;
+    ctx.members[i] = member_candidates(f);
+    const std::vector<int> pos = positions(ctx.r.extended, ctx.members[i]);
+    if (ctx.r.extended.initialised && std::find(pos.begin(), pos.end(), -1) == pos.end())
+      s.flown_correlation = group_correlation(ctx.r.extended.correlation, pos);
+    ctx.groups.push_back(i);
+  }
+}
+
+/// Segments only: every candidate, one after the other (a test flight that flies them all).
+void segments_without_prediction(const std::vector<std::size_t>& groups, const std::string& why_not,
+                                 std::vector<Separation>& out) {
+  const std::vector<SeparationTrial> cands = separation_candidates();
+  for (std::size_t i : groups) {
+    Separation& s = out[i];
+    s.predicted = false;
+    s.note = why_not;
+    s.label = "every candidate manoeuvre in turn (not predicted)";
+    for (const SeparationTrial& c : cands) {
+      s.label += (s.segments.empty() ? ": " : ", ") + c.label;
+      s.segments.insert(s.segments.end(), c.segments.begin(), c.segments.end());
+    }
+    s.segments_toml = sim::segments_toml(s.segments);
+  }
+}
+
+/// One trial: the flown scenario with the trial's segments appended, simulated, and the extended
+/// model run over it; the predicted correlation of each group's members.
+void evaluate_trial(const SeparationContext& ctx, Trial& tr) {
+  SeparationTrial& t = tr.t;
+  try {
+    sim::Scenario ext;
+    std::string err;
+    if (!sim::append_segments(ctx.flown.scenario, t.segments, ext, err)) {
+      t.error = err;
+      return;
+    }
+    t.added_s = ext.duration_s - ctx.flown.scenario.duration_s;
+    // The covariance depends on the trajectory, not on how finely the IMU samples it: the
+    // prediction flies the IMU at the navigation rate when the scenario's is a multiple of it.
+    if (ext.imu.rate_hz > kPredictionImuRate_hz && ext.imu.rate_hz % kPredictionImuRate_hz == 0)
+      ext.imu.rate_hz = kPredictionImuRate_hz;
+    const RecordedData d = record_scenario(ext, ext.seed);
+    const DiagnosisRun run = run_diagnosis_model(d, ctx.cfg, ctx.r.extended.active);
+    if (!run.initialised) {
+      t.error = "the diagnosis model did not initialise on the simulated flight";
+      return;
+    }
+    t.correlation.assign(ctx.nf, NAN);
+    t.member_correlation.assign(ctx.nf, {});
+    t.member_sigma.assign(ctx.nf, {});
+    for (std::size_t i : ctx.groups) {
+      const std::vector<int> pos = positions(run, ctx.members[i]);
+      if (std::find(pos.begin(), pos.end(), -1) != pos.end()) continue;
+      t.correlation[i] = group_correlation(run.correlation, pos, &t.member_correlation[i]);
+      for (int p : pos) t.member_sigma[i].push_back(run.sigma[static_cast<std::size_t>(p)]);
+    }
+    t.evaluated = true;
+  } catch (const std::exception& e) {
+    t.error = e.what();
+  }
+}
+
+/// The trials evaluated on the hardware's threads.
+void evaluate_all(const SeparationContext& ctx, std::vector<Trial>& trials) {
+  std::atomic<std::size_t> next{0};
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned n = std::min<unsigned>(hw, static_cast<unsigned>(std::max<std::size_t>(1, trials.size())));
+  auto worker = [&]() {
+    for (std::size_t k = next++; k < trials.size(); k = next++) evaluate_trial(ctx, trials[k]);
+  };
+  std::vector<std::thread> th;
+  for (unsigned k = 1; k < n; ++k) th.emplace_back(worker);
+  worker();
+  for (std::thread& t : th) t.join();
+}
+
+/// Group g's trial with the lowest predicted correlation (index into all), -1 if none was evaluated.
+int best_of(const std::vector<Trial>& all, std::size_t g) {
+  int best = -1;
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    const SeparationTrial& t = all[k].t;
+    if (!t.evaluated || !std::isfinite(t.correlation[g])) continue;
+    if (best < 0 || t.correlation[g] < all[static_cast<std::size_t>(best)].t.correlation[g]) best = static_cast<int>(k);
+  }
+  return best;
+}
+
+/// Whether a trial of the same parts (in any order) is among the trials.
+bool has_parts(const std::vector<Trial>& trials, const std::vector<int>& key) {
+  bool seen = false;
+  for (const Trial& x : trials) {
+    std::vector<int> xk = x.parts;
+    std::sort(xk.begin(), xk.end());
+    seen = seen || xk == key;
+  }
+  return seen;
+}
+
+/// The combinations of `round` parts to try: for each group not yet separated whose best is of the
+/// last round, the best so far followed by one of the kCombineBest best single candidates for this
+/// group (the same one again too: more of what informs), each sequence once.
+std::vector<Trial> combinations(const SeparationContext& ctx, const std::vector<SeparationTrial>& singles,
+                                const std::vector<Trial>& all, int round) {
+  std::vector<Trial> more;
+  for (std::size_t g : ctx.groups) {
+    const int b = best_of(all, g);
+    if (b < 0 || all[static_cast<std::size_t>(b)].t.correlation[g] < ctx.cfg.max_correlation) continue;
+    const Trial base = all[static_cast<std::size_t>(b)];
+    if (static_cast<int>(base.parts.size()) != round - 1) continue;  // the best is not of the last round
+    std::vector<std::size_t> rank;
+    for (std::size_t k = 0; k < singles.size(); ++k)
+      if (all[k].t.evaluated && std::isfinite(all[k].t.correlation[g])) rank.push_back(k);
+    std::sort(rank.begin(), rank.end(),
+              [&](std::size_t a, std::size_t b2) { return all[a].t.correlation[g] < all[b2].t.correlation[g]; });
+    if (rank.size() > static_cast<std::size_t>(kCombineBest)) rank.resize(static_cast<std::size_t>(kCombineBest));
+    for (std::size_t k : rank) {
+      Trial t;
+      t.parts = base.parts;
+      t.parts.push_back(static_cast<int>(k));
+      std::vector<int> key = t.parts;
+      std::sort(key.begin(), key.end());
+      if (has_parts(all, key) || has_parts(more, key)) continue;
+      t.t.label = base.t.label + " + " + singles[k].label;
+      t.t.segments = base.t.segments;
+      t.t.segments.insert(t.t.segments.end(), singles[k].segments.begin(), singles[k].segments.end());
+      more.push_back(t);
+    }
+  }
+  return more;
+}
+
+/// Group g's separation from its best trial (all.size() trials evaluated), with the whole scenario
+/// to fly as TOML.
+void set_separation(const SeparationContext& ctx, const std::vector<Trial>& all, std::size_t g, Separation& s) {
+  const int b = best_of(all, g);
+  if (b < 0) {
+    s.note = "no candidate could be evaluated";
+    for (const Trial& t : all)
+      if (!t.t.error.empty()) {
+        s.note += ": " + t.t.error;
+        break;
+      }
+    return;
+  }
+  const FlownScenario& flown = ctx.flown;
+  const SeparationTrial& t = all[static_cast<std::size_t>(b)].t;
+  s.predicted = true;
+  s.label = t.label;
+  s.segments = t.segments;
+  s.segments_toml = sim::segments_toml(t.segments);
+  s.added_s = t.added_s;
+  s.predicted_correlation = t.correlation[g];
+  s.member_correlation = t.member_correlation[g];
+  s.member_sigma = t.member_sigma[g];
+  s.separates = s.predicted_correlation < ctx.cfg.max_correlation;
+  s.note = "predicted by the extended model over the flown scenario (" + flown.source + ") with " +
+           std::to_string(all.size()) + " candidate segment sequences appended, simulated";
+  sim::Scenario ext;
+  std::string err;
+  if (sim::append_segments(flown.scenario, t.segments, ext, err)) {
+    std::string group;
+    for (const std::string& m : s.members) group += (group.empty() ? "" : ", ") + m;
+    ext.name = flown.scenario.name + " + " + t.label;
+    const sim::ScenarioWriteResult w = sim::write_scenario_toml(
+        ext, "The flown scenario (" + flown.source + ")\nwith the segments that separate " + group +
+                 " appended\n(" + t.label + ", from t = " + fmt(flown.scenario.duration_s, "%g") + " s; written by "
+                 "sdins diagnose, docs/diagnosis-separation.md).\nPredicted correlation of the members " +
+                 fmt(s.predicted_correlation, "%.3f") + " (flown: " + fmt(s.flown_correlation, "%.4f") + ").");
+    if (w.ok()) s.scenario_toml = w.text;
+    else s.note += "; the scenario file cannot be written: " + w.error;
+  } else {
+    s.note += "; " + err;
+  }
+}
+
+}  // namespace
+
 std::vector<Separation> suggest_separations(const DiagnosisResult& r, const DiagnosisConfig& cfg,
                                             const FlownScenario& flown,
                                             const std::function<void(const std::string&)>& progress,
@@ -262,196 +460,35 @@ std::vector<Separation> suggest_separations(const DiagnosisResult& r, const Diag
   auto say = [&progress](const std::string& s) {
     if (progress) progress(s);
   };
-  const std::size_t nf = r.findings.size();
-  std::vector<Separation> out(nf);
-  std::vector<std::vector<int>> members(nf);
-  std::vector<std::size_t> groups;
-  for (std::size_t i = 0; i < nf; ++i) {
-    const Finding& f = r.findings[i];
-    if (f.separable()) continue;
-    Separation& s = out[i];
-    for (const GroupMember& m : f.group) s.members.push_back(m.name);
-    s.max_correlation = cfg.max_correlation;
-    members[i] = member_candidates(f);
-    const std::vector<int> pos = positions(r.extended, members[i]);
-    if (r.extended.initialised && std::find(pos.begin(), pos.end(), -1) == pos.end())
-      s.flown_correlation = group_correlation(r.extended.correlation, pos);
-    groups.push_back(i);
-  }
-  if (groups.empty()) return out;
+  SeparationContext ctx{r, cfg, flown, r.findings.size(), std::vector<std::vector<int>>(r.findings.size()), {}};
+  std::vector<Separation> out(ctx.nf);
+  collect_groups(ctx, out);
+  if (ctx.groups.empty()) return out;
 
   std::string why_not;
   if (!flown.known) why_not = flown.note;
   else if (cfg.gnss_source != cfg::GnssSource::kRaw)
     why_not = "the diagnosis took GNSS solutions, which the simulator does not make: segments without a prediction";
   if (!why_not.empty()) {
-    // Segments only: every candidate, one after the other (a test flight that flies them all).
-    const std::vector<SeparationTrial> cands = separation_candidates();
-    for (std::size_t i : groups) {
-      Separation& s = out[i];
-      s.predicted = false;
-      s.note = why_not;
-      s.label = "every candidate manoeuvre in turn (not predicted)";
-      for (const SeparationTrial& c : cands) {
-        s.label += (s.segments.empty() ? ": " : ", ") + c.label;
-        s.segments.insert(s.segments.end(), c.segments.begin(), c.segments.end());
-      }
-      s.segments_toml = sim::segments_toml(s.segments);
-    }
+    segments_without_prediction(ctx.groups, why_not, out);
     return out;
   }
-
-  const std::vector<int>& active = r.extended.active;
-  const auto evaluate = [&](Trial& tr) {
-    SeparationTrial& t = tr.t;
-    try {
-      sim::Scenario ext;
-      std::string err;
-      if (!sim::append_segments(flown.scenario, t.segments, ext, err)) {
-        t.error = err;
-        return;
-      }
-      t.added_s = ext.duration_s - flown.scenario.duration_s;
-      // The covariance depends on the trajectory, not on how finely the IMU samples it: the
-      // prediction flies the IMU at the navigation rate when the scenario's is a multiple of it.
-      if (ext.imu.rate_hz > kPredictionImuRate_hz && ext.imu.rate_hz % kPredictionImuRate_hz == 0)
-        ext.imu.rate_hz = kPredictionImuRate_hz;
-      const RecordedData d = record_scenario(ext, ext.seed);
-      const DiagnosisRun run = run_diagnosis_model(d, cfg, active);
-      if (!run.initialised) {
-        t.error = "the diagnosis model did not initialise on the simulated flight";
-        return;
-      }
-      t.correlation.assign(nf, NAN);
-      t.member_correlation.assign(nf, {});
-      t.member_sigma.assign(nf, {});
-      for (std::size_t i : groups) {
-        const std::vector<int> pos = positions(run, members[i]);
-        if (std::find(pos.begin(), pos.end(), -1) != pos.end()) continue;
-        t.correlation[i] = group_correlation(run.correlation, pos, &t.member_correlation[i]);
-        for (int p : pos) t.member_sigma[i].push_back(run.sigma[static_cast<std::size_t>(p)]);
-      }
-      t.evaluated = true;
-    } catch (const std::exception& e) {
-      t.error = e.what();
-    }
-  };
-  const auto evaluate_all = [&](std::vector<Trial>& trials) {
-    std::atomic<std::size_t> next{0};
-    const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
-    const unsigned n = std::min<unsigned>(hw, static_cast<unsigned>(std::max<std::size_t>(1, trials.size())));
-    auto worker = [&]() {
-      for (std::size_t k = next++; k < trials.size(); k = next++) evaluate(trials[k]);
-    };
-    std::vector<std::thread> th;
-    for (unsigned k = 1; k < n; ++k) th.emplace_back(worker);
-    worker();
-    for (std::thread& t : th) t.join();
-  };
 
   std::vector<SeparationTrial> singles = separation_candidates(flown.scenario);
   std::vector<Trial> all;
   for (std::size_t k = 0; k < singles.size(); ++k) all.push_back(Trial{singles[k], {static_cast<int>(k)}});
   say("separation: " + std::to_string(all.size()) + " candidate manoeuvres appended to the flown flight, the "
       "extended model over each");
-  evaluate_all(all);
-  // Per group: the trial with the lowest predicted correlation (index into all).
-  const auto best_of = [&](std::size_t g) {
-    int best = -1;
-    for (std::size_t k = 0; k < all.size(); ++k) {
-      const SeparationTrial& t = all[k].t;
-      if (!t.evaluated || !std::isfinite(t.correlation[g])) continue;
-      if (best < 0 || t.correlation[g] < all[static_cast<std::size_t>(best)].t.correlation[g]) best = static_cast<int>(k);
-    }
-    return best;
-  };
+  evaluate_all(ctx, all);
   for (int round = 2; round <= kMaxCombined; ++round) {
-    std::vector<Trial> more;
-    for (std::size_t g : groups) {
-      const int b = best_of(g);
-      if (b < 0 || all[static_cast<std::size_t>(b)].t.correlation[g] < cfg.max_correlation) continue;
-      const Trial base = all[static_cast<std::size_t>(b)];
-      if (static_cast<int>(base.parts.size()) != round - 1) continue;  // the best is not of the last round
-      // The best so far followed by one of the kCombineBest best single candidates for this group
-      // (the same one again too: more of what informs).
-      std::vector<std::size_t> rank;
-      for (std::size_t k = 0; k < singles.size(); ++k)
-        if (all[k].t.evaluated && std::isfinite(all[k].t.correlation[g])) rank.push_back(k);
-      std::sort(rank.begin(), rank.end(),
-                [&](std::size_t a, std::size_t b2) { return all[a].t.correlation[g] < all[b2].t.correlation[g]; });
-      if (rank.size() > static_cast<std::size_t>(kCombineBest)) rank.resize(static_cast<std::size_t>(kCombineBest));
-      for (std::size_t k : rank) {
-        Trial t;
-        t.parts = base.parts;
-        t.parts.push_back(static_cast<int>(k));
-        std::vector<int> key = t.parts;
-        std::sort(key.begin(), key.end());
-        bool seen = false;
-        for (const Trial& x : all) {
-          std::vector<int> xk = x.parts;
-          std::sort(xk.begin(), xk.end());
-          seen = seen || xk == key;
-        }
-        for (const Trial& x : more) {
-          std::vector<int> xk = x.parts;
-          std::sort(xk.begin(), xk.end());
-          seen = seen || xk == key;
-        }
-        if (seen) continue;
-        t.t.label = base.t.label + " + " + singles[k].label;
-        t.t.segments = base.t.segments;
-        t.t.segments.insert(t.t.segments.end(), singles[k].segments.begin(), singles[k].segments.end());
-        more.push_back(t);
-      }
-    }
+    std::vector<Trial> more = combinations(ctx, singles, all, round);
     if (more.empty()) break;
     say("separation: no single manoeuvre separates every group; " + std::to_string(more.size()) +
         " combinations of " + std::to_string(round));
-    evaluate_all(more);
+    evaluate_all(ctx, more);
     all.insert(all.end(), more.begin(), more.end());
   }
-
-  for (std::size_t g : groups) {
-    Separation& s = out[g];
-    const int b = best_of(g);
-    if (b < 0) {
-      s.note = "no candidate could be evaluated";
-      for (const Trial& t : all)
-        if (!t.t.error.empty()) {
-          s.note += ": " + t.t.error;
-          break;
-        }
-      continue;
-    }
-    const SeparationTrial& t = all[static_cast<std::size_t>(b)].t;
-    s.predicted = true;
-    s.label = t.label;
-    s.segments = t.segments;
-    s.segments_toml = sim::segments_toml(t.segments);
-    s.added_s = t.added_s;
-    s.predicted_correlation = t.correlation[g];
-    s.member_correlation = t.member_correlation[g];
-    s.member_sigma = t.member_sigma[g];
-    s.separates = s.predicted_correlation < cfg.max_correlation;
-    s.note = "predicted by the extended model over the flown scenario (" + flown.source + ") with " +
-             std::to_string(all.size()) + " candidate segment sequences appended, simulated";
-    sim::Scenario ext;
-    std::string err;
-    if (sim::append_segments(flown.scenario, t.segments, ext, err)) {
-      std::string group;
-      for (const std::string& m : s.members) group += (group.empty() ? "" : ", ") + m;
-      ext.name = flown.scenario.name + " + " + t.label;
-      const sim::ScenarioWriteResult w = sim::write_scenario_toml(
-          ext, "The flown scenario (" + flown.source + ")\nwith the segments that separate " + group +
-                   " appended\n(" + t.label + ", from t = " + fmt(flown.scenario.duration_s, "%g") + " s; written by "
-                   "sdins diagnose, docs/diagnosis-separation.md).\nPredicted correlation of the members " +
-                   fmt(s.predicted_correlation, "%.3f") + " (flown: " + fmt(s.flown_correlation, "%.4f") + ").");
-      if (w.ok()) s.scenario_toml = w.text;
-      else s.note += "; the scenario file cannot be written: " + w.error;
-    } else {
-      s.note += "; " + err;
-    }
-  }
+  for (std::size_t g : ctx.groups) set_separation(ctx, all, g, out[g]);
   if (trials_out) {
     trials_out->clear();
     for (const Trial& t : all) trials_out->push_back(t.t);

@@ -1,6 +1,6 @@
 #include "tools/fsw_report.hpp"
 
-#include "tools/timing_audit.hpp"
+#include "tools/timing_stats.hpp"
 
 #include <cinttypes>
 #include <cstdio>

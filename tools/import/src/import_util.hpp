@@ -1,4 +1,4 @@
-// Small text-parsing helpers of the importers (private to tools/lib).
+// Small text-parsing helpers of the importers (private to tools/import).
 #pragma once
 
 #include <cstdint>

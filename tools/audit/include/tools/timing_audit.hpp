@@ -49,17 +49,9 @@
 #include "fsw/executive.hpp"
 #include "fsw/flight_app.hpp"
 #include "sim/scenario.hpp"
+#include "tools/timing_stats.hpp"
 
 namespace tools {
-
-struct TimingStats {
-  long n = 0;
-  double min_us = 0, median_us = 0, p99_us = 0, p999_us = 0, max_us = 0, mean_us = 0;
-  double total_s = 0;  ///< sum of all samples
-};
-
-/// Order statistics (nearest rank) of execution times in seconds.
-TimingStats timing_stats(std::vector<double> samples_s);
 
 /// A per-frame stage timed as its own task: run once per minor frame, before the executive's tick.
 /// EXTENSION POINT (bus decode, HAL issue): the HAL's decoder plugs in here with `prepare` encoding
