@@ -273,11 +273,8 @@ NavState Executive<Layout>::aligned(double t_s) const {
   return at;
 }
 
-template class Executive<Layout15>;
-template class Executive<Layout24>;
-template class Executive<Layout15Full>;
-template class Executive<Layout24Full>;
-template class Executive<Layout15Conv>;
-template class Executive<LayoutDiag>;
+#define FSW_EXECUTIVE_INSTANTIATE(L) template class Executive<L>;
+FSW_FOR_EACH_LAYOUT(FSW_EXECUTIVE_INSTANTIATE)
+#undef FSW_EXECUTIVE_INSTANTIATE
 
 }  // namespace fsw

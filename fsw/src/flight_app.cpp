@@ -502,11 +502,8 @@ Status FlightApp<Layout>::on_event(const InputEvent& ev, FrameOutput& out) {
   return Status::kBadInput;
 }
 
-template class FlightApp<Layout15>;
-template class FlightApp<Layout24>;
-template class FlightApp<Layout15Conv>;
-template class FlightApp<Layout15Full>;
-template class FlightApp<Layout24Full>;
-template class FlightApp<LayoutDiag>;
+#define FSW_FLIGHT_APP_INSTANTIATE(L) template class FlightApp<L>;
+FSW_FOR_EACH_LAYOUT(FSW_FLIGHT_APP_INSTANTIATE)
+#undef FSW_FLIGHT_APP_INSTANTIATE
 
 }  // namespace fsw

@@ -280,11 +280,8 @@ class Executive {
   Ekf<Layout> ekf_{};
 };
 
-extern template class Executive<Layout15>;
-extern template class Executive<Layout24>;
-extern template class Executive<Layout15Full>;
-extern template class Executive<Layout24Full>;
-extern template class Executive<Layout15Conv>;
-extern template class Executive<LayoutDiag>;
+#define FSW_EXECUTIVE_EXTERN(L) extern template class Executive<L>;
+FSW_FOR_EACH_LAYOUT(FSW_EXECUTIVE_EXTERN)
+#undef FSW_EXECUTIVE_EXTERN
 
 }  // namespace fsw

@@ -286,11 +286,8 @@ class FlightApp {
   VelocityMatchAlignment vm_{};
 };
 
-extern template class FlightApp<Layout15>;
-extern template class FlightApp<Layout24>;
-extern template class FlightApp<Layout15Conv>;
-extern template class FlightApp<Layout15Full>;
-extern template class FlightApp<Layout24Full>;
-extern template class FlightApp<LayoutDiag>;
+#define FSW_FLIGHT_APP_EXTERN(L) extern template class FlightApp<L>;
+FSW_FOR_EACH_LAYOUT(FSW_FLIGHT_APP_EXTERN)
+#undef FSW_FLIGHT_APP_EXTERN
 
 }  // namespace fsw
