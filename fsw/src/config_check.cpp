@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "fsw/flight_app.hpp"
+#include "fsw/flight_app_config.hpp"
 
 namespace fsw {
 

@@ -55,39 +55,6 @@ constexpr double kNisTestZ = 3.090232;
 
 }  // namespace
 
-PvtModel pvt_measurement_model(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
-                               const Vec3& lever_arm_b_m, double time_offset_s, const Vec3& accel_enu_mps2) {
-  PvtModel o;
-  const Mat3 C = nav.C_b_n();
-  const Vec3 l_n = C * lever_arm_b_m;
-  const Vec3 w_ie = omega_ie_n(nav.llh.x());
-  const Vec3 w_rel_b = omega_ib_b_radps - C.transpose() * w_ie;
-  const Vec3 lw_n = C * w_rel_b.cross(lever_arm_b_m);
-  // As update(): the INS at the solution's GNSS time plus the estimated IMU-GNSS offset.
-  const double dt_ins = m.t_s + time_offset_s - nav.t_s;
-  const Vec3 v_ant = nav.vel_enu_mps + lw_n;
-  const Vec3 d_ant = l_n + v_ant * dt_ins;  // antenna relative to the INS solution, ENU
-  o.llh_ant = nav.llh + llh_delta_from_enu(nav.llh, d_ant);
-  o.vel_ant_enu_mps = v_ant + accel_enu_mps2 * time_offset_s;
-  // The measured antenna relative to the INS solution in ENU metres at the solution's point (the
-  // exact inverse of llh_delta_from_enu there), so no rounded llh sum enters the innovation.
-  o.pos_innovation_m = d_ant - enu_difference_m(m.llh, nav.llh);
-  o.vel_innovation_mps = o.vel_ant_enu_mps - m.vel_enu_mps;
-  // v_a = v + C (w_ib x l) - w_ie x (C l): with C_hat = (I - [phi x]) C both terms move.
-  const Mat3 vel_att = skew(lw_n) + skew(w_ie.cross(l_n)) - skew(w_ie) * skew(l_n);
-  const Mat3 vel_lever = C * skew(w_rel_b);
-  o.H.block<3, 3>(0, 0).setIdentity();
-  o.H.block<3, 3>(0, 3) = Mat3::Identity() * dt_ins;
-  o.H.block<3, 3>(0, 6) = skew(l_n) + dt_ins * vel_att;
-  o.H.block<3, 3>(0, 9) = C + dt_ins * vel_lever;
-  o.H.block<3, 1>(0, 12) = v_ant;
-  o.H.block<3, 3>(3, 3).setIdentity();
-  o.H.block<3, 3>(3, 6) = vel_att;
-  o.H.block<3, 3>(3, 9) = vel_lever;
-  o.H.block<3, 1>(3, 12) = accel_enu_mps2;
-  return o;
-}
-
 template <class Layout>
 Status Ekf<Layout>::init(const EkfConfig& cfg) {
   if (!check_config(cfg).ok()) return Status::kBadConfig;  // fsw/config_check.hpp
@@ -394,260 +361,16 @@ bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu,
 }
 
 template <class Layout>
-void Ekf<Layout>::reset_channel_state(int state, double sigma) {
-  x_(state) = 0.0;
-  P_.row(state).setZero();
-  P_.col(state).setZero();
-  P_(state, state) = sigma * sigma;
-}
-
-template <class Layout>
-int Ekf<Layout>::bind_channel(std::uint8_t prn) {
-  if constexpr (!Layout::has(Block::kRangeError) && !Layout::has(Block::kRangeRateError)) {
-    (void)prn;
-    return -1;
-  } else {
-    for (int s = 0; s < kGnssErrorChannels; ++s)
-      if (slot_prn_[s] == prn) return s;
-    for (int s = 0; s < kGnssErrorChannels; ++s) {
-      if (slot_prn_[s] != 0) continue;
-      slot_prn_[s] = prn;
-      if constexpr (Layout::has(Block::kRangeError)) {
-        reset_channel_state(Layout::offset(Block::kRangeError) + s, cfg_.range_gm_sigma_m);
-        range_err_hat_(s) = 0.0;
-      }
-      if constexpr (Layout::has(Block::kRangeRateError)) {
-        reset_channel_state(Layout::offset(Block::kRangeRateError) + s, cfg_.range_rate_gm_sigma_mps);
-        rate_err_hat_(s) = 0.0;
-      }
-      return s;
-    }
-    return -1;
+InnovationOutcome Ekf<Layout>::fuse(const RowVec& h, double y, double r, double& nu, double& S, int& used,
+                                    int& rejected, EkfUpdateReport& report) {
+  if (!scalar_update(h, y, r, nu, S)) {
+    ++rejected;
+    return InnovationOutcome::kGated;
   }
-}
-
-template <class Layout>
-Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Vec3& omega_ib_b_radps,
-                           EkfUpdateReport& report) {
-  report = EkfUpdateReport{};
-  if (!initialised_) return Status::kNotInitialised;
-  if (epoch.n_obs < 0 || epoch.n_obs > kMaxGnssChannels || !std::isfinite(epoch.t_s) || !omega_ib_b_radps.allFinite() ||
-      !nav.llh.allFinite() || !nav.vel_enu_mps.allFinite() || !nav.q_b_n.coeffs().allFinite()) {
-    ++health_.nonfinite_rejected;
-    return Status::kBadInput;
-  }
-  const double lat = nav.llh.x(), lon = nav.llh.y();
-  const Mat3 Cne = C_n_e(lat, lon);
-  const Mat3 C = nav.C_b_n();
-  const Vec3 l_n = C * lever_arm_hat_b_m_;
-  const Vec3 w_ie_b = C.transpose() * omega_ie_n(lat);
-  const Vec3 w_rel_b = omega_ib_b_radps - w_ie_b;
-  // The frame's kinematic acceleration (specific force plus gravity; Coriolis left out), for the
-  // time-offset terms.
-  const Vec3 a_n = last_f_enu_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
-  // INS time tag of the epoch: its GNSS time plus the estimated IMU-GNSS offset at that time.
-  if (!std::isfinite(drift_t_ref_s_)) drift_t_ref_s_ = epoch.t_s;
-  const double offset_s = time_offset_at(epoch.t_s);
-  const double drift_lever_s = epoch.t_s - drift_t_ref_s_;  // d offset / d drift
-  const double dt_ins = epoch.t_s + offset_s - nav.t_s;
-  Vec3 v_ant_n = nav.vel_enu_mps + C * w_rel_b.cross(lever_arm_hat_b_m_);
-  const Vec3 r_ant = ecef_from_llh(nav.llh) + Cne * (l_n + v_ant_n * dt_ins);
-  if constexpr (Layout::has(Block::kTimeOffset) || Layout::has(Block::kTimeDrift)) v_ant_n += a_n * offset_s;
-  const Vec3 v_ant = Cne * v_ant_n;
-  const double dt = epoch.t_s - nav.t_s;  // the clock runs on GNSS time
-  const double clk_b = clock_bias_m_ + clock_drift_mps_ * dt;
-  const double h_ant_m = nav.llh.z() + l_n.z();
-
-  GnssGeometry geo[kMaxGnssChannels];
-  bool valid[kMaxGnssChannels] = {};
-  double delay_tropo[kMaxGnssChannels] = {};
-  double delay_iono[kMaxGnssChannels] = {};
-  double sum_b = 0.0, sum_d = 0.0;
-  int n_valid = 0;
-  report.n_obs = epoch.n_obs;
-  for (int k = 0; k < epoch.n_obs; ++k) {
-    const GnssObservation& o = epoch.obs[k];
-    report.obs[k].prn = o.prn;
-    const double rs = o.sat_pos_ecef_m.norm();
-    if (!o.sat_pos_ecef_m.allFinite() || !o.sat_vel_ecef_mps.allFinite() || !std::isfinite(o.pseudorange_m) ||
-        !std::isfinite(o.pseudorange_rate_mps) || rs < 1.0e7 || rs > 1.0e8) {
-      ++report.obs_invalid;
-      report.obs[k].pr_outcome = InnovationOutcome::kInvalid;
-      report.obs[k].prr_outcome = InnovationOutcome::kInvalid;
-      continue;
-    }
-    geo[k] = gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r_ant, v_ant);
-    valid[k] = true;
-    // Modelled delays (diagnosis extensions): added to the predicted range.
-    if constexpr (Layout::has(Block::kTropoScale) || Layout::has(Block::kIonoScale)) {
-      const Vec3 los_n = Cne.transpose() * geo[k].los_ecef;
-      const double el = std::asin(std::clamp(los_n.z(), -1.0, 1.0));
-      delay_tropo[k] = saastamoinen_delay_m(lat, h_ant_m, el);
-      const double az = std::atan2(los_n.x(), los_n.y());
-      delay_iono[k] = klobuchar_delay_m(kKlobucharDefault, epoch.gps_tow_s, lat, lon, az, el);
-      geo[k].range_m += tropo_scale_hat_ * delay_tropo[k] + iono_scale_hat_ * delay_iono[k];
-    }
-    sum_b += o.pseudorange_m - geo[k].range_m;
-    sum_d += o.pseudorange_rate_mps - geo[k].range_rate_mps;
-    ++n_valid;
-  }
-  if (!clock_initialised_) {
-    if (n_valid == 0) return Status::kOk;
-    clock_bias_m_ = sum_b / n_valid;
-    clock_drift_mps_ = sum_d / n_valid;
-    clock_initialised_ = true;
-    report.clock_initialised = true;
-    return Status::kOk;  // this epoch's measurements set the clock; they are not used twice
-  }
-  constexpr int oc = Layout::offset(Block::kClock);
-  constexpr bool kChannels = Layout::has(Block::kRangeError) || Layout::has(Block::kRangeRateError);
-  // Release the channels of satellites that are no longer tracked.
-  if constexpr (kChannels) {
-    for (int s = 0; s < kGnssErrorChannels; ++s) {
-      bool tracked = false;
-      for (int k = 0; k < epoch.n_obs; ++k) tracked = tracked || (valid[k] && epoch.obs[k].prn == slot_prn_[s]);
-      if (!tracked) slot_prn_[s] = 0;
-    }
-  }
-  for (int k = 0; k < epoch.n_obs; ++k) {
-    if (!valid[k]) continue;
-    const GnssObservation& o = epoch.obs[k];
-    ObservationInnovation& inn = report.obs[static_cast<std::size_t>(k)];
-    const int slot = kChannels ? bind_channel(o.prn) : -1;
-    double r_pr = cfg_.pseudorange_sigma_m * cfg_.pseudorange_sigma_m;
-    double r_prr = cfg_.pseudorange_rate_sigma_mps * cfg_.pseudorange_rate_sigma_mps;
-    double range_err = 0.0, rate_err = 0.0;
-    RowVec h = RowVec::Zero();
-    if constexpr (kChannels) {
-      if (slot < 0) {  // no channel left: fold the correlated error into the white noise
-        ++report.obs_no_channel;
-        r_pr += cfg_.range_gm_sigma_m * cfg_.range_gm_sigma_m;
-        r_prr += cfg_.range_rate_gm_sigma_mps * cfg_.range_rate_gm_sigma_mps;
-      }
-    }
-    const Vec3 e_n = Cne.transpose() * geo[k].los_ecef;
-    h.template segment<3>(0) = -e_n.transpose();
-    h.template segment<3>(6) = -e_n.transpose() * skew(l_n);
-    h(oc) = 1.0;
-    if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = -e_n.dot(nav.vel_enu_mps);
-    if constexpr (Layout::has(Block::kTimeDrift))
-      h(Layout::offset(Block::kTimeDrift)) = -e_n.dot(nav.vel_enu_mps) * drift_lever_s;
-    if constexpr (Layout::has(Block::kLeverArm))
-      h.template segment<3>(Layout::offset(Block::kLeverArm)) = -e_n.transpose() * C;
-    if constexpr (Layout::has(Block::kTropoScale)) h(Layout::offset(Block::kTropoScale)) = delay_tropo[k];
-    if constexpr (Layout::has(Block::kIonoScale)) h(Layout::offset(Block::kIonoScale)) = delay_iono[k];
-    if constexpr (Layout::has(Block::kRangeError)) {
-      if (slot >= 0) {
-        h(Layout::offset(Block::kRangeError) + slot) = 1.0;
-        range_err = range_err_hat_(slot);
-      }
-    }
-    if (scalar_update(h, geo[k].range_m + clk_b + range_err - o.pseudorange_m, r_pr, inn.pr_innovation_m,
-                      inn.pr_variance_m2)) {
-      ++report.pr_used;
-      inn.pr_outcome = InnovationOutcome::kUsed;
-      report.nis_sum += inn.pr_innovation_m * inn.pr_innovation_m / inn.pr_variance_m2;
-      ++report.nis_dof;
-    } else {
-      ++report.pr_rejected;
-      inn.pr_outcome = InnovationOutcome::kGated;
-    }
-    if (!cfg_.use_pseudorange_rate) continue;
-    h.setZero();
-    h.template segment<3>(3) = -e_n.transpose();
-    h(oc + 1) = 1.0;
-    if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = -e_n.dot(a_n);
-    if constexpr (Layout::has(Block::kTimeDrift)) h(Layout::offset(Block::kTimeDrift)) = -e_n.dot(a_n) * drift_lever_s;
-    if constexpr (Layout::has(Block::kLeverArm))
-      h.template segment<3>(Layout::offset(Block::kLeverArm)) = -e_n.transpose() * C * skew(w_rel_b);
-    if constexpr (Layout::has(Block::kRangeRateError)) {
-      if (slot >= 0) {
-        h(Layout::offset(Block::kRangeRateError) + slot) = 1.0;
-        rate_err = rate_err_hat_(slot);
-      }
-    }
-    if (scalar_update(h, geo[k].range_rate_mps + clock_drift_mps_ + rate_err - o.pseudorange_rate_mps, r_prr,
-                      inn.prr_innovation_mps, inn.prr_variance_m2ps2)) {
-      ++report.prr_used;
-      inn.prr_outcome = InnovationOutcome::kUsed;
-      report.nis_sum += inn.prr_innovation_mps * inn.prr_innovation_mps / inn.prr_variance_m2ps2;
-      ++report.nis_dof;
-    } else {
-      ++report.prr_rejected;
-      inn.prr_outcome = InnovationOutcome::kGated;
-    }
-  }
-  check_covariance();
-  track_consistency(report);
-  return Status::kOk;
-}
-
-template <class Layout>
-Status Ekf<Layout>::update_pvt(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
-                               EkfUpdateReport& report) {
-  report = EkfUpdateReport{};
-  report.pvt = true;
-  if (!initialised_) return Status::kNotInitialised;
-  if (!std::isfinite(m.t_s) || !omega_ib_b_radps.allFinite() || !nav.llh.allFinite() || !nav.vel_enu_mps.allFinite() ||
-      !nav.q_b_n.coeffs().allFinite()) {
-    ++health_.nonfinite_rejected;
-    return Status::kBadInput;
-  }
-  const bool pos_ok = m.llh.allFinite() && std::abs(m.llh.x()) <= 0.5 * kPi && m.pos_sigma_enu_m.allFinite() &&
-                      (m.pos_sigma_enu_m.array() > 0.0).all();
-  const bool vel_ok = m.has_velocity && m.vel_enu_mps.allFinite() && m.vel_sigma_enu_mps.allFinite() &&
-                      (m.vel_sigma_enu_mps.array() > 0.0).all();
-  if (!pos_ok) {
-    ++report.obs_invalid;
-    for (int i = 0; i < 3; ++i) report.pvt_obs[static_cast<std::size_t>(i)].outcome = InnovationOutcome::kInvalid;
-  }
-  if (m.has_velocity && !vel_ok) {
-    ++report.obs_invalid;
-    for (int i = 3; i < 6; ++i) report.pvt_obs[static_cast<std::size_t>(i)].outcome = InnovationOutcome::kInvalid;
-  }
-  if (pos_ok || vel_ok) {
-    const double lat = nav.llh.x();
-    // The frame's kinematic acceleration, exactly as update() forms it for the time-offset terms.
-    const Vec3 a_n = last_f_enu_mps2_ - Vec3(0.0, 0.0, normal_gravity_mps2(lat, nav.llh.z()));
-    if (!std::isfinite(drift_t_ref_s_)) drift_t_ref_s_ = m.t_s;
-    const double drift_lever_s = m.t_s - drift_t_ref_s_;  // d offset / d drift
-    const PvtModel mdl =
-        pvt_measurement_model(m, nav, omega_ib_b_radps, lever_arm_hat_b_m_, time_offset_at(m.t_s), a_n);
-    const double scale2 = cfg_.pvt_sigma_scale * cfg_.pvt_sigma_scale;
-    // Re-acquisition after a PVT runaway reset: this update is not gated (the reset opened the
-    // position and velocity variances, so the solution is taken nearly as it is).
-    ungated_ = reacquire_pvt_;
-    reacquire_pvt_ = false;
-    RowVec h;
-    for (int i = 0; i < 6; ++i) {
-      const bool is_pos = i < 3;
-      if (is_pos ? !pos_ok : !vel_ok) continue;
-      const int a = is_pos ? i : i - 3;
-      const double sig = is_pos ? std::max(m.pos_sigma_enu_m(a), cfg_.pvt_pos_sigma_floor_m)
-                                : std::max(m.vel_sigma_enu_mps(a), cfg_.pvt_vel_sigma_floor_mps);
-      h.setZero();
-      h.template head<9>() = mdl.H.template block<1, 9>(i, 0);
-      if constexpr (Layout::has(Block::kLeverArm))
-        h.template segment<3>(Layout::offset(Block::kLeverArm)) = mdl.H.template block<1, 3>(i, 9);
-      if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = mdl.H(i, 12);
-      if constexpr (Layout::has(Block::kTimeDrift)) h(Layout::offset(Block::kTimeDrift)) = mdl.H(i, 12) * drift_lever_s;
-      const double y = is_pos ? mdl.pos_innovation_m(a) : mdl.vel_innovation_mps(a);
-      PvtInnovation& inn = report.pvt_obs[static_cast<std::size_t>(i)];
-      if (scalar_update(h, y, scale2 * sig * sig, inn.innovation, inn.variance)) {
-        inn.outcome = InnovationOutcome::kUsed;
-        ++(is_pos ? report.pos_used : report.vel_used);
-        report.nis_sum += inn.innovation * inn.innovation / inn.variance;
-        ++report.nis_dof;
-      } else {
-        inn.outcome = InnovationOutcome::kGated;
-        ++(is_pos ? report.pos_rejected : report.vel_rejected);
-      }
-    }
-    ungated_ = false;
-  }
-  check_covariance();
-  track_consistency(report);
-  return Status::kOk;
+  ++used;
+  report.nis_sum += nu * nu / S;
+  ++report.nis_dof;
+  return InnovationOutcome::kUsed;
 }
 
 template <class Layout>
@@ -889,22 +612,12 @@ void Ekf<Layout>::output(double t_s, EkfOutput<Layout>& out) const {
   out.channel_prn = slot_prn_;
 }
 
-#define FSW_EKF_INSTANTIATE(L) \
-  template class EkfTransition<L>; \
-  template void add_sensor_correction<L>(const Eigen::Matrix<double, L::kSize, 1>&, ImuCompensation&);
-FSW_EKF_INSTANTIATE(Layout15)
-FSW_EKF_INSTANTIATE(Layout24)
-FSW_EKF_INSTANTIATE(Layout15Full)
-FSW_EKF_INSTANTIATE(Layout24Full)
-FSW_EKF_INSTANTIATE(Layout15Conv)
-FSW_EKF_INSTANTIATE(LayoutDiag)
+// The core's members (the aid units instantiate theirs), for every layout (FSW_FOR_EACH_LAYOUT).
+#define FSW_EKF_INSTANTIATE(L)                                                                          \
+  template class EkfTransition<L>;                                                                      \
+  template void add_sensor_correction<L>(const Eigen::Matrix<double, L::kSize, 1>&, ImuCompensation&); \
+  template class Ekf<L>;
+FSW_FOR_EACH_LAYOUT(FSW_EKF_INSTANTIATE)
 #undef FSW_EKF_INSTANTIATE
-
-template class Ekf<Layout15>;
-template class Ekf<Layout24>;
-template class Ekf<Layout15Full>;
-template class Ekf<Layout24Full>;
-template class Ekf<Layout15Conv>;
-template class Ekf<LayoutDiag>;
 
 }  // namespace fsw

@@ -16,35 +16,12 @@ Status FlightApp<Layout>::init(const FlightAppConfig& cfg) {
   cfg_.exec.ekf.att_sigma_rad = cfg.init_att_sigma_rad;
   almanac_.clear();
   health_ = FlightAppHealth{};
-  level_head_ = 0;
-  level_count_ = 0;
   n_batch_ = 0;
   have_epoch_ = false;
   have_pvt_ = false;
-  window_.reset();
-  interval_.reset();
-  prev_epoch_at_rest_ = false;
-  vm_q_b_b0_ = Quat::Identity();
-  vm_alpha_.setZero();
-  vm_last_f_b_.setZero();
-  vm_bias_radps_.setZero();
-  vm_gyro_sigma_radps_ = cfg.exec.ekf.gyro_bias_sigma_radps;
-  vm_hist_head_ = 0;
-  vm_hist_count_ = 0;
-  vm_window_open_ = false;
-  vm_.reset();
+  initialiser_.reset(cfg_);
   configured_ = true;
   return Status::kOk;
-}
-
-const char* to_string(InitMode m) {
-  switch (m) {
-    case InitMode::kTrack: return "track";
-    case InitMode::kStatic: return "static";
-    case InitMode::kVelocityMatching: return "velocity_matching";
-    case InitMode::kGiven: return "given";
-  }
-  return "unknown";
 }
 
 template <class Layout>
@@ -67,56 +44,13 @@ Status FlightApp<Layout>::on_gnss(const GnssRawEpoch& raw) {
     ++health_.gnss_rejected;
     return st;
   }
-  if (!health_.initialised) return try_initialise(epoch_);
+  if (!health_.initialised) {
+    InitialState initial;
+    bool ready = false;
+    const Status init_st = initialiser_.on_gnss(epoch_, cfg_, health_, initial, ready);
+    return ready ? start(initial) : init_st;
+  }
   have_epoch_ = true;  // handed to the executive with the next minor frame
-  return Status::kOk;
-}
-
-template <class Layout>
-Status FlightApp<Layout>::try_initialise(const GnssEpoch& epoch) {
-  ++health_.gnss_before_init;
-  if (cfg_.init_mode == InitMode::kGiven) return Status::kOk;  // waits for start_given()
-  if (cfg_.init_mode == InitMode::kTrack && level_count_ < cfg_.levelling_samples) {
-    ++health_.init_not_level;
-    return Status::kOk;
-  }
-  GnssPvt fix;
-  if (epoch.n_obs < cfg_.min_satellites_for_init || gnss_pvt(epoch, fix) != Status::kOk ||
-      fix.n_used < cfg_.min_satellites_for_init) {
-    ++health_.init_no_fix;
-    return Status::kOk;
-  }
-  if (!(fix.pdop <= cfg_.max_init_pdop)) {
-    ++health_.init_bad_geometry;
-    return Status::kOk;
-  }
-  NavState nav;
-  nav.t_s = epoch.t_s;
-  nav.llh = llh_from_ecef(fix.r_ecef_m);
-  nav.vel_enu_mps = C_n_e(nav.llh.x(), nav.llh.y()).transpose() * fix.v_ecef_mps;
-  if (cfg_.init_mode != InitMode::kTrack) {
-    InitFix f;
-    f.t_s = epoch.t_s;
-    f.llh = nav.llh;
-    f.vel_enu_mps = nav.vel_enu_mps;
-    f.vel_sigma_mps = cfg_.exec.ekf.pseudorange_rate_sigma_mps * fix.pdop;
-    f.antenna = false;
-    const Status st = cfg_.init_mode == InitMode::kStatic ? init_static(f) : init_velocity_matching(f);
-    if (health_.initialised) health_.init_fix = fix;
-    return st;
-  }
-  const double ground_speed = std::hypot(nav.vel_enu_mps.x(), nav.vel_enu_mps.y());
-  if (!(ground_speed >= cfg_.min_init_speed_mps)) {
-    ++health_.init_too_slow;
-    return Status::kOk;
-  }
-  double roll = 0.0, pitch = 0.0;
-  levelled_roll_pitch(roll, pitch);
-  const double heading = std::atan2(nav.vel_enu_mps.x(), nav.vel_enu_mps.y()) + cfg_.init_heading_offset_rad;
-  nav.q_b_n = Quat(C_b_n_from_euler(roll, pitch, heading));
-  const Status st = start(nav, cfg_.init_att_sigma_rad, 0.0);
-  if (st != Status::kOk) return st;
-  health_.init_fix = fix;
   return Status::kOk;
 }
 
@@ -126,241 +60,32 @@ Status FlightApp<Layout>::start_given(const NavState& nav) {
   if (health_.initialised || !std::isfinite(nav.t_s) || !nav.llh.allFinite() || !nav.vel_enu_mps.allFinite() ||
       !nav.q_b_n.coeffs().allFinite())
     return Status::kBadInput;
-  return start(nav, cfg_.init_att_sigma_rad, 0.0);
+  InitialState initial;
+  initial.nav = nav;
+  initial.att_sigma_rad = cfg_.init_att_sigma_rad;
+  return start(initial);
 }
 
 template <class Layout>
-Status FlightApp<Layout>::start(const NavState& nav, const Vec3& att_sigma_rad, double align_s) {
-  cfg_.exec.ekf.att_sigma_rad = att_sigma_rad;
-  const Status st = exec_.init(cfg_.exec, nav);
+Status FlightApp<Layout>::start(const InitialState& initial) {
+  cfg_.exec.ekf.att_sigma_rad = initial.att_sigma_rad;
+  const Status st = exec_.init(cfg_.exec, initial.nav);
   if (st != Status::kOk) return st;
   health_.initialised = true;
-  health_.init_t_s = nav.t_s;
+  health_.init_t_s = initial.nav.t_s;
   health_.init_mode = cfg_.init_mode;
-  health_.init_align_s = align_s;
-  health_.init_att_sigma_rad = att_sigma_rad;
-  health_.init_euler_rad = euler_from_C_b_n(nav.C_b_n());
+  health_.init_align_s = initial.align_s;
+  health_.init_att_sigma_rad = initial.att_sigma_rad;
+  health_.init_euler_rad = euler_from_C_b_n(initial.nav.C_b_n());
+  health_.init_fix = initial.fix;
+  if (initial.vm_biases) {
+    health_.vm_gyro_bias_radps = initial.vm_gyro_bias_radps;
+    health_.vm_accel_bias_mps2 = initial.vm_accel_bias_mps2;
+  }
   n_batch_ = 0;
   have_epoch_ = false;  // this fix initialised the solution; the EKF starts with the next one
   have_pvt_ = false;
   return Status::kOk;
-}
-
-template <class Layout>
-bool FlightApp<Layout>::rest_epoch(double ground_speed_mps) {
-  const bool gnss_rest = ground_speed_mps <= cfg_.static_max_speed_mps;
-  bool imu_rest = true;
-  if (gnss_rest && prev_epoch_at_rest_ && interval_.duration_s() > 0.0 && window_.duration_s() > 0.0) {
-    const double df = (interval_.mean_f_b_mps2() - window_.mean_f_b_mps2()).norm();
-    const double dw = (interval_.mean_omega_b_radps() - window_.mean_omega_b_radps()).norm();
-    imu_rest = df <= cfg_.static_max_accel_dev_mps2 && dw <= cfg_.static_max_rate_dev_radps;
-  }
-  if (!gnss_rest || !imu_rest) {
-    window_.reset();
-    interval_.reset();
-    prev_epoch_at_rest_ = false;
-    return false;
-  }
-  // Only an interval bracketed by two epochs at rest joins the window; the first one after motion
-  // (or the very first one) is dropped.
-  if (prev_epoch_at_rest_) window_.merge(interval_);
-  interval_.reset();
-  prev_epoch_at_rest_ = true;
-  return true;
-}
-
-template <class Layout>
-Status FlightApp<Layout>::init_static(const InitFix& f) {
-  if (!rest_epoch(std::hypot(f.vel_enu_mps.x(), f.vel_enu_mps.y()))) {
-    ++health_.init_moving;
-    return Status::kOk;
-  }
-  if (window_.duration_s() < cfg_.alignment_s) {
-    ++health_.init_aligning;
-    return Status::kOk;
-  }
-  Mat3 C;
-  if (window_.solve(f.llh.x(), C) != Status::kOk) {
-    ++health_.init_align_failed;
-    window_.reset();
-    return Status::kOk;
-  }
-  NavState nav;
-  nav.t_s = f.t_s;
-  nav.llh = f.antenna ? Vec3(f.llh + llh_delta_from_enu(f.llh, -(C * cfg_.exec.ekf.lever_arm_b_m))) : f.llh;
-  nav.vel_enu_mps = f.vel_enu_mps;
-  nav.q_b_n = Quat(C);
-  nav.q_b_n.normalize();
-  return start(nav, cfg_.init_att_sigma_rad, window_.duration_s());
-}
-
-template <class Layout>
-void FlightApp<Layout>::vm_imu(const ImuSample& s) {
-  // C_b^b0 and alpha = integral C_b^b0 f_b dt, one rotation-vector step per sample; the
-  // specific-force increment is rotated to the sample's mid-attitude (dv + dtheta x dv / 2).
-  const Vec3 dth = s.dtheta_rad - vm_bias_radps_ * s.dt_s;
-  const Mat3 C = vm_q_b_b0_.toRotationMatrix();
-  const Vec3 dv_b0 = C * (s.dv_mps + 0.5 * dth.cross(s.dv_mps));
-  // Gyro-bias sensitivities (fsw::VelocityMatchAlignment): Theta = integral C_b^b0 dt and
-  // G = -integral [f_b0 x] Theta dt, Theta taken at the sample's middle.
-  const Mat3 theta_mid = vm_theta_ + 0.5 * s.dt_s * C;
-  vm_G_.noalias() -= skew(dv_b0).lazyProduct(theta_mid);
-  vm_theta_ += s.dt_s * C;
-  vm_alpha_ += dv_b0;
-  vm_q_b_b0_ = vm_q_b_b0_ * quat_from_rotvec(dth);
-  vm_q_b_b0_.normalize();
-  vm_last_f_b_ = s.dv_mps / s.dt_s;
-  vm_hist_t_[static_cast<std::size_t>(vm_hist_head_)] = s.t_s;
-  vm_hist_alpha_[static_cast<std::size_t>(vm_hist_head_)] = vm_alpha_;
-  vm_hist_head_ = (vm_hist_head_ + 1) % kVmHistory;
-  if (vm_hist_count_ < kVmHistory) ++vm_hist_count_;
-}
-
-template <class Layout>
-bool FlightApp<Layout>::vm_alpha_at(double t_s, Vec3& alpha) const {
-  if (vm_hist_count_ < 2) return false;
-  const auto slot = [this](int back) {  // back = 0: the newest sample
-    return static_cast<std::size_t>((vm_hist_head_ - 1 - back + 2 * kVmHistory) % kVmHistory);
-  };
-  const double t_new = vm_hist_t_[slot(0)];
-  if (t_s >= t_new) {
-    if (t_s - t_new > kVmMaxExtrapolation_s) return false;
-    alpha = vm_alpha_ + vm_q_b_b0_ * (vm_last_f_b_ * (t_s - t_new));
-    return true;
-  }
-  for (int back = 1; back < vm_hist_count_; ++back) {
-    const double t_a = vm_hist_t_[slot(back)];
-    if (t_a <= t_s) {
-      const double t_b = vm_hist_t_[slot(back - 1)];
-      const double u = t_b > t_a ? (t_s - t_a) / (t_b - t_a) : 1.0;
-      alpha = vm_hist_alpha_[slot(back)] + u * (vm_hist_alpha_[slot(back - 1)] - vm_hist_alpha_[slot(back)]);
-      return true;
-    }
-  }
-  return false;  // older than the history
-}
-
-template <class Layout>
-void FlightApp<Layout>::vm_open_window(const InitFix& f) {
-  // Re-base: b0 becomes the newest sample's body frame; alpha and its history rotate with it.
-  const Quat q_b0_new = vm_q_b_b0_.conjugate();
-  for (int k = 0; k < vm_hist_count_; ++k) {
-    Vec3& a = vm_hist_alpha_[static_cast<std::size_t>(k)];
-    a = q_b0_new * (a - vm_alpha_);
-  }
-  vm_alpha_.setZero();
-  vm_q_b_b0_ = Quat::Identity();
-  vm_theta_.setZero();
-  vm_G_.setZero();
-  vm_.reset();
-  vm_window_open_ = false;
-  if (cfg_.vm_rest_gyro_bias && prev_epoch_at_rest_ && window_.duration_s() >= cfg_.vm_rest_min_s) {
-    // What remains of the bias: the noise of the rest mean and the Earth rate, whose body
-    // components change when the body turns.
-    vm_bias_radps_ = window_.mean_omega_b_radps();
-    const double arw = cfg_.exec.ekf.arw_rad_per_rts;
-    vm_gyro_sigma_radps_ = std::min(cfg_.exec.ekf.gyro_bias_sigma_radps,
-                                    std::sqrt(arw * arw / window_.duration_s() +
-                                              wgs84::omega_ie_radps * wgs84::omega_ie_radps));
-  }
-  Vec3 alpha0;
-  if (!vm_alpha_at(f.t_s, alpha0)) return;
-  vm_window_open_ = true;
-  vm_t0_s_ = f.t_s;
-  vm_v0_ = f.vel_enu_mps;
-  vm_alpha0_ = alpha0;
-  vm_g_n_ = gravity_enu_mps2(f.llh.x(), f.llh.z());
-  // t_0 is a pair too (alpha = beta = 0) with its own velocity error: the solver fits the
-  // common offset that error puts into every later pair.
-  (void)vm_.add(Vec3::Zero(), Vec3::Zero(), 1.0 / std::max(f.vel_sigma_mps * f.vel_sigma_mps, 1e-12));
-}
-
-template <class Layout>
-Status FlightApp<Layout>::init_velocity_matching(const InitFix& f) {
-  const double ground_speed = std::hypot(f.vel_enu_mps.x(), f.vel_enu_mps.y());
-  (void)rest_epoch(ground_speed);  // the rest window (gyro bias estimate) and its bookkeeping
-  Vec3 alpha_k;
-  if (!vm_alpha_at(f.t_s, alpha_k)) {
-    ++health_.init_not_level;  // no IMU history at this time (yet)
-    return Status::kOk;
-  }
-  const bool at_rest = ground_speed <= cfg_.static_max_speed_mps;
-  const double dt = f.t_s - vm_t0_s_;
-  if (!vm_window_open_ || (at_rest && dt < cfg_.vm_min_s)) {
-    vm_open_window(f);  // the first window, or rest: start (again) here
-    ++health_.init_aligning;
-    return Status::kOk;
-  }
-  if (dt > cfg_.vm_max_s || !(dt > 0.0)) {
-    vm_open_window(f);
-    ++health_.init_align_restarts;
-    return Status::kOk;
-  }
-  const Vec3 beta = f.vel_enu_mps - vm_v0_ - vm_g_n_ * dt;
-  // White error budget of the pair (file header): the fix's velocity noise and the IMU's white
-  // noise (velocity random walk; the angle random walk tilts b0 and leaks gravity into alpha). The
-  // gyro and accelerometer biases enter the solver as nuisance parameters through G and Theta.
-  const double g = vm_g_n_.norm();
-  const double arw = cfg_.exec.ekf.arw_rad_per_rts;
-  const double s_tilt = g * arw * dt * std::sqrt(dt / 3.0);
-  const double vrw = cfg_.exec.ekf.vrw_mps_per_rts;
-  const double var = f.vel_sigma_mps * f.vel_sigma_mps + vrw * vrw * dt + s_tilt * s_tilt;
-  if (!(var > 0.0) || vm_.add(alpha_k - vm_alpha0_, beta, 1.0 / var, vm_G_, vm_theta_) != Status::kOk) {
-    ++health_.init_align_failed;
-    return Status::kOk;
-  }
-  if (dt < cfg_.vm_min_s) {
-    ++health_.init_aligning;
-    return Status::kOk;
-  }
-  Mat3 C_b0_n;
-  Vec3 sigma;
-  if (vm_.solve(C_b0_n, sigma, vm_gyro_sigma_radps_, cfg_.exec.ekf.accel_bias_sigma_mps2) != Status::kOk ||
-      !(sigma.z() <= cfg_.vm_max_heading_sigma_rad)) {
-    // Not determined yet. At rest the window starts again here: rest adds no heading information,
-    // only gyro error.
-    if (at_rest) vm_open_window(f);
-    ++health_.init_aligning;
-    return Status::kOk;
-  }
-  // Propagate to the newest IMU sample.
-  const double t_new = vm_hist_t_[static_cast<std::size_t>((vm_hist_head_ - 1 + kVmHistory) % kVmHistory)];
-  // The window's bias estimates correct the integration up to the newest sample: its attitude
-  // drifted by Theta eps (C_true = (I - [Theta eps x]) C_hat), its alpha by G eps + Theta b_a.
-  const Vec3& eps = vm_.gyro_bias_radps();
-  const Vec3& b_a = vm_.accel_bias_mps2();
-  const Mat3 C = C_b0_n * quat_from_rotvec(-(vm_theta_ * eps)).toRotationMatrix() * vm_q_b_b0_.toRotationMatrix();
-  NavState nav;
-  nav.t_s = t_new;
-  // The fitted velocity (every epoch of the window through the fitted offset), at the newest sample.
-  const Vec3 alpha_new = vm_alpha_ - vm_alpha0_ - vm_G_ * eps - vm_theta_ * b_a;
-  nav.vel_enu_mps = vm_v0_ - vm_.offset_mps() + C_b0_n * alpha_new + vm_g_n_ * (t_new - vm_t0_s_);
-  Vec3 d_enu = f.vel_enu_mps * (t_new - f.t_s);
-  if (f.antenna) d_enu -= C * cfg_.exec.ekf.lever_arm_b_m;
-  nav.llh = f.llh + llh_delta_from_enu(f.llh, d_enu);
-  nav.q_b_n = Quat(C);
-  nav.q_b_n.normalize();
-  const Status st = start(nav, sigma, dt);
-  if (st == Status::kOk) {
-    health_.vm_gyro_bias_radps = vm_bias_radps_ + eps;
-    health_.vm_accel_bias_mps2 = b_a;
-  }
-  return st;
-}
-
-template <class Layout>
-void FlightApp<Layout>::levelled_roll_pitch(double& roll, double& pitch) const {
-  // Levelling: mean specific force in body axes, f_b = (g sin(pitch), -g sin(roll) cos(pitch),
-  // -g cos(roll) cos(pitch)) in unaccelerated motion (body x forward, y right, z down).
-  Vec3 dv = Vec3::Zero();
-  double dt = 0.0;
-  for (int k = 0; k < level_count_; ++k) {
-    dv += level_dv_[static_cast<std::size_t>(k)];
-    dt += level_dt_[static_cast<std::size_t>(k)];
-  }
-  const Vec3 f = dv / dt;
-  roll = std::atan2(-f.y(), -f.z());
-  pitch = std::atan2(f.x(), std::hypot(f.y(), f.z()));
 }
 
 template <class Layout>
@@ -376,62 +101,14 @@ Status FlightApp<Layout>::on_gnss_pvt(const GnssPvtMeasurement& m) {
     ++health_.pvt_rejected;
     return Status::kBadInput;
   }
-  if (!health_.initialised) return try_initialise_pvt(m);
+  if (!health_.initialised) {
+    InitialState initial;
+    bool ready = false;
+    const Status init_st = initialiser_.on_pvt(m, cfg_, health_, initial, ready);
+    return ready ? start(initial) : init_st;
+  }
   pvt_ = m;
   have_pvt_ = true;  // handed to the executive with the next minor frame
-  return Status::kOk;
-}
-
-template <class Layout>
-Status FlightApp<Layout>::try_initialise_pvt(const GnssPvtMeasurement& m) {
-  ++health_.pvt_before_init;
-  if (cfg_.init_mode == InitMode::kGiven) return Status::kOk;  // waits for start_given()
-  if (cfg_.init_mode == InitMode::kTrack && level_count_ < cfg_.levelling_samples) {
-    ++health_.init_not_level;
-    return Status::kOk;
-  }
-  if (!m.has_velocity) {
-    ++health_.init_no_fix;  // no velocity, no heading (kStatic: no rest test)
-    return Status::kOk;
-  }
-  if (cfg_.init_mode != InitMode::kTrack) {
-    InitFix f;
-    f.t_s = m.t_s;
-    f.llh = m.llh;
-    f.vel_enu_mps = m.vel_enu_mps;
-    f.vel_sigma_mps = m.vel_sigma_enu_mps.maxCoeff();
-    f.antenna = true;
-    const Status st = cfg_.init_mode == InitMode::kStatic ? init_static(f) : init_velocity_matching(f);
-    if (health_.initialised) {
-      health_.init_fix = GnssPvt{};
-      health_.init_fix.r_ecef_m = ecef_from_llh(m.llh);
-      health_.init_fix.v_ecef_mps = C_n_e(m.llh.x(), m.llh.y()) * m.vel_enu_mps;
-      health_.init_fix.n_used = m.n_sat;
-    }
-    return st;
-  }
-  const double ground_speed = std::hypot(m.vel_enu_mps.x(), m.vel_enu_mps.y());
-  if (!(ground_speed >= cfg_.min_init_speed_mps)) {
-    ++health_.init_too_slow;
-    return Status::kOk;
-  }
-  double roll = 0.0, pitch = 0.0;
-  levelled_roll_pitch(roll, pitch);
-  const double heading = std::atan2(m.vel_enu_mps.x(), m.vel_enu_mps.y()) + cfg_.init_heading_offset_rad;
-  const Mat3 C = C_b_n_from_euler(roll, pitch, heading);
-  NavState nav;
-  nav.t_s = m.t_s;
-  // The IMU reference point: the antenna moved back by the lever arm (the lever arm's rotation
-  // velocity is left in the velocity's uncertainty).
-  nav.llh = m.llh + llh_delta_from_enu(m.llh, -(C * cfg_.exec.ekf.lever_arm_b_m));
-  nav.vel_enu_mps = m.vel_enu_mps;
-  nav.q_b_n = Quat(C);
-  const Status st = start(nav, cfg_.init_att_sigma_rad, 0.0);
-  if (st != Status::kOk) return st;
-  health_.init_fix = GnssPvt{};
-  health_.init_fix.r_ecef_m = ecef_from_llh(m.llh);
-  health_.init_fix.v_ecef_mps = C_n_e(m.llh.x(), m.llh.y()) * m.vel_enu_mps;
-  health_.init_fix.n_used = m.n_sat;
   return Status::kOk;
 }
 
@@ -447,27 +124,7 @@ Status FlightApp<Layout>::on_imu(const ImuSample& s, FrameOutput& out) {
   if (!health_.initialised) {
     ++health_.imu_before_init;
     out.frame_closed = health_.imu_before_init % static_cast<std::uint32_t>(cfg_.exec.imu_samples_per_frame) == 0u;
-    const bool aligning = cfg_.init_mode != InitMode::kTrack;
-    if (!(s.dt_s > 0.0) || !s.dv_mps.allFinite() || !std::isfinite(s.dt_s) ||
-        (aligning && (!s.dtheta_rad.allFinite() || !std::isfinite(s.t_s)))) {
-      ++health_.imu_rejected;
-      return Status::kBadInput;
-    }
-    if (cfg_.init_mode == InitMode::kVelocityMatching && vm_hist_count_ > 0 &&
-        !(s.t_s > vm_hist_t_[static_cast<std::size_t>((vm_hist_head_ - 1 + kVmHistory) % kVmHistory)])) {
-      ++health_.imu_rejected;  // not after the previous sample: the history must be in time order
-      return Status::kOk;
-    }
-    const int n = cfg_.levelling_samples;
-    level_dv_[static_cast<std::size_t>(level_head_)] = s.dv_mps;
-    level_dt_[static_cast<std::size_t>(level_head_)] = s.dt_s;
-    level_head_ = (level_head_ + 1) % n;
-    if (level_count_ < n) ++level_count_;
-    if (aligning) {
-      (void)interval_.add(s);  // validated above
-      if (cfg_.init_mode == InitMode::kVelocityMatching) vm_imu(s);
-    }
-    return Status::kOk;
+    return initialiser_.on_imu(s, cfg_, health_);
   }
   if (!(s.t_s > exec_.ins().state().t_s) && n_batch_ == 0) {
     ++health_.imu_rejected;  // at or before the initialisation epoch: already represented
@@ -502,11 +159,8 @@ Status FlightApp<Layout>::on_event(const InputEvent& ev, FrameOutput& out) {
   return Status::kBadInput;
 }
 
-template class FlightApp<Layout15>;
-template class FlightApp<Layout24>;
-template class FlightApp<Layout15Conv>;
-template class FlightApp<Layout15Full>;
-template class FlightApp<Layout24Full>;
-template class FlightApp<LayoutDiag>;
+#define FSW_FLIGHT_APP_INSTANTIATE(L) template class FlightApp<L>;
+FSW_FOR_EACH_LAYOUT(FSW_FLIGHT_APP_INSTANTIATE)
+#undef FSW_FLIGHT_APP_INSTANTIATE
 
 }  // namespace fsw

@@ -169,3 +169,61 @@ TEST(RateGroups, AFrameRateThatDoesNotMatchTheImuIsCounted) {
   EXPECT_GT(wrong.health.nav_frames, 5000u);
   EXPECT_EQ(wrong.health.frame_rate_mismatch, wrong.health.nav_frames / 200);  // nav_rate_hz 200
 }
+
+// The executive's units on their own: the 200 Hz group completes a navigation frame every
+// imu_samples_per_frame samples (counting them), accumulates it into the interval it hands over
+// at a release, and aligns the solution to an aid's time tag; the 1 Hz group without an aid
+// propagates only and reports the request's release time.
+TEST(RateGroupUnits, NavigationGroupFramesHandsOverAndAligns) {
+  fsw::ExecutiveConfig cfg;
+  cfg.imu_samples_per_frame = 5;
+  fsw::NavState start;
+  start.t_s = 10.0;
+  start.llh = fsw::Vec3(0.6, 2.0, 100.0);
+  start.vel_enu_mps = fsw::Vec3(0.0, 50.0, 0.0);
+  static fsw::NavGroup<fsw::Layout15> nav;
+  ASSERT_EQ(nav.configure(cfg, start), fsw::Status::kOk);
+  nav.reset(cfg);
+  fsw::ExecutiveHealth h;
+  int frames = 0;
+  for (int k = 1; k <= 12; ++k) {
+    fsw::ImuSample s;
+    s.t_s = 10.0 + 0.001 * k;
+    s.dt_s = 0.001;
+    s.dv_mps = fsw::Vec3(0.0, 0.0, -9.8 * s.dt_s);  // level, body z down
+    s.dtheta_rad = fsw::Vec3::Zero();
+    const bool frame = nav.add_sample(s, h);
+    EXPECT_EQ(frame, k % 5 == 0) << k;
+    frames += frame ? 1 : 0;
+  }
+  EXPECT_EQ(frames, 2);
+  EXPECT_EQ(h.imu_samples, 12u);
+  EXPECT_EQ(h.nav_frames, 2u);
+  EXPECT_EQ(h.imu_rejected + h.fsw_errors, 0u);
+  EXPECT_EQ(nav.samples_to_frame_end(), 3);
+  EXPECT_NEAR(nav.ins().state().t_s, 10.010, 1e-12);
+  // The interval accumulated so far is handed over; the next one starts empty.
+  const int closed = nav.hand_over_interval();
+  EXPECT_EQ(closed, 0);
+  EXPECT_EQ(nav.transition(0).frames(), 2);
+  EXPECT_EQ(nav.transition(1).frames(), 0);
+  // Aligned 0.1 s back: the position moves back along the velocity.
+  const fsw::NavState& now = nav.ins().state();
+  const fsw::NavState at = nav.aligned(now.t_s - 0.1);
+  EXPECT_NEAR(at.t_s, now.t_s - 0.1, 1e-12);
+  EXPECT_NEAR(fsw::enu_difference_m(now.llh, at.llh).y(), 0.1 * now.vel_enu_mps.y(), 1e-3);
+
+  static fsw::EkfGroup<fsw::Layout15> ekf;
+  ASSERT_EQ(ekf.init(cfg.ekf), fsw::Status::kOk);
+  fsw::EkfRequest<fsw::Layout15> rq;
+  rq.aid = fsw::EkfRequest<fsw::Layout15>::Aid::kNone;
+  rq.t_s = now.t_s;
+  static fsw::EkfResult<fsw::Layout15> r;
+  const double p0 = ekf.ekf().P()(0, 0);
+  ekf.run(rq, nav.transition(closed), r);
+  EXPECT_FALSE(r.updated);
+  EXPECT_FALSE(r.correction_valid);
+  EXPECT_EQ(r.fsw_errors, 0u);
+  EXPECT_EQ(r.output.t_s, now.t_s);
+  EXPECT_GT(ekf.ekf().P()(0, 0), p0);  // propagated over the 10 ms interval
+}

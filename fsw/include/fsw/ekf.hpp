@@ -1,5 +1,6 @@
-// Error-state extended Kalman filter, tightly coupled to GPS pseudorange and pseudorange rate
-// (1 Hz task). One implementation for every model: Ekf<Layout15>, Ekf<Layout24>, and the
+// Error-state extended Kalman filter, tightly coupled to GPS pseudorange and pseudorange rate or
+// loosely coupled to GNSS position/velocity solutions (1 Hz task): the core (init, propagate, the
+// scalar update, feedback) and its aid units. One implementation for every model: Ekf<Layout15>, Ekf<Layout24>, and the
 // extended layouts of the diagnosis (error_state.hpp defines the states and their signs).
 //
 // PROPAGATION (linearised SDINS error model, ENU, frames.hpp conventions)
@@ -18,49 +19,14 @@
 // random constant or random walk; the clock is a two-state (bias, drift) random process.
 // Q: Qd = 0.5 (Phi Qc Phi^T + Qc) T per interval; the clock's Qd is exact.
 //
-// MEASUREMENTS (sequential scalar updates, Joseph form, symmetry enforced)
-//   y = z_hat - z = H dx + noise,  z_hat from gnss_geometry() at the antenna (lever arm) with the
-//   clock estimate; pseudorange H: position -e_n^T, attitude -e_n^T [(C_b_n l) x], clock bias 1;
-//   pseudorange rate H: velocity -e_n^T, clock drift 1 (e_n: unit line of sight receiver ->
-//   satellite in ENU). Every scalar is gated: (y - H dx)^2 / (H P H^T + R) > gate_chi2 rejects it
-//   (counted). The INS solution at the frame closest to the epoch is extrapolated to the epoch's
-//   time tag with its velocity.
-//
-// EXTENSION BLOCKS OF THE DIAGNOSIS MODEL (LayoutDiag; each a random constant, estimate fed back)
-//   time offset tau (IMU tag minus GNSS time): the INS is read at the epoch's time tag plus
-//     tau_hat; H_pr = -e_n^T v_n, H_prr = -e_n^T a_n (a_n: the frame's acceleration).
-//   lever arm l: the antenna at l_hat; H_pr = -e_n^T C_b_n, H_prr = -e_n^T C_b_n [w x]
-//     (w = w_ib_b - w_ie_b).
-//   tropospheric / ionospheric scale s: z_hat += s_hat * D, H_pr = D, with D the model delay
-//     (fsw/gnss_delays.hpp, the simulator's too; s = 1 is the full model): troposphere
-//     saastamoinen_delay_m(lat, h_ant, el), ionosphere klobuchar_delay_m(kKlobucharDefault,
-//     epoch.gps_tow_s, lat, lon, az, el); lat / lon of the INS, el / az of the predicted line of
-//     sight in ENU. Their rates (< 1 cm/s) are left out.
-//   A block whose initial sigma is zero stays exactly zero (it has no process noise): the
-//   diagnosis switches extensions on and off that way.
-//
-// LOOSELY COUPLED UPDATE (update_pvt: a GNSS position/velocity solution of the antenna)
-//   The antenna p_a = p + C_b_n l, v_a = v + C_b_n (w x l) (w = w_ib_b - C_n_b w_ie_n), read at
-//   the solution's time plus tau_hat like the pseudoranges. Six sequential scalar updates in ENU,
-//   position E N U then velocity E N U (axes uncorrelated), each gated with gate_chi2, Joseph form:
-//     y_pos = d_a - enu_difference_m(llh_meas, llh_nav)  H: pos I, att [(C_b_n l) x], lever C_b_n,
-//                                                          tau v_a (= v_n + C_b_n (w x l))
-//     y_vel = v_a_hat - v_meas                           H: vel I, att [(C_b_n (w x l)) x]
-//                                                          + [(w_ie_n x C_b_n l) x] - [w_ie_n x][(C_b_n l) x]
-//                                                          (the Earth-rate part of w depends on the
-//                                                          attitude too), lever C_b_n [w x], tau a_n
-//   (d_a = C_b_n l + v_a dt: the predicted antenna relative to the INS solution; the velocity term
-//   tau a_n is applied to v_a_hat as in update()). The position is read
-//   dt = t_meas + tau_hat - t_nav after nav (0 when the executive has aligned nav to the solution
-//   and tau_hat = 0), so its rows also get dt times the velocity rows' nav, attitude and lever terms.
-//   R = (pvt_sigma_scale * max(sigma, floor))^2 per axis. The clock and the channel errors are
-//   not involved. pvt_measurement_model() is the model itself (tests check it by differences).
-//
-// TIME-CORRELATED MEASUREMENT ERRORS (layouts with kRangeError / kRangeRateError): each tracked
-//   satellite is bound to a channel; the channel's first-order Gauss-Markov error is a state
-//   (H = 1), propagated with a = exp(-T / tau) and Qd = sigma^2 (1 - a^2). A newly tracked
-//   satellite takes a free channel, whose state restarts at zero with variance sigma^2 and no
-//   correlation; a satellite that is not in the epoch releases its channel.
+// MEASUREMENTS: one aid unit per measurement type, each in the same shape (observation, variance,
+// innovation, gate, then fuse / reset) and each returning its innovation records in
+// EkfUpdateReport: the raw GNSS aid, pseudorange and pseudorange rate (update(),
+// fsw/ekf/aid_gnss_raw.hpp: the measurement model, the clock, the diagnosis' extension blocks and
+// the time-correlated channel errors), and the position/velocity aid, a GNSS solution (update_pvt(),
+// fsw/ekf/aid_gnss_pvt.hpp). What they share is the core's (fsw/src/ekf.cpp): the gated sequential
+// scalar update in Joseph form (fuse()), the covariance check and the consistency bookkeeping (the
+// NIS window and the gating runaway).
 //
 // FEEDBACK (closed loop): after each epoch the estimate is removed from the navigation solution
 // (Strapdown::correct) and added to the IMU compensation, and the error state is reset to zero.
@@ -72,6 +38,8 @@
 #include <limits>
 #include <cstdint>
 
+#include "fsw/ekf/aid_gnss_pvt.hpp"
+#include "fsw/ekf/aid_gnss_raw.hpp"
 #include "fsw/error_state.hpp"
 #include "fsw/frames.hpp"
 #include "fsw/gnss.hpp"
@@ -197,22 +165,6 @@ struct EkfUpdateReport {
   int pos_rejected = 0;  ///< failed the innovation gate
   int vel_rejected = 0;
 };
-
-/// The loosely coupled measurement model at one solution (see the file comment): the predicted
-/// antenna, the innovations (predicted minus measured) and the exact Jacobian of the predicted
-/// measurement. lever_arm_b_m and time_offset_s are the filter's estimates, accel_enu_mps2 the
-/// frame's kinematic acceleration (ENU).
-struct PvtModel {
-  Vec3 llh_ant = Vec3::Zero();         ///< predicted antenna position
-  Vec3 vel_ant_enu_mps = Vec3::Zero(); ///< predicted antenna velocity
-  Vec3 pos_innovation_m = Vec3::Zero();
-  Vec3 vel_innovation_mps = Vec3::Zero();
-  /// Rows: pos E N U, vel E N U. Columns: position (0..2), velocity (3..5), attitude phi (6..8),
-  /// lever arm (9..11), time offset (12), in the error definitions of error_state.hpp.
-  Eigen::Matrix<double, 6, 13> H = Eigen::Matrix<double, 6, 13>::Zero();
-};
-PvtModel pvt_measurement_model(const GnssPvtMeasurement& m, const NavState& nav, const Vec3& omega_ib_b_radps,
-                               const Vec3& lever_arm_b_m, double time_offset_s, const Vec3& accel_enu_mps2);
 
 /// Numerical and statistical health of the filter (F Prime style counters, never asserts).
 struct EkfHealth {
@@ -387,16 +339,42 @@ class Ekf {
  private:
   /// One gated scalar update; nu and S receive the innovation and its variance.
   bool scalar_update(const RowVec& h, double y, double r, double& nu, double& S);
+  /// The core's step of every aid: one scalar through the gate and, when it passes, into the state
+  /// (scalar_update); nu and S receive the innovation and its variance, the NIS of an accepted
+  /// scalar joins report's sum. kUsed or kGated; used / rejected count it.
+  InnovationOutcome fuse(const RowVec& h, double y, double r, double& nu, double& S, int& used, int& rejected,
+                         EkfUpdateReport& report);
   /// Symmetrises P in place and checks it is positive definite; repairs (counted) if not.
   void check_covariance();
   /// Applies the part of the estimate the filter keeps itself and zeroes the estimate.
   void keep_correction();
   void symmetrise();
   void track_consistency(const EkfUpdateReport& report);
+
+  // The raw GNSS aid (fsw/src/ekf/aid_gnss_raw.cpp).
+  /// Observation: each satellite's prediction from the antenna (valid[k] false and the record
+  /// kInvalid for unusable data); returns the number of usable observations.
+  int predict_epoch(const GnssEpoch& epoch, const GnssRawAntenna& ant, GnssRawPrediction* pred, bool* valid,
+                    EkfUpdateReport& report) const;
+  /// Reset: the clock from the mean residuals of the usable observations (the first epoch).
+  void init_clock(const GnssEpoch& epoch, const GnssRawPrediction* pred, const bool* valid, int n_valid);
+  /// Releases the channels of satellites that are no longer tracked.
+  void release_channels(const GnssEpoch& epoch, const bool* valid);
+  /// Variance, innovation, gate and fuse of one observation's pseudorange and pseudorange rate;
+  /// returns its innovation record (and counts it in report).
+  ObservationInnovation fuse_observation(const GnssObservation& o, const GnssRawPrediction& p, const GnssRawAntenna& ant,
+                                         const NavState& nav, double clock_bias_m, double drift_lever_s,
+                                         EkfUpdateReport& report);
   // noinline: a partially inlined clone (.part.0) folded by identical-code folding leaves the
   // stack audit without a frame size for it.
   [[gnu::noinline]] int bind_channel(std::uint8_t prn);
   void reset_channel_state(int state, double sigma);
+
+  // The position/velocity aid (fsw/src/ekf/aid_gnss_pvt.cpp).
+  /// Variance, innovation, gate and fuse of axis i (pos E N U, vel E N U) of a solution; returns
+  /// its innovation record (and counts it in report).
+  PvtInnovation fuse_pvt_axis(int i, const GnssPvtMeasurement& m, const PvtModel& mdl, double drift_lever_s,
+                              EkfUpdateReport& report);
 
   EkfConfig cfg_{};
   bool initialised_ = false;
@@ -436,21 +414,11 @@ class Ekf {
   Eigen::Matrix<double, kGnssErrorChannels, 1> rate_err_hat_ = Eigen::Matrix<double, kGnssErrorChannels, 1>::Zero();
 };
 
-#define FSW_EKF_EXTERN(L)                 \
-  extern template class EkfTransition<L>; \
-  extern template void add_sensor_correction<L>(const Eigen::Matrix<double, L::kSize, 1>&, ImuCompensation&);
-FSW_EKF_EXTERN(Layout15)
-FSW_EKF_EXTERN(Layout24)
-FSW_EKF_EXTERN(Layout15Full)
-FSW_EKF_EXTERN(Layout24Full)
-FSW_EKF_EXTERN(Layout15Conv)
-FSW_EKF_EXTERN(LayoutDiag)
+#define FSW_EKF_EXTERN(L)                                                                                   \
+  extern template class EkfTransition<L>;                                                                   \
+  extern template void add_sensor_correction<L>(const Eigen::Matrix<double, L::kSize, 1>&, ImuCompensation&); \
+  extern template class Ekf<L>;
+FSW_FOR_EACH_LAYOUT(FSW_EKF_EXTERN)
 #undef FSW_EKF_EXTERN
-extern template class Ekf<Layout15>;
-extern template class Ekf<Layout24>;
-extern template class Ekf<Layout15Full>;
-extern template class Ekf<Layout24Full>;
-extern template class Ekf<Layout15Conv>;
-extern template class Ekf<LayoutDiag>;
 
 }  // namespace fsw

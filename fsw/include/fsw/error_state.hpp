@@ -165,6 +165,12 @@ using LayoutDiag =
                      Block::kGyroGSens, Block::kTimeOffset, Block::kTimeDrift, Block::kLeverArm, Block::kTropoScale,
                      Block::kIonoScale, Block::kClock, Block::kRangeError, Block::kRangeRateError>;
 
+/// The layouts the flight software is built for, named once: every explicit instantiation of a
+/// layout template in fsw/ (Ekf and its aid units, EkfTransition, the executive's rate groups and
+/// scheduler, FlightApp) and its extern declaration expand this list, so adding a layout is one entry
+/// here.
+#define FSW_FOR_EACH_LAYOUT(X) X(Layout15) X(Layout24) X(Layout15Full) X(Layout24Full) X(Layout15Conv) X(LayoutDiag)
+
 static_assert(Layout15::kSize == 17, "15-state model plus two clock states");
 static_assert(LayoutDiag::kSize == 66);
 static_assert(Layout24::kSize == 26, "24-state model plus two clock states");

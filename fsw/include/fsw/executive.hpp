@@ -1,10 +1,17 @@
-// The rate-group executive of the flight software: two rate groups with a fixed hand-off.
+// The rate-group executive of the flight software: two rate groups with a fixed hand-off, and the
+// scheduler that divides each minor frame among them (as F Prime's rate-group driver divides one
+// tick among its rate groups).
 //
-//   200 Hz group, tick():        IMU compensation -> coning/sculling frame builder -> strapdown
+//   200 Hz group, NavGroup:      IMU compensation -> coning/sculling frame builder -> strapdown
 //                                step -> accumulation of the filter's transition matrix
-//                                (EkfTransition); releases the 1 Hz group; applies its correction
-//   1 Hz group, run_ekf_group(): Ekf::propagate over the released interval -> measurement update
+//                                (EkfTransition); at a release it hands over the closed interval,
+//                                at a landing it applies the correction
+//   1 Hz group, EkfGroup:        Ekf::propagate over the released interval -> measurement update
 //                                with the GNSS epoch (or solution) -> the correction
+//   scheduler, Executive::tick(): the tick's health, the pending GNSS epoch / solution, then per
+//                                IMU sample the 200 Hz group and, after each navigation frame,
+//                                the 1 Hz group's landing and release; Executive::run_ekf_group()
+//                                runs the released 1 Hz group (inline or on the caller's thread)
 //
 // RELEASE. The 1 Hz group falls due every frames_per_ekf navigation frames and is released as
 // soon as a GNSS epoch whose time tag lies within max_gnss_age_s of the INS time is available; if
@@ -204,11 +211,81 @@ struct HandOffState {
   void store(std::uint8_t x, std::memory_order m) { v.store(x, m); }
 };
 
+/// The 200 Hz group (navigation): IMU compensation -> coning/sculling frame builder -> the frame
+/// rate check -> strapdown step -> accumulation of the filter's transition matrix, plus what the
+/// scheduler asks of it at a release (the solution aligned to an aid's time tag, the closed
+/// interval) and at a landing (the correction). Owns the navigation state; runs on the 200 Hz
+/// thread only.
+template <class Layout>
+class NavGroup {
+ public:
+  using Vec = Eigen::Matrix<double, Layout::kSize, 1>;
+  /// Frame builder and strapdown from cfg and initial; kOk or their status.
+  Status configure(const ExecutiveConfig& cfg, const NavState& initial);
+  /// Empties the compensation, both transition intervals and the rate window (after configure()).
+  void reset(const ExecutiveConfig& cfg);
+  /// One raw IMU sample (counted in health): true when it completed a navigation frame (the
+  /// strapdown stepped and the frame joined the accumulating interval).
+  bool add_sample(const ImuSample& raw, ExecutiveHealth& health);
+  /// Release: hands the accumulating interval to the 1 Hz group (returns its index) and starts the
+  /// other one empty.
+  int hand_over_interval();
+  EkfTransition<Layout>& transition(int i) { return transition_[i]; }
+  /// Landing: the estimate x of the release frame, its navigation part carried to this frame by
+  /// the interval accumulated since (the sensor part into the compensation). kOk or the status of
+  /// the solution's correction (nothing applied).
+  Status apply_correction(const Vec& x);
+  /// The solution at time t_s, extrapolated back (or forward) from the frame end.
+  NavState aligned(double t_s) const;
+  const Strapdown& ins() const { return ins_; }
+  const ImuCompensation& compensation() const { return comp_; }
+  int samples_to_frame_end() const { return builder_.samples_to_frame_end(); }
+
+ private:
+  /// The frame-rate check of one navigation frame (frame_rate_mismatch).
+  void check_frame_rate(double frame_dt_s, ExecutiveHealth& health);
+
+  int substep_frames_ = 10;
+  FrameBuilder builder_{};
+  Strapdown ins_{};
+  ImuCompensation comp_{};
+  EkfTransition<Layout> transition_[2]{};
+  int acc_ = 0;  ///< transition_[acc_] accumulates; the other is the 1 Hz group's while released
+  bool have_last_sample_ = false;
+  double last_sample_t_s_ = 0.0;
+  // The rate check (frame_rate_mismatch): a window of nav_rate_hz frames, 1 s of IMU time when the
+  // configuration matches the IMU (both set at reset), and the current window's frames and IMU time.
+  int rate_window_frames_ = 1;
+  double rate_window_s_ = 1.0;
+  int window_frames_ = 0;
+  double window_imu_s_ = 0.0;
+  Vec3 last_accel_enu_mps2_ = Vec3::Zero();
+};
+
+/// The 1 Hz group (EKF): Ekf::propagate over the released interval -> the measurement update with
+/// the request's aid (raw epoch or solution) -> the correction, into the result. Owns the filter;
+/// runs on the 1 Hz thread (or inline) only, while the hand-off says released.
+template <class Layout>
+class EkfGroup {
+ public:
+  Status init(const EkfConfig& cfg) { return ekf_.init(cfg); }
+  /// One epoch of the request rq over the closed interval t.
+  void run(const EkfRequest<Layout>& rq, EkfTransition<Layout>& t, EkfResult<Layout>& r);
+  const Ekf<Layout>& ekf() const { return ekf_; }
+
+ private:
+  Ekf<Layout> ekf_{};
+};
+
+/// The executive: the scheduler (the rate-group driver) of the two groups above. tick() divides one
+/// minor frame among them: the tick's health, the pending GNSS epoch / solution, then per IMU
+/// sample the 200 Hz group and, after each navigation frame, the 1 Hz group's landing and release
+/// (the hand-off, the file header).
 template <class Layout>
 class Executive {
  public:
   Status init(const ExecutiveConfig& cfg, const NavState& initial);
-  /// The 200 Hz group: one minor frame.
+  /// One minor frame: the scheduler.
   Status tick(const FrameInput& in, FrameOutput& out);
   /// The 1 Hz group: runs the released epoch (kOk and nothing done when none is released). With
   /// ekf_group_inline tick() calls it; otherwise the caller does, once per out.ekf_released, on
@@ -228,31 +305,31 @@ class Executive {
   /// What telemetry reads of the filter: valid after an out.ekf_ran.
   const EkfOutput<Layout>& ekf_output() const { return ekf_output_; }
   /// The filter itself: read it only between run_ekf_group() calls (lockstep callers).
-  const Ekf<Layout>& ekf() const { return ekf_; }
-  const Strapdown& ins() const { return ins_; }
-  const ImuCompensation& compensation() const { return comp_; }
+  const Ekf<Layout>& ekf() const { return ekf_group_.ekf(); }
+  const Strapdown& ins() const { return nav_.ins(); }
+  const ImuCompensation& compensation() const { return nav_.compensation(); }
   /// IMU samples the next tick needs to complete its minor frame (FrameBuilder: the one grouping).
-  int samples_to_frame_end() const { return builder_.samples_to_frame_end(); }
+  int samples_to_frame_end() const { return nav_.samples_to_frame_end(); }
   const ExecutiveConfig& config() const { return cfg_; }
 
  private:
   enum : std::uint8_t { kIdle = 0, kReleased = 1, kDone = 2 };
+  /// The tick's execution-time health (overruns, worst_tick_s).
+  void note_tick_exec_s(double s);
+  /// The frame's GNSS epoch and solution, if any, become pending (or are counted invalid).
+  void accept_aids(const FrameInput& in);
+  /// After a navigation frame: lands a finished epoch's correction at its frame (counts a late
+  /// one) and releases the 1 Hz group when it is due.
+  void schedule_ekf(FrameOutput& out);
   /// Release decision of a due frame; fills the request and releases when ready.
   void maybe_release(FrameOutput& out);
   /// Lands the 1 Hz group's result in this frame.
   void land(FrameOutput& out);
-  /// The solution at time t_s, extrapolated back (or forward) from the frame end.
-  NavState aligned(double t_s) const;
 
   ExecutiveConfig cfg_{};
   bool initialised_ = false;
-  // 200 Hz group.
-  FrameBuilder builder_{};
-  Strapdown ins_{};
-  ImuCompensation comp_{};
+  NavGroup<Layout> nav_{};  ///< the 200 Hz group
   ExecutiveHealth health_{};
-  EkfTransition<Layout> transition_[2]{};
-  int acc_ = 0;  ///< transition_[acc_] accumulates; the other is the 1 Hz group's while released
   GnssEpoch pending_{};
   bool have_pending_ = false;
   GnssPvtMeasurement pending_pvt_{};
@@ -261,30 +338,20 @@ class Executive {
   bool slip_counted_ = false;
   std::uint32_t apply_frame_ = 0;
   bool late_counted_ = false;
-  bool have_last_sample_ = false;
-  // The rate check (frame_rate_mismatch): a window of nav_rate_hz frames, 1 s of IMU time when the
-  // configuration matches the IMU (both set at init), and the current window's frames and IMU time.
-  int rate_window_frames_ = 1;
-  double rate_window_s_ = 1.0;
-  int window_frames_ = 0;
-  double window_imu_s_ = 0.0;
-  double last_sample_t_s_ = 0.0;
-  Vec3 last_accel_enu_mps2_ = Vec3::Zero();
   EkfOutput<Layout> ekf_output_{};
   // The hand-off (one atomic state word; the request is the 200 Hz group's to write while idle,
   // the result the 1 Hz group's while released).
   HandOffState group_state_{};  ///< kIdle, kReleased, kDone
   EkfRequest<Layout> request_{};
   EkfResult<Layout> result_{};
-  // 1 Hz group.
-  Ekf<Layout> ekf_{};
+  EkfGroup<Layout> ekf_group_{};  ///< the 1 Hz group
 };
 
-extern template class Executive<Layout15>;
-extern template class Executive<Layout24>;
-extern template class Executive<Layout15Full>;
-extern template class Executive<Layout24Full>;
-extern template class Executive<Layout15Conv>;
-extern template class Executive<LayoutDiag>;
+#define FSW_EXECUTIVE_EXTERN(L)          \
+  extern template class NavGroup<L>;     \
+  extern template class EkfGroup<L>;     \
+  extern template class Executive<L>;
+FSW_FOR_EACH_LAYOUT(FSW_EXECUTIVE_EXTERN)
+#undef FSW_EXECUTIVE_EXTERN
 
 }  // namespace fsw
