@@ -279,7 +279,11 @@ int run_paper_body() {
   const tools::MonteCarloConfig defaults;
   const double paper_arw = cfg::shipped_flight_config().app.exec.ekf.arw_rad_per_rts;  // config/default.toml
   std::vector<tools::paper::LevelSummary> levels;
-  const std::vector<tools::paper::TurnKick> kicks = root_rank ? kicks_of(base) : std::vector<tools::paper::TurnKick>{};
+  // One truth for the turn kicks and every level: at_level() sets the IMU's error set and sigmas
+  // only, and the truth depends on the flight alone (montecarlo_case.hpp, run_case).
+  const sim::TruthTrack truth = sim::TruthTrack::generate(base);
+  const std::vector<tools::paper::TurnKick> kicks =
+      root_rank ? tools::paper::turn_kicks(truth) : std::vector<tools::paper::TurnKick>{};
   for (double level : opt.levels) {
     const sim::Scenario sc = at_level(base, level);
     tools::MonteCarloConfig mc = case_config();
@@ -289,7 +293,7 @@ int run_paper_body() {
     if (root_rank) fs::create_directories(out / dir);
     std::printf("gyro misalignment 1-sigma %.0f arcsec: %d runs, filters 15, 15c, 15t, 24\n", level, opt.runs);
     std::fflush(stdout);
-    const CaseResult r = run_case(sc, mc, (out / dir).string(), "");
+    const CaseResult r = run_case(sc, truth, mc, (out / dir).string(), "");
     if (!r.written) {
       root = false;
       continue;

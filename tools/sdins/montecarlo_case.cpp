@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <optional>
 #include <thread>
 #include <type_traits>
 
@@ -279,13 +280,15 @@ json health_json(const fsw::ExecutiveHealth& h) {
               {"gating_runaway_epochs", h.ekf.gating_runaway_epochs}, {"filter_resets", h.ekf.resets}};
 }
 
-CaseResult run_case_impl(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, const std::string& out_dir,
-                         const std::string& prefix) {
+CaseResult run_case_impl(const sim::Scenario& sc, const sim::TruthTrack* given_truth, const tools::MonteCarloConfig& mc,
+                         const std::string& out_dir, const std::string& prefix) {
   const auto t0 = std::chrono::steady_clock::now();
   const MpiWorld& w = mpi_world();
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
-  const sim::TruthTrack truth = sim::TruthTrack::generate(sc);
+  std::optional<sim::TruthTrack> own_truth;
+  if (given_truth == nullptr) own_truth = sim::TruthTrack::generate(sc);
+  const sim::TruthTrack& truth = given_truth != nullptr ? *given_truth : *own_truth;
   // This rank's block of runs; with one rank, all of them.
   tools::MonteCarloConfig local = mc;
   const int begin = block_begin(mc.runs, w.size, w.rank), end = block_begin(mc.runs, w.size, w.rank + 1);
@@ -485,7 +488,17 @@ CaseResult run_case(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, 
                     const std::string& prefix) {
   CaseResult r;
   run_guarded([&] {
-    r = run_case_impl(sc, mc, out_dir, prefix);
+    r = run_case_impl(sc, nullptr, mc, out_dir, prefix);
+    return 0;
+  });
+  return r;
+}
+
+CaseResult run_case(const sim::Scenario& sc, const sim::TruthTrack& truth, const tools::MonteCarloConfig& mc,
+                    const std::string& out_dir, const std::string& prefix) {
+  CaseResult r;
+  run_guarded([&] {
+    r = run_case_impl(sc, &truth, mc, out_dir, prefix);
     return 0;
   });
   return r;

@@ -43,6 +43,11 @@ int run_guarded(const std::function<int()>& body);
 /// ranks write nothing and get written == false. An error on any rank aborts the job.
 CaseResult run_case(const sim::Scenario& sc, const tools::MonteCarloConfig& mc, const std::string& out_dir,
                     const std::string& prefix);
+/// The same with the truth given: sim::TruthTrack::generate of a scenario that flies as sc does
+/// (the same start, segments, duration and IMU and GNSS rates, what the truth depends on), for
+/// cases that differ only in their sensor errors (`sdins paper`'s levels share one).
+CaseResult run_case(const sim::Scenario& sc, const sim::TruthTrack& truth, const tools::MonteCarloConfig& mc,
+                    const std::string& out_dir, const std::string& prefix);
 
 /// Prints the per-model table of a case.
 void print_case(const CaseResult& r);
