@@ -196,7 +196,7 @@ nlohmann::json mounting_json(const MountingFromTravel& m) {
                       {"min_speed_mps", m.min_speed_mps},
                       {"t_quantile", m.t_quantile},
                       {"threshold", kMountingDeviance},
-                      {"applied", m.found && m.track_init ? nlohmann::json("init.heading_offset_deg")
+                      {"applied", m.yaw.named && m.track_init ? nlohmann::json("init.heading_offset_deg")
                                                           : nlohmann::json(nullptr)}};
   if (!m.determined) j["why"] = m.why;
   if (m.determined) {
@@ -214,10 +214,11 @@ std::vector<std::string> mounting_terminal_lines(const MountingFromTravel& m) {
            angle_text(a);
   };
   std::vector<std::string> v = {line("yaw", m.yaw), line("pitch", m.pitch)};
-  if (m.found)
+  if (m.yaw.named)
     v.push_back(m.track_init ? "mounting: the yaw is the track initialisation's init.heading_offset_deg (applied before every search)"
                              : "mounting: not applied (this initialisation does not use the track; with init.mode = \"track\" "
                                "set init.heading_offset_deg = " + fmt(m.yaw.estimate_deg, "%.1f") + ")");
+  if (m.pitch.named) v.push_back("mounting: the pitch enters no part of the model (the levelling carries it): reported only");
   return v;
 }
 
@@ -238,7 +239,8 @@ std::string mounting_report_md(const MountingFromTravel& m) {
   };
   row("yaw (IMU heading minus track)", m.yaw);
   row("pitch (IMU pitch above the flight path)", m.pitch);
-  if (m.found)
+  if (m.pitch.named) s += "\nThe pitch enters no part of the model (the levelling carries the sensor's attitude): reported only.\n";
+  if (m.yaw.named)
     s += m.track_init ? "\nThe yaw is applied to `init.heading_offset_deg` (the track initialisation) before every search.\n"
                       : "\nNot applied: this initialisation does not use the track (with `init.mode = \"track\"`, "
                         "`init.heading_offset_deg = " + fmt(m.yaw.estimate_deg, "%.1f") + "`).\n";
