@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "fsw/frames.hpp"
+
 namespace sim {
 namespace {
 
@@ -32,6 +34,12 @@ void add_effects(ImuErrors& e, const EffectSet& fx) {
 }
 
 }  // namespace
+
+Mat3 mounting_C_s_b(const std::array<double, 3>& rpy_deg) {
+  // C_b_n_from_euler is the rotation to NED followed by the NED -> ENU permutation: undo the latter.
+  return fsw::C_ned_enu() *
+         fsw::C_b_n_from_euler(rpy_deg[0] * fsw::kDegToRad, rpy_deg[1] * fsw::kDegToRad, rpy_deg[2] * fsw::kDegToRad);
+}
 
 ImuErrors imu_errors_from_effects(const EffectSet& effects) {
   ImuErrors e;
@@ -74,6 +82,9 @@ ImuErrors draw_imu_errors(const ImuConfig& cfg, const EffectSet& effects, std::u
     e.accel_bias_rw_mps2_per_rts = s.accel_bias_rw_ug_per_rthr * fsw::kMicroG_mps2 / 60.0;
   }
   add_effects(e, effects);
+  const std::array<double, 3>& m = cfg.mounting_rpy_deg;
+  e.mounted = m[0] != 0.0 || m[1] != 0.0 || m[2] != 0.0;  // no draw: the seeded runs are unchanged
+  if (e.mounted) e.C_s_b = mounting_C_s_b(m);
   return e;
 }
 
@@ -95,12 +106,15 @@ fsw::ImuSample ImuModel::measure(const TruthSample& truth) {
   }
   const Mat3 Kg = Mat3::Identity() + Mat3(e_.gyro_scale_factor.asDiagonal()) + e_.gyro_misalignment_rad;
   const Mat3 Ka = Mat3::Identity() + Mat3(e_.accel_scale_factor.asDiagonal()) + e_.accel_misalignment_rad;
+  // The increments in the sensor's axes (a fixed rotation turns the integrals exactly).
+  const Vec3 dtheta = e_.mounted ? Vec3(e_.C_s_b.transpose() * truth.dtheta_rad) : truth.dtheta_rad;
+  const Vec3 dv = e_.mounted ? Vec3(e_.C_s_b.transpose() * truth.dv_mps) : truth.dv_mps;
   fsw::ImuSample s;
   s.t_s = truth.t_s * (1.0 + e_.clock_drift) + e_.time_offset_s;
   s.dt_s = dt * (1.0 + e_.clock_drift);
-  s.dtheta_rad = Kg * truth.dtheta_rad + e_.gyro_g_sensitivity_radps_per_mps2.cwiseProduct(truth.dv_mps) +
+  s.dtheta_rad = Kg * dtheta + e_.gyro_g_sensitivity_radps_per_mps2.cwiseProduct(dv) +
                  (e_.gyro_bias_radps + drift_g_ + walk_g_) * dt;
-  s.dv_mps = Ka * truth.dv_mps + (e_.accel_bias_mps2 + drift_a_ + walk_a_) * dt;
+  s.dv_mps = Ka * dv + (e_.accel_bias_mps2 + drift_a_ + walk_a_) * dt;
   if (e_.gyro_arw_rad_per_rts > 0.0) s.dtheta_rad += normal3(rng_, e_.gyro_arw_rad_per_rts * std::sqrt(dt));
   if (e_.accel_vrw_mps_per_rts > 0.0) s.dv_mps += normal3(rng_, e_.accel_vrw_mps_per_rts * std::sqrt(dt));
   return s;

@@ -220,7 +220,23 @@ class Parser : public cfg::toml_schema::Reader {
         {"bias_instability_tau_s", number(s.bias_instability_tau_s, positive())},
         {"gyro_bias_rw_degph_per_rthr", number(s.gyro_bias_rw_degph_per_rthr, non_negative())},
         {"accel_bias_rw_ug_per_rthr", number(s.accel_bias_rw_ug_per_rthr, non_negative())},
+        {"mounting_rpy_deg", mounting(cfg.mounting_rpy_deg)},
     });
+  }
+
+  /// [roll, pitch, yaw] in degrees: roll and yaw in [-180, 180], pitch in [-90, 90].
+  Handler mounting(std::array<double, 3>& out) {
+    return [this, &out](const toml::node& n, const std::string& p) {
+      const auto* a = n.as_array();
+      if (!a || a->size() != 3)
+        return fail(n, "'" + p + "' must be an array of 3 numbers [roll, pitch, yaw] in degrees" + got(n));
+      std::array<double, 3> v{};
+      const Range ranges[3] = {closed(-180.0, 180.0), closed(-90.0, 90.0), closed(-180.0, 180.0)};
+      for (std::size_t i = 0; i < 3; ++i)
+        if (!read_number(*a->get(i), p + "[" + std::to_string(i) + "]", ranges[i], v[i])) return false;
+      out = v;
+      return true;
+    };
   }
 
   bool gps(const toml::node& n, const std::string& path, GpsConfig& g) {

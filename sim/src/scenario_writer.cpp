@@ -201,7 +201,12 @@ ScenarioWriteResult write_scenario_toml(const Scenario& sc, const std::string& h
     << "accel_bias_instability_ug = " << num(s.accel_bias_instability_ug) << "\n"
     << "bias_instability_tau_s = " << num(s.bias_instability_tau_s) << "\n"
     << "gyro_bias_rw_degph_per_rthr = " << num(s.gyro_bias_rw_degph_per_rthr) << "\n"
-    << "accel_bias_rw_ug_per_rthr = " << num(s.accel_bias_rw_ug_per_rthr) << "\n\n";
+    << "accel_bias_rw_ug_per_rthr = " << num(s.accel_bias_rw_ug_per_rthr) << "\n";
+  // Written only when set: a scenario without a mounting is written as before.
+  const std::array<double, 3>& m = sc.imu.mounting_rpy_deg;
+  if (m[0] != 0.0 || m[1] != 0.0 || m[2] != 0.0)
+    o << "mounting_rpy_deg = [" << num(m[0]) << ", " << num(m[1]) << ", " << num(m[2]) << "]\n";
+  o << "\n";
   o << "[effects]\n";
   for (const fsw::EffectInfo& info : fsw::kEffectCatalogue) {
     if (!sc.effects.on(info.effect)) continue;

@@ -89,5 +89,16 @@ for f in w["findings"]:
 for f in w["findings"]:
     if f["effect"] == "antenna_lever_arm" and f["interval_95"]["method"] == "profile_likelihood":
         assert f["interval_95"]["model_agrees"], f
-print("diagnoses ok:", sorted(names(p)), sorted(names(w)))
+# The mounting (docs/diagnosis.md, "The mounting"), from the direction of travel: the walk's yaw
+# (body heading minus the RTK track, 97-99 deg on the straight stretches of the replay) and psins-tc's
+# 90 deg (body heading minus the GNSS track: 90.5 deg over its 64 epochs above 1 m/s); neither
+# initialisation uses the track, so neither is applied.
+for d, truth in ((w, 97.0), (p, 90.5)):
+    m = d["chain"]["mounting_from_travel"]
+    assert m["determined"] and m["yaw"]["named"], m
+    lo, hi = m["yaw"]["interval_95_deg"]
+    assert lo <= truth <= hi and hi - lo < 25.0, (truth, m["yaw"])
+    assert m["applied"] is None, m
+print("diagnoses ok:", sorted(names(p)), sorted(names(w)), "; mounting yaw walk",
+      w["chain"]["mounting_from_travel"]["yaw"]["interval_95_deg"], "psins-tc", p["chain"]["mounting_from_travel"]["yaw"]["interval_95_deg"])
 PY

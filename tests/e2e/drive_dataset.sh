@@ -62,4 +62,18 @@ assert iv["method"] == "profile_likelihood" and iv["bounded"], iv
 assert iv["lo"] <= implied_ppm <= iv["hi"], (implied_ppm, iv)
 print("diagnosis ok:", f[0]["effect"], f[0]["estimate"], "+-", f[0]["sigma"], "interval", iv["lo"], iv["hi"],
       "tick records", implied_ppm)
+# The mounting (docs/diagnosis.md, "The mounting"): the direction of travel names the IMU's pitch
+# against the car. The accelerometers in the first 10 s at rest say the same from other data: the
+# README's axes are x backward, y right, z up, so the forward axis sits asin(-f_x / |f|) above the
+# horizontal (-6.7 deg; the parking's slope and a consumer part's 30 mg bias, 1.7 deg, lie in it).
+m = d["chain"]["mounting_from_travel"]
+assert m["determined"] and m["pitch"]["named"], m
+rest = [[float(x) for x in l.split(",")[:3]] for l in open(data + "/imu_1934.csv").readlines()[1:1001] if len(l.split(",")) == 7]
+fx, fy, fz = (sum(r[i] for r in rest) / len(rest) for i in range(3))
+import math
+rest_pitch = math.degrees(math.asin(-fx / math.sqrt(fx * fx + fy * fy + fz * fz)))
+lo, hi = m["pitch"]["interval_95_deg"]
+assert lo - 1.7 <= rest_pitch <= hi + 1.7, (rest_pitch, m["pitch"])
+print("mounting ok: pitch", m["pitch"]["estimate_deg"], [lo, hi], "at rest", rest_pitch, "; yaw",
+      m["yaw"]["estimate_deg"], m["yaw"]["interval_95_deg"], "named" if m["yaw"]["named"] else "not named")
 PY

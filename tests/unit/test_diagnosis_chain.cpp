@@ -148,23 +148,16 @@ TEST(DiagnosisChain, CorrectionsGoToTheModelOrTheData) {
   EXPECT_DOUBLE_EQ(d.imu[0].t_s, 9.75);
 }
 
-// A sensor mounted sideways (90 deg about the vehicle's z, and 5 deg of pitch) on the default
-// aircraft, initialised from the GNSS track: the mounting yaw is found by the profile over the
-// initial heading offset, its interval covering 90 deg, and the flight then initialises right
-// (the chain's first search starts from it). The pitch is absorbed by the levelling (the INS
-// carries the sensor's attitude): no quantity of this model depends on it, so it is not named.
+// A sensor mounted sideways (90 deg about the vehicle's z, and 5 deg of pitch: the simulator's
+// imu.mounting_rpy_deg) on the default aircraft, initialised from the GNSS track: the mounting yaw
+// is found by the profile over the initial heading offset, its interval covering 90 deg, and the
+// flight then initialises right (the chain's first search starts from it).
 TEST(DiagnosisChain, SidewaysMountingYawIsFoundByTheInitialHeadingProfile) {
   if (kSanitized) GTEST_SKIP() << "statistical test: release stage";
   sim::Scenario sc = aircraft(300.0, 21);
-  tools::RecordedData data = tools::record_scenario(sc, 21);
-  // The sensor frame s: the body rotated by yaw 90 deg, then pitch 5 deg: v_s = C_b_s v_b.
-  const fsw::Mat3 C_s_b = (Eigen::AngleAxisd(90.0 * fsw::kDegToRad, fsw::Vec3::UnitZ()) *
-                           Eigen::AngleAxisd(5.0 * fsw::kDegToRad, fsw::Vec3::UnitY()))
-                              .toRotationMatrix();
-  for (fsw::ImuSample& s : data.imu) {
-    s.dtheta_rad = C_s_b.transpose() * s.dtheta_rad;
-    s.dv_mps = C_s_b.transpose() * s.dv_mps;
-  }
+  const tools::RecordedData as_configured = tools::record_scenario(sc, 21);
+  sc.imu.mounting_rpy_deg = {0.0, 5.0, 90.0};
+  const tools::RecordedData data = tools::record_scenario(sc, 21);
   const tools::DiagnosisConfig cfg = tools::default_diagnosis_config();
   const tools::MountingEstimate m = tools::estimate_mounting_yaw(data, cfg);
   std::printf("mounting yaw %.2f deg [%.2f, %.2f], deviance at 0 %.1f, %d runs\n", m.yaw_deg, m.lo_deg, m.hi_deg,
@@ -175,7 +168,7 @@ TEST(DiagnosisChain, SidewaysMountingYawIsFoundByTheInitialHeadingProfile) {
   EXPECT_LE(m.lo_deg, 90.0);
   EXPECT_GE(m.hi_deg, 90.0);
   // With the sensor mounted as configured, nothing is found (the screen's 8 runs only).
-  const tools::MountingEstimate none = tools::estimate_mounting_yaw(tools::record_scenario(sc, 21), cfg);
+  const tools::MountingEstimate none = tools::estimate_mounting_yaw(as_configured, cfg);
   EXPECT_FALSE(none.found) << none.yaw_deg;
   EXPECT_EQ(none.runs, 8);
 }

@@ -572,3 +572,38 @@ TEST(Rng, DeterminismAndStreamSeparation) {
   sim::Rng n1(5, 9), n2(5, 9);
   for (int k = 0; k < 101; ++k) ASSERT_EQ(n1.normal(), n2.normal());
 }
+
+// A mounting turns the body increments into the sensor's axes before the error model: yaw 90 deg
+// (sensor x along the body's y, sensor y along the body's -x, z the same), written out by hand; a
+// pitch of 5 deg about y. The sensor's own scale factor then acts on the sensor's axis.
+TEST(ImuModel, MountingTurnsTheIncrementsIntoTheSensorAxes) {
+  const sim::TruthSample t = hand_truth();
+  sim::ImuConfig cfg;
+  cfg.errors = sim::ImuErrorSet::kNone;
+  cfg.mounting_rpy_deg = {0.0, 0.0, 90.0};
+  sim::ImuErrors e = sim::draw_imu_errors(cfg, sim::EffectSet{}, 1);
+  ASSERT_TRUE(e.mounted);
+  fsw::ImuSample s = measure_once(e, t);
+  const auto yawed = [](const Vec3& v) { return Vec3(v.y(), -v.x(), v.z()); };
+  expect_vec_near(s.dtheta_rad, yawed(t.dtheta_rad), 1e-18, "dtheta, yaw 90");
+  expect_vec_near(s.dv_mps, yawed(t.dv_mps), 1e-17, "dv, yaw 90");
+
+  cfg.mounting_rpy_deg = {0.0, 5.0, 0.0};
+  e = sim::draw_imu_errors(cfg, sim::EffectSet{}, 1);
+  e.gyro_scale_factor = Vec3(0.0, 0.0, 1e-3);
+  s = measure_once(e, t);
+  const double c = std::cos(5.0 * kPi / 180.0), sn = std::sin(5.0 * kPi / 180.0);
+  // Ry(5 deg)^T v = (c x - s z, y, s x + c z).
+  const auto pitched = [&](const Vec3& v) { return Vec3(c * v.x() - sn * v.z(), v.y(), sn * v.x() + c * v.z()); };
+  Vec3 want = pitched(t.dtheta_rad);
+  want.z() *= 1.0 + 1e-3;
+  expect_vec_near(s.dtheta_rad, want, 1e-18, "dtheta, pitch 5, sensor z scale factor");
+  expect_vec_near(s.dv_mps, pitched(t.dv_mps), 1e-17, "dv, pitch 5");
+
+  // No mounting: nothing turned, the increments pass through bit for bit.
+  cfg.mounting_rpy_deg = {0.0, 0.0, 0.0};
+  e = sim::draw_imu_errors(cfg, sim::EffectSet{}, 1);
+  EXPECT_FALSE(e.mounted);
+  s = measure_once(e, t);
+  expect_vec_near(s.dtheta_rad, t.dtheta_rad, 0.0, "dtheta, no mounting");
+}

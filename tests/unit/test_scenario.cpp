@@ -486,3 +486,23 @@ TEST(EffectsConversion, OnAndSi) {
 }
 
 }  // namespace
+
+TEST(ScenarioParse, ImuMountingIsReadAndWrittenOnlyWhenSet) {
+  const Scenario s = parse_ok("[imu]\nmounting_rpy_deg = [1.5, -5, 90.0]\n");
+  EXPECT_EQ(s.imu.mounting_rpy_deg, (std::array<double, 3>{1.5, -5.0, 90.0}));
+  const sim::ScenarioWriteResult w = sim::write_scenario_toml(s);
+  ASSERT_TRUE(w.ok()) << w.error;
+  EXPECT_EQ(parse_ok(w.text).imu.mounting_rpy_deg, s.imu.mounting_rpy_deg);
+  const sim::ScenarioWriteResult none = sim::write_scenario_toml(Scenario{});
+  ASSERT_TRUE(none.ok()) << none.error;
+  EXPECT_EQ(none.text.find("mounting"), std::string::npos);
+}
+
+TEST(ScenarioReject, ImuMountingOutOfRangeOrShape) {
+  expect_rejected("[imu]\nmounting_rpy_deg = [0, 0]\n", 2, "'imu.mounting_rpy_deg' must be an array of 3 numbers");
+  expect_rejected("[imu]\nmounting_rpy_deg = 90\n", 2, "'imu.mounting_rpy_deg' must be an array of 3 numbers");
+  expect_rejected("[imu]\nmounting_rpy_deg = [0, 91, 0]\n", 2, "'imu.mounting_rpy_deg[1]' must be a number in [-90, 90]");
+  expect_rejected("[imu]\nmounting_rpy_deg = [0, 0, 181]\n", 2, "'imu.mounting_rpy_deg[2]' must be a number in [-180, 180]");
+  expect_rejected("[imu]\nmounting_rpy_deg = [0, 0, nan]\n", 2, "'imu.mounting_rpy_deg[2]'");
+  expect_rejected("[imu]\nmounting_rpy_deg = [\"a\", 0, 0]\n", 2, "'imu.mounting_rpy_deg[0]'");
+}

@@ -269,7 +269,11 @@ nlohmann::json chain_json(const tools::DiagnosisChain& ch) {
                 {"deviance_at_configured", m.deviance_at_configured},
                 {"runs", m.runs},
                 {"curve", {{"value_deg", m.theta_deg}, {"deviance", m.deviance}}}};
-  return {{"mounting", mounting}, {"stages", stages}, {"applied", applied}, {"not_found_after_corrections", ch.vanished}};
+  return {{"mounting", mounting},
+          {"mounting_from_travel", tools::mounting_json(ch.travel)},
+          {"stages", stages},
+          {"applied", applied},
+          {"not_found_after_corrections", ch.vanished}};
 }
 
 void print_chain(const tools::DiagnosisChain& ch) {
@@ -281,6 +285,7 @@ void print_chain(const tools::DiagnosisChain& ch) {
                               .c_str()
                         : "none (no rotated start fits better than the configured one)",
                 m.runs, m.deviance_at_configured);
+  for (const std::string& line : tools::mounting_terminal_lines(ch.travel)) std::printf("%s\n", line.c_str());
   for (const tools::ChainStage& st : ch.stages) {
     std::string found;
     for (const tools::Finding& f : st.findings)
@@ -299,6 +304,7 @@ void print_chain(const tools::DiagnosisChain& ch) {
 }
 
 void chain_md(std::ostream& md, const tools::DiagnosisChain& ch) {
+  md << tools::mounting_report_md(ch.travel);
   md << "## The chain: findings that survive their predecessors\n\n";
   if (ch.mounting.searched)
     md << "Mounting yaw (the track initialisation's heading offset, profile likelihood of the ungated baseline over "

@@ -6,7 +6,9 @@
 // M holds the misalignments (M(i, j) = gamma_ij, see fsw/effect_catalogue.hpp), G_g the diagonal
 // gyro g-sensitivity, b the constant biases, d(t) first-order Gauss-Markov bias drifts, w(t) bias
 // random walks (rate random walk, the filter's bias model; docs/noise.md) and n white noise
-// (angle / velocity random walk). Time tags are shifted by the IMU-to-GNSS time
+// (angle / velocity random walk). With a mounting (ImuConfig::mounting_rpy_deg) dtheta and dv are
+// the body increments turned into the sensor axes first (C_s_b^T), so every error above is the
+// sensor's own. Time tags are shifted by the IMU-to-GNSS time
 // offset effect. Everything is drawn from the seed with the project's own portable generator so
 // that the same scenario and seed give bit-identical output everywhere.
 #pragma once
@@ -38,7 +40,12 @@ struct ImuErrors {
   double accel_bias_rw_mps2_per_rts = 0.0;     ///< [m/s^2/sqrt(s)]
   double time_offset_s = 0.0;                  ///< IMU time tag minus GNSS (true) time
   double clock_drift = 0.0;                    ///< IMU clock rate error: tags at t (1 + drift) + offset
+  bool mounted = false;                        ///< the sensor axes turned against the body (ImuConfig::mounting_rpy_deg)
+  Mat3 C_s_b = Mat3::Identity();               ///< sensor to body: body increments read C_s_b^T x in the sensor
 };
+
+/// C_s_b of a mounting [roll, pitch, yaw] in degrees (ImuConfig::mounting_rpy_deg).
+Mat3 mounting_C_s_b(const std::array<double, 3>& rpy_deg);
 
 /// Draws the per-run errors for a scenario: the error set's 1-sigma values from the seed, then
 /// the scenario's fixed effects added on top.

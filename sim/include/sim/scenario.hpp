@@ -85,6 +85,12 @@ struct ImuConfig {
   int rate_hz = 1000;  ///< IMU sample rate; a multiple of the 200 Hz navigation rate
   ImuErrorSet errors = ImuErrorSet::kPaper;
   ImuErrorSigmas sigmas{};
+  /// The IMU's mounting on the vehicle: roll, pitch, yaw [deg] of the sensor axes against the
+  /// vehicle's body axes (z-y-x: yaw about the body z, then pitch, then roll; a vector v in the
+  /// body frame reads C_s_b^T v in the sensor frame, C_s_b = Rz(yaw) Ry(pitch) Rx(roll)). The truth
+  /// (TRUTH, the trajectory, the antenna) stays the vehicle's; only the IMU's outputs turn. All 0:
+  /// no rotation at all (the seeded runs without it are unchanged).
+  std::array<double, 3> mounting_rpy_deg{};
   bool operator==(const ImuConfig&) const = default;
 };
 

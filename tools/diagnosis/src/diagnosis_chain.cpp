@@ -253,6 +253,17 @@ void apply_correction(RecordedData& data, DiagnosisConfig& cfg, int candidate, d
   data = with_fixed_effect(data, c, value, drift_reference_time(data, cfg));
 }
 
+/// The mounting from the direction of travel, on the recording initialised as the chain will
+/// (the profile's yaw applied): a named yaw becomes the track initialisation's heading offset.
+static void apply_mounting_from_travel(DiagnosisChain& ch, const RecordedData& data,
+                                const std::function<void(const std::string&)>& progress) {
+  ch.travel = estimate_mounting_from_travel(data, ch.corrected_cfg);
+  if (progress)
+    for (const std::string& line : mounting_terminal_lines(ch.travel)) progress(line);
+  if (ch.travel.found && ch.travel.track_init && ch.travel.yaw.named)
+    ch.corrected_cfg.app.init_heading_offset_rad = ch.travel.yaw.estimate_deg * fsw::kDegToRad;
+}
+
 DiagnosisChain diagnose_chain(const RecordedData& data, const DiagnosisConfig& cfg,
                               const std::function<void(const std::string&)>& progress) {
   DiagnosisChain ch;
@@ -275,6 +286,7 @@ DiagnosisChain diagnose_chain(const RecordedData& data, const DiagnosisConfig& c
       progress(b);
     }
   }
+  apply_mounting_from_travel(ch, data, progress);
   for (int stage = 1; stage <= kMaxChainStages; ++stage) {
     ChainStage st;
     st.stage = stage;

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "tools/diagnosis.hpp"
+#include "tools/diagnosis_mounting.hpp"
 
 namespace tools {
 
@@ -75,12 +76,15 @@ struct MountingEstimate {
   int runs = 0;
   std::vector<double> theta_deg, deviance;  ///< the curve, sorted
 };
-/// chi-square(1) at p = 0.001.
-inline constexpr double kMountingDeviance = 10.827566170662733;
+/// kMountingDeviance: tools/diagnosis_mounting.hpp.
 MountingEstimate estimate_mounting_yaw(const RecordedData& data, const DiagnosisConfig& cfg);
 
 struct DiagnosisChain {
   MountingEstimate mounting;  ///< searched first; applied to the initialisation when found
+  /// The mounting from the direction of travel (tools/diagnosis_mounting.hpp), on a run initialised
+  /// with `mounting` applied: the finding. Its yaw, when named, is the track initialisation's
+  /// heading offset of every search (replacing the profile's).
+  MountingFromTravel travel;
   std::vector<ChainStage> stages;
   std::vector<AppliedCorrection> applied;  ///< in order
   /// The findings reported: each applied component (its total, the interval of the last stage that
