@@ -361,13 +361,9 @@ bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu,
 }
 
 template <class Layout>
-InnovationOutcome Ekf<Layout>::fuse(const RowVec& h, double y, double r, double& nu, double& S, int& used,
-                                    int& rejected, EkfUpdateReport& report) {
-  if (!scalar_update(h, y, r, nu, S)) {
-    ++rejected;
-    return InnovationOutcome::kGated;
-  }
-  ++used;
+InnovationOutcome Ekf<Layout>::fuse(const RowVec& h, double y, double r, double& nu, double& S,
+                                    EkfUpdateReport& report) {
+  if (!scalar_update(h, y, r, nu, S)) return InnovationOutcome::kGated;
   report.nis_sum += nu * nu / S;
   ++report.nis_dof;
   return InnovationOutcome::kUsed;

@@ -341,9 +341,10 @@ class Ekf {
   bool scalar_update(const RowVec& h, double y, double r, double& nu, double& S);
   /// The core's step of every aid: one scalar through the gate and, when it passes, into the state
   /// (scalar_update); nu and S receive the innovation and its variance, the NIS of an accepted
-  /// scalar joins report's sum. kUsed or kGated; used / rejected count it.
-  InnovationOutcome fuse(const RowVec& h, double y, double r, double& nu, double& S, int& used, int& rejected,
-                         EkfUpdateReport& report);
+  /// scalar joins report's sum. kUsed or kGated (the aid counts it by type). At most six integer
+  /// arguments: a seventh is pushed on the stack at each call, which the stack audit sees as a
+  /// dynamic frame.
+  InnovationOutcome fuse(const RowVec& h, double y, double r, double& nu, double& S, EkfUpdateReport& report);
   /// Symmetrises P in place and checks it is positive definite; repairs (counted) if not.
   void check_covariance();
   /// Applies the part of the estimate the filter keeps itself and zeroes the estimate.
@@ -361,10 +362,10 @@ class Ekf {
   /// Releases the channels of satellites that are no longer tracked.
   void release_channels(const GnssEpoch& epoch, const bool* valid);
   /// Variance, innovation, gate and fuse of one observation's pseudorange and pseudorange rate;
-  /// returns its innovation record (and counts it in report).
+  /// returns its innovation record (and counts it in report). At most six integer arguments with
+  /// the record's return slot (the stack audit, fuse()).
   ObservationInnovation fuse_observation(const GnssObservation& o, const GnssRawPrediction& p, const GnssRawAntenna& ant,
-                                         const NavState& nav, double clock_bias_m, double drift_lever_s,
-                                         EkfUpdateReport& report);
+                                         double clock_bias_m, double drift_lever_s, EkfUpdateReport& report);
   // noinline: a partially inlined clone (.part.0) folded by identical-code folding leaves the
   // stack audit without a frame size for it.
   [[gnu::noinline]] int bind_channel(std::uint8_t prn);

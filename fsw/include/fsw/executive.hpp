@@ -289,8 +289,10 @@ class Executive {
   Status tick(const FrameInput& in, FrameOutput& out);
   /// The 1 Hz group: runs the released epoch (kOk and nothing done when none is released). With
   /// ekf_group_inline tick() calls it; otherwise the caller does, once per out.ekf_released, on
-  /// any one thread other than tick()'s or between two ticks.
-  Status run_ekf_group();
+  /// any one thread other than tick()'s or between two ticks. noinline: it is the 1 Hz group's
+  /// task entry, which the stack audit cuts from the 200 Hz task (tick's inline call); inlined
+  /// into tick, the cut would miss it.
+  [[gnu::noinline]] Status run_ekf_group();
   /// The 1 Hz group has been released and not finished.
   bool ekf_group_busy() const { return group_state_.load(std::memory_order_acquire) == kReleased; }
   /// The next navigation frame is the one at which a released epoch's correction must land

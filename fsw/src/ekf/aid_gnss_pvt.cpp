@@ -112,8 +112,11 @@ PvtInnovation Ekf<Layout>::fuse_pvt_axis(int i, const GnssPvtMeasurement& m, con
   if constexpr (Layout::has(Block::kTimeDrift)) h(Layout::offset(Block::kTimeDrift)) = mdl.H(i, 12) * drift_lever_s;
   const double y = is_pos ? mdl.pos_innovation_m(a) : mdl.vel_innovation_mps(a);
   PvtInnovation inn;
-  inn.outcome = fuse(h, y, scale2 * sig * sig, inn.innovation, inn.variance, is_pos ? report.pos_used : report.vel_used,
-                     is_pos ? report.pos_rejected : report.vel_rejected, report);
+  inn.outcome = fuse(h, y, scale2 * sig * sig, inn.innovation, inn.variance, report);
+  if (inn.outcome == InnovationOutcome::kUsed)
+    ++(is_pos ? report.pos_used : report.vel_used);
+  else
+    ++(is_pos ? report.pos_rejected : report.vel_rejected);
   return inn;
 }
 

@@ -20,6 +20,7 @@ GnssRawAntenna gnss_raw_antenna(double t_s, const NavState& nav, const Vec3& ome
   a.lever_enu_m = a.C_b_n * lever_arm_b_m;
   const Vec3 w_ie_b = a.C_b_n.transpose() * omega_ie_n(a.lat_rad);
   a.omega_rel_b_radps = omega_ib_b_radps - w_ie_b;
+  a.ins_vel_enu_mps = nav.vel_enu_mps;
   a.accel_enu_mps2 = f_enu_mps2 - Vec3(0.0, 0.0, normal_gravity_mps2(a.lat_rad, nav.llh.z()));
   // INS time tag of the epoch: its GNSS time plus the estimated IMU-GNSS offset at that time.
   const double dt_ins = t_s + time_offset_s - nav.t_s;
@@ -82,7 +83,7 @@ Status Ekf<Layout>::update(const GnssEpoch& epoch, const NavState& nav, const Ve
   for (int k = 0; k < epoch.n_obs; ++k) {
     if (!valid[k]) continue;
     report.obs[static_cast<std::size_t>(k)] =
-        fuse_observation(epoch.obs[k], pred[k], ant, nav, clock_bias_m, drift_lever_s, report);
+        fuse_observation(epoch.obs[k], pred[k], ant, clock_bias_m, drift_lever_s, report);
   }
   check_covariance();
   track_consistency(report);
@@ -141,9 +142,8 @@ void Ekf<Layout>::release_channels(const GnssEpoch& epoch, const bool* valid) {
 
 template <class Layout>
 ObservationInnovation Ekf<Layout>::fuse_observation(const GnssObservation& o, const GnssRawPrediction& p,
-                                                    const GnssRawAntenna& ant, const NavState& nav,
-                                                    double clock_bias_m, double drift_lever_s,
-                                                    EkfUpdateReport& report) {
+                                                    const GnssRawAntenna& ant, double clock_bias_m,
+                                                    double drift_lever_s, EkfUpdateReport& report) {
   constexpr int oc = Layout::offset(Block::kClock);
   constexpr bool kChannels = Layout::has(Block::kRangeError) || Layout::has(Block::kRangeRateError);
   ObservationInnovation inn;
@@ -166,9 +166,9 @@ ObservationInnovation Ekf<Layout>::fuse_observation(const GnssObservation& o, co
   h.template segment<3>(0) = -e_n.transpose();
   h.template segment<3>(6) = -e_n.transpose() * skew(ant.lever_enu_m);
   h(oc) = 1.0;
-  if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = -e_n.dot(nav.vel_enu_mps);
+  if constexpr (Layout::has(Block::kTimeOffset)) h(Layout::offset(Block::kTimeOffset)) = -e_n.dot(ant.ins_vel_enu_mps);
   if constexpr (Layout::has(Block::kTimeDrift))
-    h(Layout::offset(Block::kTimeDrift)) = -e_n.dot(nav.vel_enu_mps) * drift_lever_s;
+    h(Layout::offset(Block::kTimeDrift)) = -e_n.dot(ant.ins_vel_enu_mps) * drift_lever_s;
   if constexpr (Layout::has(Block::kLeverArm))
     h.template segment<3>(Layout::offset(Block::kLeverArm)) = -e_n.transpose() * ant.C_b_n;
   if constexpr (Layout::has(Block::kTropoScale)) h(Layout::offset(Block::kTropoScale)) = p.tropo_delay_m;
@@ -179,8 +179,10 @@ ObservationInnovation Ekf<Layout>::fuse_observation(const GnssObservation& o, co
       range_err = range_err_hat_(slot);
     }
   }
-  inn.pr_outcome = fuse(h, p.geo.range_m + clock_bias_m + range_err - o.pseudorange_m, r_pr, inn.pr_innovation_m,
-                        inn.pr_variance_m2, report.pr_used, report.pr_rejected, report);
+  inn.pr_outcome =
+      fuse(h, p.geo.range_m + clock_bias_m + range_err - o.pseudorange_m, r_pr, inn.pr_innovation_m, inn.pr_variance_m2,
+           report);
+  ++(inn.pr_outcome == InnovationOutcome::kUsed ? report.pr_used : report.pr_rejected);
   if (!cfg_.use_pseudorange_rate) return inn;
   // Pseudorange rate: the same steps.
   h.setZero();
@@ -198,7 +200,8 @@ ObservationInnovation Ekf<Layout>::fuse_observation(const GnssObservation& o, co
     }
   }
   inn.prr_outcome = fuse(h, p.geo.range_rate_mps + clock_drift_mps_ + rate_err - o.pseudorange_rate_mps, r_prr,
-                         inn.prr_innovation_mps, inn.prr_variance_m2ps2, report.prr_used, report.prr_rejected, report);
+                         inn.prr_innovation_mps, inn.prr_variance_m2ps2, report);
+  ++(inn.prr_outcome == InnovationOutcome::kUsed ? report.prr_used : report.prr_rejected);
   return inn;
 }
 
@@ -243,8 +246,7 @@ int Ekf<Layout>::bind_channel(std::uint8_t prn) {
   template void Ekf<L>::init_clock(const GnssEpoch&, const GnssRawPrediction*, const bool*, int);                  \
   template void Ekf<L>::release_channels(const GnssEpoch&, const bool*);                                           \
   template ObservationInnovation Ekf<L>::fuse_observation(const GnssObservation&, const GnssRawPrediction&,        \
-                                                          const GnssRawAntenna&, const NavState&, double, double,  \
-                                                          EkfUpdateReport&);                                       \
+                                                          const GnssRawAntenna&, double, double, EkfUpdateReport&); \
   template void Ekf<L>::reset_channel_state(int, double);                                                          \
   template int Ekf<L>::bind_channel(std::uint8_t);
 FSW_FOR_EACH_LAYOUT(FSW_EKF_RAW_AID_INSTANTIATE)

@@ -52,6 +52,7 @@ struct GnssRawAntenna {
   Mat3 C_b_n = Mat3::Identity();         ///< the INS attitude
   Vec3 lever_enu_m = Vec3::Zero();       ///< C_b_n l: IMU reference point -> antenna, ENU
   Vec3 omega_rel_b_radps = Vec3::Zero(); ///< w = w_ib_b - w_ie_b, the body rate relative to the Earth
+  Vec3 ins_vel_enu_mps = Vec3::Zero();   ///< the INS velocity (the time-offset term of the pseudorange)
   Vec3 accel_enu_mps2 = Vec3::Zero();    ///< the frame's kinematic acceleration (specific force plus
                                          ///< gravity; Coriolis left out), for the time-offset terms
   Vec3 r_ecef_m = Vec3::Zero();          ///< antenna position at the epoch's INS time tag
