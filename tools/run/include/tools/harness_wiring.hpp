@@ -21,7 +21,7 @@ struct HarnessWiring {
   std::string_view observers;  ///< what watches the FrameOutput
 };
 
-inline constexpr std::array<HarnessWiring, 8> kHarnessWiring{{
+inline constexpr std::array<HarnessWiring, 9> kHarnessWiring{{
     {"`sdins sil`", "tools/sdins/cmd_sil.cpp", "hal::CanFswInput",
      "the simulated sensor stream (`sim::SensorStream`) encoded into CAN frames in-process and decoded by the "
      "receive assembler",
@@ -42,6 +42,9 @@ inline constexpr std::array<HarnessWiring, 8> kHarnessWiring{{
     {"`sdins diagnose`", "tools/diagnosis/src/diagnosis_model.cpp", "tools::RecordedSource",
      "a recording in memory (`tools::RecordedData`), less the GNSS not taken and the outage windows",
      "fsw::FlightDriver", "Diag", "the scoring: innovations, navigation error, outages"},
+    {"`sdins diagnose`: the mounting from the direction of travel", "tools/diagnosis/src/diagnosis_mounting.cpp",
+     "tools::RecordedSource", "the same recording in memory, less the GNSS not taken", "fsw::FlightDriver", "Diag",
+     "the velocity in the IMU's axes and the attitude sigma at each epoch at speed"},
     {"target replay (`sdins audit target`: QEMU image, host `sdins_target`)", "fsw/baremetal/replay.cpp",
      "RecordedInput", "a recorded input read from the board", "fsw::FlightDriver", "15Full, 24Full",
      "`Model`: output lines, digest, tick counts, the 1 Hz group run apart"},
