@@ -391,6 +391,61 @@ std::string single_callee(const CallGraph& g, const std::string& wrapper) {
   return *it->second.callees.begin();
 }
 
+namespace {
+/// One function's state in the audit's depth-first search.
+struct Info {
+  int state = 0;  // 0 unvisited, 1 on the DFS stack, 2 done
+  long depth = 0;
+  std::string next;  // deepest callee
+  std::set<std::string> reasons;
+  std::set<std::string> assumed;
+  std::string note;
+};
+
+/// A task's result read off the finished search: depth, findings with the chain that first
+/// reached each, assumed externals, budget, and the deepest path (references shown as the
+/// definitions they resolved to).
+TaskResult task_result(const CallGraph& g, const TaskSpec& spec, std::map<std::string, Info>& info,
+                       std::map<std::string, std::vector<std::string>>& via) {
+  TaskResult r;
+  r.name = spec.name;
+  r.root = spec.root;
+  r.description = spec.description;
+  const Info& root = info[spec.root];
+  r.stack_bytes = root.depth;
+  r.unbounded_reasons.assign(root.reasons.begin(), root.reasons.end());
+  r.bounded = r.unbounded_reasons.empty();
+  for (const std::string& why : r.unbounded_reasons) {
+    Finding fd;
+    fd.reason = why;
+    for (const std::string& id : via[why])
+      if (!g.functions.at(id).linked) fd.via.push_back(id);
+    r.findings.push_back(fd);
+  }
+  r.assumed_externals.assign(root.assumed.begin(), root.assumed.end());
+  r.budget_bytes = spec.budget_bytes;
+  r.within_budget = spec.budget_bytes <= 0 || (r.bounded && r.stack_bytes <= spec.budget_bytes);
+  r.functions_reached = static_cast<int>(std::count_if(info.begin(), info.end(), [](const auto& kv) { return kv.second.state == 2; }));
+  for (std::string id = spec.root; !id.empty();) {
+    const Function& f = g.functions.at(id);
+    const Info& in = info[id];
+    if (f.linked) {  // a reference: show the definition it resolved to
+      id = in.next;
+      continue;
+    }
+    PathStep s;
+    s.id = id;
+    s.name = demangle(id);
+    s.frame_bytes = f.defined ? f.frame_bytes + (f.callees.empty() ? spec.red_zone_bytes : 0) : in.depth;
+    s.note = in.note;
+    r.path.push_back(s);
+    if (r.path.size() > g.functions.size()) break;  // cannot happen: next never points back up
+    id = in.next;
+  }
+  return r;
+}
+}  // namespace
+
 TaskResult analyse(const CallGraph& g, const TaskSpec& spec, const std::vector<ExternalCost>& costs) {
   if (g.functions.find(spec.root) == g.functions.end())
     throw std::runtime_error("stack audit: task '" + spec.name + "': root '" + spec.root + "' is not in the call graph");
@@ -401,14 +456,6 @@ TaskResult analyse(const CallGraph& g, const TaskSpec& spec, const std::vector<E
   std::map<std::string, const ExternalCost*> cost_of;
   for (const ExternalCost& c : costs) cost_of[c.name] = &c;
 
-  struct Info {
-    int state = 0;  // 0 unvisited, 1 on the DFS stack, 2 done
-    long depth = 0;
-    std::string next;  // deepest callee
-    std::set<std::string> reasons;
-    std::set<std::string> assumed;
-    std::string note;
-  };
   std::map<std::string, Info> info;
   std::vector<std::string> stack;
   std::map<std::string, std::vector<std::string>> via;  // reason -> call chain that first reached it
@@ -478,42 +525,7 @@ TaskResult analyse(const CallGraph& g, const TaskSpec& spec, const std::vector<E
   };
   visit(spec.root);
 
-  TaskResult r;
-  r.name = spec.name;
-  r.root = spec.root;
-  r.description = spec.description;
-  const Info& root = info[spec.root];
-  r.stack_bytes = root.depth;
-  r.unbounded_reasons.assign(root.reasons.begin(), root.reasons.end());
-  r.bounded = r.unbounded_reasons.empty();
-  for (const std::string& why : r.unbounded_reasons) {
-    Finding fd;
-    fd.reason = why;
-    for (const std::string& id : via[why])
-      if (!g.functions.at(id).linked) fd.via.push_back(id);
-    r.findings.push_back(fd);
-  }
-  r.assumed_externals.assign(root.assumed.begin(), root.assumed.end());
-  r.budget_bytes = spec.budget_bytes;
-  r.within_budget = spec.budget_bytes <= 0 || (r.bounded && r.stack_bytes <= spec.budget_bytes);
-  r.functions_reached = static_cast<int>(std::count_if(info.begin(), info.end(), [](const auto& kv) { return kv.second.state == 2; }));
-  for (std::string id = spec.root; !id.empty();) {
-    const Function& f = g.functions.at(id);
-    const Info& in = info[id];
-    if (f.linked) {  // a reference: show the definition it resolved to
-      id = in.next;
-      continue;
-    }
-    PathStep s;
-    s.id = id;
-    s.name = demangle(id);
-    s.frame_bytes = f.defined ? f.frame_bytes + (f.callees.empty() ? spec.red_zone_bytes : 0) : in.depth;
-    s.note = in.note;
-    r.path.push_back(s);
-    if (r.path.size() > g.functions.size()) break;  // cannot happen: next never points back up
-    id = in.next;
-  }
-  return r;
+  return task_result(g, spec, info, via);
 }
 
 namespace {

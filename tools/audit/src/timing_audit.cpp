@@ -297,6 +297,87 @@ void add_schedule(TaskTiming& t, const Schedule& s, const std::vector<std::size_
   t.release_jitter_p99_us = js.p99_us;
 }
 
+/// The 1 Hz group's timing over one pass: its statistics, and its slips and response times on a
+/// preemptive single-core schedule behind the 200 Hz group's frames (exec, sch).
+TaskTiming ekf_group_timing(const Pass& p, const Schedule& sch, const std::vector<double>& exec,
+                            const fsw::ExecutiveConfig& ecfg, const std::string& l, double flight_s) {
+  const double period_s = 1.0 / ecfg.nav_rate_hz;
+  int min_iv = 0, max_iv = 0;
+  for (std::size_t i = 1; i < p.ekf_release.size(); ++i) {
+    const int iv = static_cast<int>(p.ekf_release[i] - p.ekf_release[i - 1]);
+    min_iv = min_iv == 0 ? iv : std::min(min_iv, iv);
+    max_iv = std::max(max_iv, iv);
+  }
+  TaskTiming te;
+  te.name = "ekf_1hz/" + l;
+  te.layout = l;
+  te.description = "the 1 Hz group: one run of FlightApp::run_ekf_group (Ekf::propagate over the released interval, "
+                   "update with the epoch: pseudorange and rate per satellite, the correction), run after the frame "
+                   "that released it; its deadline is the frame at which the correction lands (ekf_latency_frames)";
+  te.nominal_rate_hz = ecfg.nav_rate_hz / ecfg.frames_per_ekf;
+  {
+    std::vector<std::size_t> ek(p.ekf_s.size());
+    for (std::size_t i = 0; i < ek.size(); ++i) ek[i] = i;
+    fill_stats(te, p.ekf_s, p.ekf_pre, ek);
+    const double ekf_cap = max_unpreempted(p.ekf_s, p.ekf_pre, ek);
+    // Preemptive schedule: a run released at frame R gets what the 200 Hz group leaves of frames
+    // R, R+1, ...; it slips when it has not finished before frame R + L's 200 Hz work.
+    for (std::size_t i = 0; i < p.ekf_s.size(); ++i) {
+      double left = p.ekf_pre[i] ? ekf_cap : p.ekf_s[i];
+      const std::size_t R = p.ekf_release[i];
+      const std::size_t L = static_cast<std::size_t>(ecfg.ekf_latency_frames);
+      double finish_s = -1.0;
+      for (std::size_t f = R; f < R + L && f < exec.size(); ++f) {
+        const double release = static_cast<double>(f) * period_s;
+        const double busy_until = release + sch.jitter_s[f] + exec[f];
+        const double idle = std::max(0.0, release + period_s - busy_until);
+        if (left <= idle) {
+          finish_s = busy_until + left - static_cast<double>(R) * period_s;
+          break;
+        }
+        left -= idle;
+      }
+      if (finish_s < 0.0) ++te.slips;
+      else te.response_max_us = std::max(te.response_max_us, finish_s * 1e6);
+    }
+  }
+  te.cpu_share = te.stats.mean_us * 1e-6 * static_cast<double>(p.ekf_s.size()) / flight_s;
+  te.interval_frames_min = min_iv;
+  te.interval_frames_max = max_iv;
+  te.deadline_misses = te.slips;
+  return te;
+}
+
+/// What one pass counted and where its worst unpreempted minor frame was, and what it did.
+void describe_pass(LayoutTiming& lt, const Pass& p) {
+  lt.ekf_updates = p.ekf_updates;
+  lt.fsw_errors = p.fsw_errors;
+  lt.ekf_slips_counted = p.ekf_slips;
+  lt.ekf_late_counted = p.ekf_late;
+  lt.init_frame = p.init_frame;
+  if (p.init_frame >= 0) {
+    lt.init_frame_us = p.tick_s[static_cast<std::size_t>(p.init_frame)] * 1e6;
+    lt.init_frame_preempted = p.tick_pre[static_cast<std::size_t>(p.init_frame)] != 0;
+  }
+  if (!p.sats.empty()) {
+    std::vector<int> s = p.sats;
+    std::sort(s.begin(), s.end());
+    lt.sats_min = s.front();
+    lt.sats_max = s.back();
+    lt.sats_median = s[(s.size() - 1) / 2];
+  }
+  lt.wall_s = p.wall_s;
+  // The worst minor frame that was not preempted, and what it did.
+  for (std::size_t k = 0; k < p.tick_s.size(); ++k)
+    if (!p.tick_pre[k] && p.tick_s[k] * 1e6 > lt.worst_frame_us) {
+      lt.worst_frame_us = p.tick_s[k] * 1e6;
+      lt.worst_frame_index = static_cast<long>(k);
+      lt.worst_frame_t_s = p.t_s[k];
+      lt.worst_frame_work = p.work[k].empty() ? (p.initialised[k] ? "200 Hz group only" : "levelling before initialisation")
+                                              : p.work[k];
+    }
+}
+
 }  // namespace
 
 TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditConfig& cfg) {
@@ -335,17 +416,8 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
     r.frames = static_cast<long>(p.tick_s.size());
     const double period_s = 1.0 / ecfg.nav_rate_hz;
 
-    std::vector<std::size_t> nav_k, all_k;
-    for (std::size_t k = 0; k < p.tick_s.size(); ++k) {
-      all_k.push_back(k);
-      if (p.initialised[k]) nav_k.push_back(k);
-    }
-    int min_iv = 0, max_iv = 0;
-    for (std::size_t i = 1; i < p.ekf_release.size(); ++i) {
-      const int iv = static_cast<int>(p.ekf_release[i] - p.ekf_release[i - 1]);
-      min_iv = min_iv == 0 ? iv : std::min(min_iv, iv);
-      max_iv = std::max(max_iv, iv);
-    }
+    std::vector<std::size_t> all_k;
+    for (std::size_t k = 0; k < p.tick_s.size(); ++k) all_k.push_back(k);
     // The single-core schedule: the 200 Hz group (and the frame stages) first in every frame; a
     // preempted sample counts as its task's largest unpreempted one.
     const double nav_cap = max_unpreempted(p.tick_s, p.tick_pre, all_k);
@@ -369,43 +441,7 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
     tm.cpu_share = tm.stats.mean_us * 1e-6 * static_cast<double>(all_k.size()) / r.flight_s;
     add_schedule(tm, sch, all_k);
     tm.slips = tm.deadline_misses;
-    TaskTiming te;
-    te.name = "ekf_1hz/" + l;
-    te.layout = l;
-    te.description = "the 1 Hz group: one run of FlightApp::run_ekf_group (Ekf::propagate over the released interval, "
-                     "update with the epoch: pseudorange and rate per satellite, the correction), run after the frame "
-                     "that released it; its deadline is the frame at which the correction lands (ekf_latency_frames)";
-    te.nominal_rate_hz = ecfg.nav_rate_hz / ecfg.frames_per_ekf;
-    {
-      std::vector<std::size_t> ek(p.ekf_s.size());
-      for (std::size_t i = 0; i < ek.size(); ++i) ek[i] = i;
-      fill_stats(te, p.ekf_s, p.ekf_pre, ek);
-      const double ekf_cap = max_unpreempted(p.ekf_s, p.ekf_pre, ek);
-      // Preemptive schedule: a run released at frame R gets what the 200 Hz group leaves of frames
-      // R, R+1, ...; it slips when it has not finished before frame R + L's 200 Hz work.
-      for (std::size_t i = 0; i < p.ekf_s.size(); ++i) {
-        double left = p.ekf_pre[i] ? ekf_cap : p.ekf_s[i];
-        const std::size_t R = p.ekf_release[i];
-        const std::size_t L = static_cast<std::size_t>(ecfg.ekf_latency_frames);
-        double finish_s = -1.0;
-        for (std::size_t f = R; f < R + L && f < exec.size(); ++f) {
-          const double release = static_cast<double>(f) * period_s;
-          const double busy_until = release + sch.jitter_s[f] + exec[f];
-          const double idle = std::max(0.0, release + period_s - busy_until);
-          if (left <= idle) {
-            finish_s = busy_until + left - static_cast<double>(R) * period_s;
-            break;
-          }
-          left -= idle;
-        }
-        if (finish_s < 0.0) ++te.slips;
-        else te.response_max_us = std::max(te.response_max_us, finish_s * 1e6);
-      }
-    }
-    te.cpu_share = te.stats.mean_us * 1e-6 * static_cast<double>(p.ekf_s.size()) / r.flight_s;
-    te.interval_frames_min = min_iv;
-    te.interval_frames_max = max_iv;
-    te.deadline_misses = te.slips;
+    const TaskTiming te = ekf_group_timing(p, sch, exec, ecfg, l, r.flight_s);
     r.tasks.push_back(tm);
     r.tasks.push_back(te);
 
@@ -421,32 +457,7 @@ TimingAuditResult run_timing_audit(const sim::Scenario& sc, const TimingAuditCon
       stage_jitter[s].insert(stage_jitter[s].end(), sch.jitter_s.begin(), sch.jitter_s.end());
       for (unsigned char m : sch.miss) stage_misses[s] += m;
     }
-    lt.ekf_updates = p.ekf_updates;
-    lt.fsw_errors = p.fsw_errors;
-    lt.ekf_slips_counted = p.ekf_slips;
-    lt.ekf_late_counted = p.ekf_late;
-    lt.init_frame = p.init_frame;
-    if (p.init_frame >= 0) {
-      lt.init_frame_us = p.tick_s[static_cast<std::size_t>(p.init_frame)] * 1e6;
-      lt.init_frame_preempted = p.tick_pre[static_cast<std::size_t>(p.init_frame)] != 0;
-    }
-    if (!p.sats.empty()) {
-      std::vector<int> s = p.sats;
-      std::sort(s.begin(), s.end());
-      lt.sats_min = s.front();
-      lt.sats_max = s.back();
-      lt.sats_median = s[(s.size() - 1) / 2];
-    }
-    lt.wall_s = p.wall_s;
-    // The worst minor frame that was not preempted, and what it did.
-    for (std::size_t k = 0; k < p.tick_s.size(); ++k)
-      if (!p.tick_pre[k] && p.tick_s[k] * 1e6 > lt.worst_frame_us) {
-        lt.worst_frame_us = p.tick_s[k] * 1e6;
-        lt.worst_frame_index = static_cast<long>(k);
-        lt.worst_frame_t_s = p.t_s[k];
-        lt.worst_frame_work = p.work[k].empty() ? (p.initialised[k] ? "200 Hz group only" : "levelling before initialisation")
-                                                : p.work[k];
-      }
+    describe_pass(lt, p);
     r.layouts.push_back(lt);
   }
   for (std::size_t s = 0; s < cfg.frame_stages.size(); ++s) {

@@ -219,13 +219,31 @@ RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, dou
   return d;
 }
 
-ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& model,
-                                 int cand, double x, double s, double level_z2) {
-  ProfileInterval pi;
-  const Candidate& c = diagnosis_candidates()[static_cast<std::size_t>(cand)];
-  if (!profile_supported(c.effect) || !(s > 0.0) || !std::isfinite(x)) return pi;
-  // The drift's reference: the first GNSS measurement (the filter's is its first update; the
-  // offset, when in the model, absorbs the difference).
+/// The parabola y = A t^2 + B t + C through three points (a minimum only where A > 0).
+struct Parabola {
+  double A = 0.0, B = 0.0, C = 0.0;
+};
+
+Parabola parabola_through(double x0, double x1, double x2, double y0, double y1, double y2) {
+  const double den = (x0 - x1) * (x0 - x2) * (x1 - x2);
+  Parabola p;
+  p.A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den;
+  p.B = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / den;
+  p.C = y1 - p.A * x1 * x1 - p.B * x1;
+  return p;
+}
+
+/// Where the deviance crosses level_z2 between t_in (below the level) and t_out (at or above it),
+/// interpolated linearly in sqrt(deviance): the signed root of the deviance is linear in theta for
+/// a Gaussian likelihood.
+double level_crossing(double t_in, double t_out, double dev_in, double dev_out, double level_z2) {
+  const double a = std::sqrt(std::max(0.0, dev_in)), b = std::sqrt(dev_out), r = std::sqrt(level_z2);
+  return t_in + (t_out - t_in) * (r - a) / (b - a);
+}
+
+/// The drift's reference: the first GNSS measurement of the configured source (the filter's is
+/// its first update; the offset, when in the model, absorbs the difference).
+double first_gnss_time_s(const RecordedData& data, const DiagnosisConfig& cfg) {
   double t_ref_s = data.imu.empty() ? 0.0 : data.imu.front().t_s;
   for (const RecordedData::Event& ev : data.order) {
     if (ev.kind == RecordedData::Kind::kGnss && cfg.gnss_source == cfg::GnssSource::kRaw) {
@@ -237,6 +255,87 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
       break;
     }
   }
+  return t_ref_s;
+}
+
+/// Resolve the maximum: the doubling steps can leave it between two points far apart, where a
+/// sharp or skewed profile's parabolic vertex lies beyond the crossing read off the coarse grid
+/// (seen on the walk's clock drift: the maximum outside its own interval). While that is so, the
+/// gaps beside the best point are halved: the points to run next, none when the vertex is inside.
+std::vector<double> refinement_points(const std::vector<double>& theta, const std::vector<std::size_t>& order,
+                                      const std::vector<double>& dev, double level_z2) {
+  const std::size_t b = static_cast<std::size_t>(std::min_element(dev.begin(), dev.end()) - dev.begin());
+  const double x0 = theta[order[b > 0 ? b - 1 : b]], x1 = theta[order[b]],
+               x2 = theta[order[b + 1 < dev.size() ? b + 1 : b]];
+  double vertex = x1;
+  if (b > 0 && b + 1 < dev.size()) {
+    const Parabola q = parabola_through(x0, x1, x2, dev[b - 1], dev[b], dev[b + 1]);
+    if (q.A > 0.0) vertex = std::clamp(-q.B / (2.0 * q.A), x0, x2);
+  }
+  const auto crossing = [&](std::size_t i, std::size_t j) {
+    return level_crossing(theta[order[i]], theta[order[j]], dev[i], dev[j], level_z2);
+  };
+  const bool below_lo = b > 0 && dev[b - 1] >= level_z2 && vertex < crossing(b, b - 1);
+  const bool above_hi = b + 1 < dev.size() && dev[b + 1] >= level_z2 && vertex > crossing(b, b + 1);
+  std::vector<double> mid;
+  if (below_lo || above_hi) {
+    if (b > 0) mid.push_back(0.5 * (x0 + x1));
+    if (b + 1 < dev.size()) mid.push_back(0.5 * (x1 + x2));
+  }
+  return mid;
+}
+
+/// The profile read off its comparable runs (theta[order[i]] with deviance dev[i]): the points,
+/// the maximum (the parabola through the best point and its neighbours) and the crossings of
+/// level_z2 outward from it.
+void read_profile(ProfileInterval& pi, const std::vector<double>& theta, const std::vector<std::size_t>& order,
+                  const std::vector<double>& dev, double x, double level_z2) {
+  const std::size_t n = order.size();
+  pi.theta.resize(n);
+  pi.deviance = dev;
+  for (std::size_t i = 0; i < n; ++i) {
+    pi.theta[i] = theta[order[i]];
+    if (theta[order[i]] == x) pi.deviance_at_filter = dev[i];  // the first point run
+  }
+  const std::size_t best = static_cast<std::size_t>(std::min_element(dev.begin(), dev.end()) - dev.begin());
+  pi.estimate = pi.theta[best];
+  if (best > 0 && best + 1 < n) {
+    const double x0 = pi.theta[best - 1], x1 = pi.theta[best], x2 = pi.theta[best + 1];
+    const Parabola q = parabola_through(x0, x1, x2, dev[best - 1], dev[best], dev[best + 1]);
+    if (q.A > 0.0) {
+      pi.estimate = std::clamp(-q.B / (2.0 * q.A), x0, x2);
+      // The deviance is relative to the best point run; measured from the parabola's minimum at
+      // the estimate instead, the filter's estimate next to it gets its own distance, not 0.
+      const double y_min = q.A * pi.estimate * pi.estimate + q.B * pi.estimate + q.C;
+      if (y_min < 0.0) pi.deviance_at_filter -= y_min;
+    }
+  }
+  const auto cross = [&](std::size_t i, std::size_t j) {  // i inside (below level), j outside
+    return level_crossing(pi.theta[i], pi.theta[j], dev[i], dev[j], level_z2);
+  };
+  pi.lo = pi.theta.front();
+  for (std::size_t i = best; i > 0; --i)
+    if (dev[i - 1] >= level_z2) {
+      pi.lo = cross(i, i - 1);
+      pi.lo_bounded = true;
+      break;
+    }
+  pi.hi = pi.theta.back();
+  for (std::size_t i = best; i + 1 < n; ++i)
+    if (dev[i + 1] >= level_z2) {
+      pi.hi = cross(i, i + 1);
+      pi.hi_bounded = true;
+      break;
+    }
+  pi.available = true;
+}
+
+ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& model,
+                                 int cand, double x, double s, double level_z2) {
+  ProfileInterval pi;
+  const Candidate& c = diagnosis_candidates()[static_cast<std::size_t>(cand)];
+  if (!profile_supported(c.effect) || !(s > 0.0) || !std::isfinite(x)) return pi;
+  const double t_ref_s = first_gnss_time_s(data, cfg);
   // The data selection held fixed. The innovation gate chooses its measurements by their
   // innovations, which move with theta: runs at different theta would gate different measurements
   // (a 10.83 gate rejects about 1 in 1000 good scalars, 4 to 6 of a 600 s flight), each
@@ -308,34 +407,8 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
     if (dev.front() < level_z2 && x - t_lo < max_reach && !stop_lo) more.push_back(t_lo - step_lo);
     if (dev.back() < level_z2 && t_hi - x < max_reach && !stop_hi) more.push_back(t_hi + step_hi);
     if (more.empty() || iter >= 8) {
-      // Resolve the maximum: the doubling steps can leave it between two points far apart, where
-      // a sharp or skewed profile's parabolic vertex lies beyond the crossing read off the coarse
-      // grid (seen on the walk's clock drift: the maximum outside its own interval). While that is
-      // so, halve the gaps beside the best point (at most 4 rounds; a Gaussian profile needs none).
-      if (refine >= 4) break;
-      const std::size_t b = static_cast<std::size_t>(std::min_element(dev.begin(), dev.end()) - dev.begin());
-      const double x0 = theta[order[b > 0 ? b - 1 : b]], x1 = theta[order[b]],
-                   x2 = theta[order[b + 1 < dev.size() ? b + 1 : b]];
-      double vertex = x1;
-      if (b > 0 && b + 1 < dev.size()) {
-        const double y0 = dev[b - 1], y1 = dev[b], y2 = dev[b + 1];
-        const double den = (x0 - x1) * (x0 - x2) * (x1 - x2);
-        const double A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den;
-        const double B = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / den;
-        if (A > 0.0) vertex = std::clamp(-B / (2.0 * A), x0, x2);
-      }
-      // Where the deviance crosses the level beside the best point (linear in sqrt(deviance)).
-      const auto crossing = [&](std::size_t i, std::size_t j) {
-        const double a = std::sqrt(std::max(0.0, dev[i])), cj = std::sqrt(dev[j]), r = std::sqrt(level_z2);
-        return theta[order[i]] + (theta[order[j]] - theta[order[i]]) * (r - a) / (cj - a);
-      };
-      const bool below_lo = b > 0 && dev[b - 1] >= level_z2 && vertex < crossing(b, b - 1);
-      const bool above_hi = b + 1 < dev.size() && dev[b + 1] >= level_z2 && vertex > crossing(b, b + 1);
-      std::vector<double> mid;
-      if (below_lo || above_hi) {
-        if (b > 0) mid.push_back(0.5 * (x0 + x1));
-        if (b + 1 < dev.size()) mid.push_back(0.5 * (x1 + x2));
-      }
+      if (refine >= 4) break;  // at most 4 rounds of refinement_points; a Gaussian profile needs none
+      const std::vector<double> mid = refinement_points(theta, order, dev, level_z2);
       if (mid.empty()) break;
       ++refine;
       add(mid);
@@ -345,52 +418,7 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
     if (dev.back() < level_z2) step_hi *= 2.0;
     add(more);
   }
-  const std::size_t n = order.size();
-  pi.theta.resize(n);
-  pi.deviance = dev;
-  for (std::size_t i = 0; i < n; ++i) {
-    pi.theta[i] = theta[order[i]];
-    if (theta[order[i]] == x) pi.deviance_at_filter = dev[i];  // the first point run
-  }
-  const std::size_t best = static_cast<std::size_t>(std::min_element(dev.begin(), dev.end()) - dev.begin());
-  // The maximum: the parabola through the best point and its neighbours.
-  pi.estimate = pi.theta[best];
-  if (best > 0 && best + 1 < n) {
-    const double x0 = pi.theta[best - 1], x1 = pi.theta[best], x2 = pi.theta[best + 1];
-    const double y0 = dev[best - 1], y1 = dev[best], y2 = dev[best + 1];
-    const double den = (x0 - x1) * (x0 - x2) * (x1 - x2);
-    const double A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den;
-    const double B = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / den;
-    if (A > 0.0) {
-      pi.estimate = std::clamp(-B / (2.0 * A), x0, x2);
-      // The deviance is relative to the best point run; measured from the parabola's minimum at
-      // the estimate instead, the filter's estimate next to it gets its own distance, not 0.
-      const double C = y1 - A * x1 * x1 - B * x1;
-      const double y_min = A * pi.estimate * pi.estimate + B * pi.estimate + C;
-      if (y_min < 0.0) pi.deviance_at_filter -= y_min;
-    }
-  }
-  // The crossings: outward from the best point, interpolated linearly in sqrt(deviance) (the
-  // signed root of the deviance is linear in theta for a Gaussian likelihood).
-  const auto cross = [&](std::size_t i, std::size_t j) {  // i inside (below level), j outside
-    const double a = std::sqrt(std::max(0.0, dev[i])), b = std::sqrt(dev[j]), r = std::sqrt(level_z2);
-    return pi.theta[i] + (pi.theta[j] - pi.theta[i]) * (r - a) / (b - a);
-  };
-  pi.lo = pi.theta.front();
-  for (std::size_t i = best; i > 0; --i)
-    if (dev[i - 1] >= level_z2) {
-      pi.lo = cross(i, i - 1);
-      pi.lo_bounded = true;
-      break;
-    }
-  pi.hi = pi.theta.back();
-  for (std::size_t i = best; i + 1 < n; ++i)
-    if (dev[i + 1] >= level_z2) {
-      pi.hi = cross(i, i + 1);
-      pi.hi_bounded = true;
-      break;
-    }
-  pi.available = true;
+  read_profile(pi, theta, order, dev, x, level_z2);
   return pi;
 }
 
