@@ -3,12 +3,11 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 
+#include "tools/diagnosis_parallel.hpp"
 #include "tools/diagnosis_intervals.hpp"
 
 namespace tools {
@@ -49,16 +48,7 @@ namespace {
 std::vector<DiagnosisRun> run_models(const RecordedData& data, const DiagnosisConfig& cfg,
                                  const std::vector<std::vector<int>>& models, bool with_outages = false) {
   std::vector<DiagnosisRun> out(models.size());
-  std::atomic<std::size_t> next{0};
-  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
-  const unsigned n_threads = std::min<unsigned>(hw, static_cast<unsigned>(std::max<std::size_t>(1, models.size())));
-  auto worker = [&]() {
-    for (std::size_t i = next++; i < models.size(); i = next++) out[i] = run_diagnosis_model(data, cfg, models[i], with_outages);
-  };
-  std::vector<std::thread> threads;
-  for (unsigned t = 1; t < n_threads; ++t) threads.emplace_back(worker);
-  worker();
-  for (std::thread& t : threads) t.join();
+  for_each_parallel(models.size(), [&](std::size_t i) { out[i] = run_diagnosis_model(data, cfg, models[i], with_outages); });
   return out;
 }
 
@@ -315,11 +305,20 @@ bool joint_statistic(const DiagnosisRun& ext, const DiagnosisConfig& cfg, Group&
 /// The extended model: confirmed in one run with every finding, each by its joint statistic; the
 /// findings below their threshold are dropped and the rest run again (at most
 /// cfg.max_confirmation_passes times).
+/// The first pass runs the baseline model beside it (into res.base: it does not depend on the
+/// findings), and sets base_done.
 void confirm_groups(const RecordedData& data, const DiagnosisConfig& cfg, double alpha_each, std::vector<Group>& groups,
-                    DiagnosisResult& res, const Progress& say) {
+                    DiagnosisResult& res, bool& base_done, const Progress& say) {
   for (int pass = 0; !groups.empty(); ++pass) {
     say("extended model: baseline + " + std::to_string(groups.size()) + " findings");
-    res.extended = run_diagnosis_model(data, cfg, search_model(cfg.baseline_states, groups));
+    if (pass == 0) {
+      std::vector<DiagnosisRun> both = run_models(data, cfg, {search_model(cfg.baseline_states, groups), cfg.baseline_states});
+      res.extended = std::move(both[0]);
+      res.base = std::move(both[1]);
+      base_done = true;
+    } else {
+      res.extended = run_diagnosis_model(data, cfg, search_model(cfg.baseline_states, groups));
+    }
     std::vector<Group> keep;
     for (Group& g : groups) {
       if (!joint_statistic(res.extended, cfg, g)) continue;
@@ -332,11 +331,11 @@ void confirm_groups(const RecordedData& data, const DiagnosisConfig& cfg, double
 
 /// The baseline's run, the likelihoods on common measurements, and both models coasting through
 /// the GNSS outages.
-void score_baseline_and_outages(const RecordedData& data, const DiagnosisConfig& cfg, bool no_findings,
+void score_baseline_and_outages(const RecordedData& data, const DiagnosisConfig& cfg, bool no_findings, bool base_done,
                                 DiagnosisResult& res, const Progress& say) {
   const std::vector<int>& base = cfg.baseline_states;
   say("baseline model");
-  res.base = run_diagnosis_model(data, cfg, base);
+  if (!base_done) res.base = run_diagnosis_model(data, cfg, base);
   if (no_findings) res.extended = res.base;
   compare_likelihood(res.base, res.extended);
   if (cfg.outage_length_s > 0.0) {  // with a reference: the coasting error; always: the re-acquisition NIS
@@ -394,8 +393,9 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
   res.baseline = fsw::to_string(cfg.baseline);
   std::vector<Group> groups = GroupSearch(data, cfg, res, say).run();
   const double alpha_each = res.tested > 0 ? cfg.alpha / static_cast<double>(res.tested) : 0.0;
-  confirm_groups(data, cfg, alpha_each, groups, res, say);
-  score_baseline_and_outages(data, cfg, groups.empty(), res, say);
+  bool base_done = false;
+  confirm_groups(data, cfg, alpha_each, groups, res, base_done, say);
+  score_baseline_and_outages(data, cfg, groups.empty(), base_done, res, say);
   findings_from_groups(groups, alpha_each, res);
   add_finding_intervals(res, data, cfg, progress);
   set_headline_estimates(res.findings);

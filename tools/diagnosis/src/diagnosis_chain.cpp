@@ -1,14 +1,13 @@
 #include "tools/diagnosis_chain.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <limits>
-#include <thread>
 #include <cstdio>
 #include <cmath>
 #include <map>
 #include <set>
 
+#include "tools/diagnosis_parallel.hpp"
 #include "tools/diagnosis_intervals.hpp"
 
 namespace tools {
@@ -143,21 +142,13 @@ MountingEstimate estimate_mounting_yaw(const RecordedData& data, const Diagnosis
   std::vector<DiagnosisRun> runs;
   const auto add = [&](const std::vector<double>& t) {
     std::vector<DiagnosisRun> r(t.size());
-    std::atomic<std::size_t> next{0};
-    auto worker = [&]() {
-      for (std::size_t i = next++; i < t.size(); i = next++) {
-        DiagnosisConfig c = k;
-        c.app.init_heading_offset_rad += t[i] * fsw::kDegToRad;
-        r[i] = run_diagnosis_model(data, c, cfg.baseline_states);
-        r[i].est_trace.clear();
-        r[i].sigma_trace.clear();
-      }
-    };
-    const unsigned n = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), static_cast<unsigned>(t.size())));
-    std::vector<std::thread> th;
-    for (unsigned i = 1; i < n; ++i) th.emplace_back(worker);
-    worker();
-    for (std::thread& x : th) x.join();
+    for_each_parallel(t.size(), [&](std::size_t i) {
+      DiagnosisConfig c = k;
+      c.app.init_heading_offset_rad += t[i] * fsw::kDegToRad;
+      r[i] = run_diagnosis_model(data, c, cfg.baseline_states);
+      r[i].est_trace.clear();
+      r[i].sigma_trace.clear();
+    });
     for (std::size_t i = 0; i < t.size(); ++i) {
       theta.push_back(t[i]);
       runs.push_back(std::move(r[i]));

@@ -1,12 +1,11 @@
 #include "tools/diagnosis_intervals.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cstdio>
 #include <cmath>
 #include <limits>
-#include <thread>
 #include <utility>
+#include "tools/diagnosis_parallel.hpp"
 
 namespace tools {
 namespace {
@@ -43,24 +42,15 @@ std::vector<Contributions> profile_runs(const RecordedData& data, const Diagnosi
   for (int m : model)
     if (m != cand) fixed_model.push_back(m);
   std::vector<Contributions> out(thetas.size());
-  std::atomic<std::size_t> next{0};
-  auto worker = [&]() {
-    for (std::size_t i = next++; i < thetas.size(); i = next++) {
-      DiagnosisConfig k = cfg;
-      if (c.effect == Effect::kAntennaLeverArm) {
-        k.app.exec.ekf.lever_arm_b_m(c.component) += thetas[i] * fsw::effect_info(c.effect).unit_to_si;
-        out[i] = contributions(run_diagnosis_model(data, k, fixed_model));
-      } else {
-        out[i] = contributions(run_diagnosis_model(with_fixed_effect(data, c, thetas[i], t_ref_s), k, fixed_model));
-      }
+  for_each_parallel(thetas.size(), [&](std::size_t i) {
+    DiagnosisConfig k = cfg;
+    if (c.effect == Effect::kAntennaLeverArm) {
+      k.app.exec.ekf.lever_arm_b_m(c.component) += thetas[i] * fsw::effect_info(c.effect).unit_to_si;
+      out[i] = contributions(run_diagnosis_model(data, k, fixed_model));
+    } else {
+      out[i] = contributions(run_diagnosis_model(with_fixed_effect(data, c, thetas[i], t_ref_s), k, fixed_model));
     }
-  };
-  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
-  const unsigned n = std::min<unsigned>(hw, static_cast<unsigned>(std::max<std::size_t>(1, thetas.size())));
-  std::vector<std::thread> threads;
-  for (unsigned t = 1; t < n; ++t) threads.emplace_back(worker);
-  worker();
-  for (std::thread& t : threads) t.join();
+  });
   return out;
 }
 
@@ -489,35 +479,51 @@ ReportedInterval reported_interval(const ProfileInterval& pi) {
 void add_finding_intervals(DiagnosisResult& res, const RecordedData& data, const DiagnosisConfig& cfg,
                            const std::function<void(const std::string&)>& progress) {
   const bool profile = cfg.profile_intervals && res.extended.initialised;
-  // The profile interval of candidate cand in model, started from the filter's x, s; else theirs.
-  const auto interval = [&](const std::vector<int>& model, int cand, double x, double s, const std::string& what) {
-    const Candidate& c = diagnosis_candidates()[static_cast<std::size_t>(cand)];
-    if (!profile || !profile_supported(c.effect)) return filter_interval(x, s);
-    if (progress) progress("interval: profile likelihood of " + what);
-    const ProfileInterval pi = profile_interval(data, cfg, model, cand, x, s);
-    if (!pi.available) return filter_interval(x, s);
-    report_curve(progress, pi);
-    return reported_interval(pi);
+  // Every interval first as the filter's; the profile intervals are then independent jobs (a
+  // finding, or a group member alone on top of the model at the lead's selection, where its alone
+  // estimate was measured: the filter's alone sigma is that of a model that does not hold when the
+  // member is not the cause, and was measured optimistic, docs/diagnosis-intervals.md:
+  // gyro_misalignment.zy, 0 of 20), run side by side and reported in this order.
+  struct Job {
+    std::vector<int> model;
+    int cand;
+    double x, s;
+    std::string what;
+    ReportedInterval* out;
+    ProfileInterval pi;
+  };
+  std::vector<Job> jobs;
+  const auto interval = [&](std::vector<int> model, int cand, double x, double s, std::string what, ReportedInterval& out) {
+    out = filter_interval(x, s);
+    if (cand < 0 || !profile || !profile_supported(diagnosis_candidates()[static_cast<std::size_t>(cand)].effect)) return;
+    jobs.push_back(Job{std::move(model), cand, x, s, std::move(what), &out, {}});
   };
   for (Finding& f : res.findings) {
     if (f.separable()) {
       const std::string name = std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component);
-      const int cand = candidate_index(name);
-      f.interval = cand < 0 ? filter_interval(f.estimate, f.sigma)
-                            : interval(res.extended.active, cand, f.estimate, f.sigma, name);
+      interval(res.extended.active, candidate_index(name), f.estimate, f.sigma, name, f.interval);
       continue;
     }
-    // A group: each member alone on top of the model at the lead's selection (where its alone
-    // estimate was measured), the same profile as a separable finding's. The filter's alone sigma
-    // is that of a model that does not hold when the member is not the cause, and was measured
-    // optimistic (docs/diagnosis-intervals.md: gyro_misalignment.zy, 0 of 20).
     for (GroupMember& m : f.group) {
       const int cand = candidate_index(m.name);
       std::vector<int> model = f.selection_model;
       model.push_back(cand);
-      m.alone_interval = cand < 0 ? filter_interval(m.alone_estimate, m.alone_sigma)
-                                  : interval(model, cand, m.alone_estimate, m.alone_sigma, "group member " + m.name + " alone");
+      interval(std::move(model), cand, m.alone_estimate, m.alone_sigma, "group member " + m.name + " alone",
+               m.alone_interval);
     }
+  }
+  for_each_parallel(jobs.size(), [&](std::size_t i) {
+    Job& j = jobs[i];
+    j.pi = profile_interval(data, cfg, j.model, j.cand, j.x, j.s);
+  });
+  for (const Job& j : jobs) {
+    if (progress) progress("interval: profile likelihood of " + j.what);
+    if (!j.pi.available) continue;  // the filter's interval stays
+    report_curve(progress, j.pi);
+    *j.out = reported_interval(j.pi);
+  }
+  for (Finding& f : res.findings) {
+    if (f.separable()) continue;
     set_group_plausibility(f.group);
     f.interval = f.group.front().alone_interval;  // the group's: its lead's
   }

@@ -1,17 +1,16 @@
 #include "tools/diagnosis_separation.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <exception>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <thread>
 
 #include "sim/effects.hpp"
 #include "sim/trajectory.hpp"
+#include "tools/diagnosis_parallel.hpp"
 
 namespace tools {
 namespace {
@@ -340,16 +339,7 @@ void evaluate_trial(const SeparationContext& ctx, Trial& tr) {
 
 /// The trials evaluated on the hardware's threads.
 void evaluate_all(const SeparationContext& ctx, std::vector<Trial>& trials) {
-  std::atomic<std::size_t> next{0};
-  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
-  const unsigned n = std::min<unsigned>(hw, static_cast<unsigned>(std::max<std::size_t>(1, trials.size())));
-  auto worker = [&]() {
-    for (std::size_t k = next++; k < trials.size(); k = next++) evaluate_trial(ctx, trials[k]);
-  };
-  std::vector<std::thread> th;
-  for (unsigned k = 1; k < n; ++k) th.emplace_back(worker);
-  worker();
-  for (std::thread& t : th) t.join();
+  for_each_parallel(trials.size(), [&](std::size_t k) { evaluate_trial(ctx, trials[k]); });
 }
 
 /// Group g's trial with the lowest predicted correlation (index into all), -1 if none was evaluated.
