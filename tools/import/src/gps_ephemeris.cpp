@@ -21,13 +21,6 @@ double wrap_pi(double a) {
   return a;
 }
 
-/// Normalises (week, tow) so that tow is in [0, 604800).
-void normalise(int& week, double& tow) {
-  const double k = std::floor(tow / kWeek);
-  tow -= k * kWeek;
-  week += static_cast<int>(k);
-}
-
 // Parameters of the fit, in this order.
 enum Param { kE = 0, kI0, kOmegaDot, kSqrtA, kOmega0, kArgPerigee, kM0, kParams };
 
@@ -127,10 +120,8 @@ void orbit_residuals(const fsw::GpsAlmanac& alm, const double* q, const FitEpoch
   res.resize(3 * f.size());
   for (int j = 0; j < f.size(); ++j) {
     fsw::Vec3 r, v;
-    int w = f.start_week;
-    double t = f.t[static_cast<std::size_t>(j)];
-    normalise(w, t);
-    fsw::satellite_pv_ecef(a, w, t, r, v);
+    const fsw::GpsTime g = fsw::gps_time(f.start_week, f.t[static_cast<std::size_t>(j)]);
+    fsw::satellite_pv_ecef(a, g.week, g.tow_s, r, v);
     res.segment<3>(3 * j) = r - f.r[static_cast<std::size_t>(j)];
   }
 }
@@ -188,11 +179,9 @@ void fit_clock(const FitEpochs& f, fsw::GpsAlmanac& alm) {
   Eigen::MatrixXd A(f.size(), 2);
   Eigen::VectorXd b(f.size());
   for (int j = 0; j < f.size(); ++j) {
-    int w = f.start_week;
-    double t = f.t[static_cast<std::size_t>(j)];
-    normalise(w, t);
+    const fsw::GpsTime g = fsw::gps_time(f.start_week, f.t[static_cast<std::size_t>(j)]);
     A(j, 0) = 1.0;
-    A(j, 1) = fsw::time_from_applicability_s(alm, w, t);
+    A(j, 1) = fsw::time_from_applicability_s(alm, g.week, g.tow_s);
     b[j] = f.clock[static_cast<std::size_t>(j)];
   }
   const Eigen::Vector2d x = A.colPivHouseholderQr().solve(b);
@@ -207,9 +196,9 @@ void evaluate_fit(const GpsEphemeris& eph, int start_week, double start_tow_s, d
   const int n_eval = std::clamp(static_cast<int>(std::ceil(span_s)), 10, 2000) + 1;
   double sum2 = 0.0;
   for (int j = 0; j < n_eval; ++j) {
-    int w = start_week;
-    double t = start_tow_s + span_s * j / (n_eval - 1);
-    normalise(w, t);
+    const fsw::GpsTime g = fsw::gps_time(start_week, start_tow_s + span_s * j / (n_eval - 1));
+    const int w = g.week;
+    const double t = g.tow_s;
     fsw::Vec3 r_e, r_p, r_m, r_a, v_a;
     double c_e = 0.0, c_dummy = 0.0;
     ephemeris_position_clock(eph, w, t, r_e, c_e);
@@ -235,9 +224,9 @@ AlmanacFit fit_almanac(const GpsEphemeris& eph, int start_week, double start_tow
   AlmanacFit fit;
   span_s = std::max(span_s, 1.0);
   // toa: the window's centre, a whole second.
-  int toa_week = start_week;
-  double toa = std::round(start_tow_s + 0.5 * span_s);
-  normalise(toa_week, toa);
+  const fsw::GpsTime toa_time = fsw::gps_time(start_week, std::round(start_tow_s + 0.5 * span_s));
+  const int toa_week = toa_time.week;
+  const double toa = toa_time.tow_s;
   fsw::GpsAlmanac& alm = fit.almanac;
   alm.prn = eph.prn;
   alm.health = eph.health;

@@ -136,32 +136,22 @@ std::int64_t days_from_civil(std::int64_t y, unsigned m, unsigned d) {
   return era * 146097 + static_cast<std::int64_t>(doe) - 719468;
 }
 
-constexpr std::int64_t kWeekSeconds = 604800;
-
-GpsTime gps_from_seconds(std::int64_t gps_seconds, double fraction_s) {
-  std::int64_t week = gps_seconds / kWeekSeconds;
-  std::int64_t rem = gps_seconds - week * kWeekSeconds;
-  if (rem < 0) {
-    rem += kWeekSeconds;
-    --week;
-  }
-  GpsTime t;
-  t.week = static_cast<int>(week);
-  t.tow_s = static_cast<double>(rem) + fraction_s;
-  if (t.tow_s >= fsw::kSecondsPerWeek) {
-    t.tow_s -= fsw::kSecondsPerWeek;
-    ++t.week;
-  } else if (t.tow_s < 0.0) {
-    t.tow_s += fsw::kSecondsPerWeek;
-    --t.week;
-  }
-  return t;
-}
-
 }  // namespace
 
+GpsTime gps_time_from_count(std::int64_t count, std::int64_t per_second, double fraction_s) {
+  const std::int64_t per_week = static_cast<std::int64_t>(fsw::kSecondsPerWeek) * per_second;
+  std::int64_t week = count / per_week;
+  std::int64_t rem = count - week * per_week;
+  if (rem < 0) {
+    rem += per_week;
+    --week;
+  }
+  // 1.0 / per_second is the double nearest 1/per_second (1e-6 for microseconds), exact for seconds.
+  return fsw::gps_time(static_cast<int>(week), static_cast<double>(rem) * (1.0 / static_cast<double>(per_second)) + fraction_s);
+}
+
 GpsTime gps_time_from_gtime(std::int64_t seconds, double fraction_s) {
-  return gps_from_seconds(seconds - kGpsEpochGtime_s, fraction_s);
+  return gps_time_from_count(seconds - kGpsEpochGtime_s, 1, fraction_s);
 }
 
 bool gps_time_from_calendar(int year, int month, int day, int hour, int minute, double second, GpsTime& out) {
@@ -176,7 +166,7 @@ bool gps_time_from_calendar(int year, int month, int day, int hour, int minute, 
   const double whole = std::floor(second);
   const std::int64_t secs = (days - gps_day0) * 86400 + hour * 3600 + minute * 60 + static_cast<std::int64_t>(whole);
   if (secs < 0) return false;
-  out = gps_from_seconds(secs, second - whole);
+  out = gps_time_from_count(secs, 1, second - whole);
   return true;
 }
 

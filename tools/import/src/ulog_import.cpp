@@ -23,7 +23,7 @@ namespace tools {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr std::int64_t kWeek_us = 604800LL * 1000000LL;
+constexpr std::int64_t kWeek_us = static_cast<std::int64_t>(fsw::kSecondsPerWeek) * 1000000;
 
 /// One topic instance of the file: fields by name, values by message index.
 class Topic {
@@ -650,13 +650,13 @@ double param(const ulog::File& f, const char* name) {
 
 nlohmann::json time_fit_json(const UlogClockFit& clock, const UlogImportOptions& opt, double ekf2_delay_ms,
                              std::int64_t last_utc_us) {
-  const double boot0_gps = clock.gps_s(clock.boot0_us);
+  const GpsTime first_fix = fsw::gps_time(0, clock.gps_s(clock.boot0_us));
   return {
       {"pairs", clock.pairs},
       {"outliers", clock.outliers},
       {"first_fix_boot_s", static_cast<double>(clock.boot0_us) * 1e-6},
-      {"first_fix_gps_week", static_cast<int>(std::floor(boot0_gps / 604800.0))},
-      {"first_fix_gps_tow_s", boot0_gps - 604800.0 * std::floor(boot0_gps / 604800.0)},
+      {"first_fix_gps_week", first_fix.week},
+      {"first_fix_gps_tow_s", first_fix.tow_s},
       {"offset_s", clock.offset_s},
       {"drift_ppm", clock.drift * 1e6},
       {"fitted_drift_ppm", clock.fitted_drift * 1e6},
@@ -755,7 +755,7 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
   double first_gps = clock.gps_s(gps.front().boot_us - latency_us);
   if (!imu.empty()) first_gps = std::min(first_gps, clock.gps_s(imu.front().boot_us));
   for (const GpsRow& r : gps) first_gps = std::min(first_gps, static_cast<double>(gps_us_from_utc_us(r.utc_us)) * 1e-6);
-  const int week0 = static_cast<int>(std::floor(first_gps / 604800.0));
+  const int week0 = fsw::gps_time(0, first_gps).week;
   const std::int64_t week0_us = static_cast<std::int64_t>(week0) * kWeek_us;
 
   Converted c;
@@ -768,8 +768,9 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
   for (const GpsRow& g : gps) {
     hal::GnssPvtSample p = g.pvt;
     const std::int64_t gus = gps_us_from_utc_us(g.utc_us);  // the receiver's own time of the fix
-    p.gps_week = static_cast<int>(gus / kWeek_us);
-    p.gps_tow_s = static_cast<double>(gus % kWeek_us) * 1e-6;
+    const GpsTime fix = gps_time_from_count(gus, 1000000);
+    p.gps_week = fix.week;
+    p.gps_tow_s = fix.tow_s;
     p.t_s = static_cast<double>(gus - week0_us) * 1e-6;
     c.pvt.push_back(p);
   }
