@@ -287,26 +287,18 @@ bool read_pos_header(std::string_view comment, PosColumns& cols) {
                              "out-solformat llh, degrees)");
   if (tok[0] != "GPST")
     throw std::runtime_error("RTKLIB .pos time system '" + std::string(tok[0]) + "': only GPST is supported (out-timesys gpst)");
+  // The header's name of each column read; any other column is passed over.
+  static constexpr std::pair<std::string_view, int PosColumns::*> kNames[] = {
+      {"latitude(deg)", &PosColumns::lat}, {"longitude(deg)", &PosColumns::lon}, {"height(m)", &PosColumns::h},
+      {"Q", &PosColumns::q},               {"ns", &PosColumns::ns},              {"sdn(m)", &PosColumns::sdn},
+      {"sde(m)", &PosColumns::sde},        {"sdu(m)", &PosColumns::sdu},         {"vn(m/s)", &PosColumns::vn},
+      {"ve(m/s)", &PosColumns::ve},        {"vu(m/s)", &PosColumns::vu},         {"sdvn", &PosColumns::sdvn},
+      {"sdve", &PosColumns::sdve},         {"sdvu", &PosColumns::sdvu}};
   PosColumns c;
   // Header token k (k >= 1) is data token k + 1: the time is two data tokens.
-  for (std::size_t k = 1; k < tok.size(); ++k) {
-    const std::string_view n = tok[k];
-    const int idx = static_cast<int>(k) + 1;
-    if (n == "latitude(deg)") c.lat = idx;
-    else if (n == "longitude(deg)") c.lon = idx;
-    else if (n == "height(m)") c.h = idx;
-    else if (n == "Q") c.q = idx;
-    else if (n == "ns") c.ns = idx;
-    else if (n == "sdn(m)") c.sdn = idx;
-    else if (n == "sde(m)") c.sde = idx;
-    else if (n == "sdu(m)") c.sdu = idx;
-    else if (n == "vn(m/s)") c.vn = idx;
-    else if (n == "ve(m/s)") c.ve = idx;
-    else if (n == "vu(m/s)") c.vu = idx;
-    else if (n == "sdvn") c.sdvn = idx;
-    else if (n == "sdve") c.sdve = idx;
-    else if (n == "sdvu") c.sdvu = idx;
-  }
+  for (std::size_t k = 1; k < tok.size(); ++k)
+    for (const auto& [name, column] : kNames)
+      if (tok[k] == name) c.*column = static_cast<int>(k) + 1;
   c.n_tokens = tok.size() + 1;
   if (c.lat < 0 || c.lon < 0 || c.h < 0 || c.q < 0 || c.ns < 0 || c.sdn < 0 || c.sde < 0 || c.sdu < 0)
     throw std::runtime_error("RTKLIB .pos column header lacks one of latitude, longitude, height, Q, ns, sdn, sde, sdu");
