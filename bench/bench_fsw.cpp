@@ -323,60 +323,10 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // 1. 200 Hz mechanization
 // ------------------------------------------------------------------------------------------------
 
-/// FrameBuilder::add for the 5 samples of a frame and Strapdown::step: one navigation frame.
-void BM_MechFrame(benchmark::State& state) {
-  const FlightData& d = flight();
-  fsw::FrameBuilder fb;
-  fsw::Strapdown sd;
-  fb.configure(kSamplesPerFrame);
-  sd.init(d.init);
-  const int nf = d.frames();
-  int f = 0;
-  AllocScope allocs;
-  const auto t_loop = Clock::now();
-  for (auto _ : state) {
-    if (f == nf) {  // wrap to the start of the data (once in 6000 frames)
-      f = 0;
-      fb.reset();
-      sd.init(d.init);
-    }
-    const fsw::ImuSample* s = d.frame_imu(f++);
-    Status st = Status::kOk;
-    for (int k = 0; k < kSamplesPerFrame; ++k) st = fb.add(s[k]);
-    benchmark::DoNotOptimize(st);
-    st = sd.step(fb.frame());
-    benchmark::DoNotOptimize(st);
-    benchmark::ClobberMemory();
-  }
-  finish(state, allocs, 1.0, seconds_since(t_loop));
-}
-
-/// FrameBuilder::add alone, 5 samples (one frame's coning/sculling).
-void BM_FrameBuilderAdd5(benchmark::State& state) {
-  const FlightData& d = flight();
-  fsw::FrameBuilder fb;
-  fb.configure(kSamplesPerFrame);
-  const int nf = d.frames();
-  int f = 0;
-  AllocScope allocs;
-  const auto t_loop = Clock::now();
-  for (auto _ : state) {
-    if (f == nf) f = 0;
-    const fsw::ImuSample* s = d.frame_imu(f++);
-    for (int k = 0; k < kSamplesPerFrame; ++k) {
-      Status st = fb.add(s[k]);
-      benchmark::DoNotOptimize(st);
-    }
-    benchmark::ClobberMemory();
-  }
-  finish(state, allocs, 1.0, seconds_since(t_loop));
-}
-
-/// Strapdown::step alone on the precomputed frame increments.
-void BM_StrapdownStep(benchmark::State& state) {
-  const FlightData& d = flight();
-  fsw::Strapdown sd;
-  sd.init(d.init);
+/// One frame of the data per iteration, the whole loop timed: step(f) for frames 0, 1, ... and,
+/// on wrapping to the start of the data (once in 6000 frames), restart() first.
+template <class Restart, class Step>
+void time_over_frames(benchmark::State& state, const FlightData& d, Restart restart, Step step) {
   const int nf = d.frames();
   int f = 0;
   AllocScope allocs;
@@ -384,13 +334,64 @@ void BM_StrapdownStep(benchmark::State& state) {
   for (auto _ : state) {
     if (f == nf) {
       f = 0;
-      sd.init(d.init);
+      restart();
     }
-    Status st = sd.step(d.inc[static_cast<std::size_t>(f++)]);
-    benchmark::DoNotOptimize(st);
+    step(f++);
     benchmark::ClobberMemory();
   }
   finish(state, allocs, 1.0, seconds_since(t_loop));
+}
+
+/// FrameBuilder::add for the 5 samples of a frame and Strapdown::step: one navigation frame.
+void BM_MechFrame(benchmark::State& state) {
+  const FlightData& d = flight();
+  fsw::FrameBuilder fb;
+  fsw::Strapdown sd;
+  fb.configure(kSamplesPerFrame);
+  sd.init(d.init);
+  time_over_frames(
+      state, d,
+      [&] {
+        fb.reset();
+        sd.init(d.init);
+      },
+      [&](int f) {
+        const fsw::ImuSample* s = d.frame_imu(f);
+        Status st = Status::kOk;
+        for (int k = 0; k < kSamplesPerFrame; ++k) st = fb.add(s[k]);
+        benchmark::DoNotOptimize(st);
+        st = sd.step(fb.frame());
+        benchmark::DoNotOptimize(st);
+      });
+}
+
+/// FrameBuilder::add alone, 5 samples (one frame's coning/sculling).
+void BM_FrameBuilderAdd5(benchmark::State& state) {
+  const FlightData& d = flight();
+  fsw::FrameBuilder fb;
+  fb.configure(kSamplesPerFrame);
+  time_over_frames(
+      state, d, [] {},
+      [&](int f) {
+        const fsw::ImuSample* s = d.frame_imu(f);
+        for (int k = 0; k < kSamplesPerFrame; ++k) {
+          Status st = fb.add(s[k]);
+          benchmark::DoNotOptimize(st);
+        }
+      });
+}
+
+/// Strapdown::step alone on the precomputed frame increments.
+void BM_StrapdownStep(benchmark::State& state) {
+  const FlightData& d = flight();
+  fsw::Strapdown sd;
+  sd.init(d.init);
+  time_over_frames(
+      state, d, [&] { sd.init(d.init); },
+      [&](int f) {
+        Status st = sd.step(d.inc[static_cast<std::size_t>(f)]);
+        benchmark::DoNotOptimize(st);
+      });
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -438,6 +439,23 @@ bool warm_up(const FlightData& d, fsw::Ekf<L>& ekf, std::string& err, const std:
     return false;
   }
   return true;
+}
+
+/// Times work(*copy) on a fresh copy of pre each iteration (the copy untimed); the timed total.
+template <class T, class Work>
+double time_on_fresh_copies(benchmark::State& state, const T& pre, T& copy, Work work) {
+  double total_s = 0.0;
+  for (auto _ : state) {
+    copy = pre;
+    benchmark::ClobberMemory();
+    const auto t0 = Clock::now();
+    work(copy);
+    benchmark::ClobberMemory();
+    const double dt = seconds_since(t0);
+    total_s += dt;
+    state.SetIterationTime(dt);
+  }
+  return total_s;
 }
 
 /// Accumulates the frames of cycle kWarmCycles (the next 200 frames) into ekf.
@@ -495,19 +513,11 @@ void BM_EkfPropagate(benchmark::State& state) {
   std::string err;
   if (!d.error.empty() || !warm_up(d, *pre, err)) return fail(state, d.error.empty() ? err : d.error);
   if (!accumulate_next_cycle(d, *pre)) return fail(state, "Ekf::accumulate failed");
-  double total_s = 0.0;
   AllocScope allocs;
-  for (auto _ : state) {
-    *ekf = *pre;
-    benchmark::ClobberMemory();
-    const auto t0 = Clock::now();
-    Status st = ekf->propagate();
+  const double total_s = time_on_fresh_copies(state, *pre, *ekf, [](fsw::Ekf<L>& e) {
+    Status st = e.propagate();
     benchmark::DoNotOptimize(st);
-    benchmark::ClobberMemory();
-    const double dt = seconds_since(t0);
-    total_s += dt;
-    state.SetIterationTime(dt);
-  }
+  });
   finish(state, allocs, 0.0, total_s);
 }
 
@@ -534,19 +544,11 @@ void BM_EkfUpdate(benchmark::State& state) {
       return fail(state, "the benchmark epoch is not fully used: pr " + std::to_string(rep.pr_used) + ", prr " +
                              std::to_string(rep.prr_used));
   }
-  double total_s = 0.0;
   AllocScope allocs;
-  for (auto _ : state) {
-    *ekf = *pre;
-    benchmark::ClobberMemory();
-    const auto t0 = Clock::now();
-    Status st = ekf->update(epoch, nav, omega, rep);
+  const double total_s = time_on_fresh_copies(state, *pre, *ekf, [&](fsw::Ekf<L>& e) {
+    Status st = e.update(epoch, nav, omega, rep);
     benchmark::DoNotOptimize(st);
-    benchmark::ClobberMemory();
-    const double dt = seconds_since(t0);
-    total_s += dt;
-    state.SetIterationTime(dt);
-  }
+  });
   finish(state, allocs, 2.0 * kSatellites, total_s);  // items: scalar measurements
 }
 
@@ -573,19 +575,11 @@ void BM_EkfUpdateSats(benchmark::State& state) {
       return fail(state, "the " + std::to_string(n_sats) + "-satellite epoch is not fully used: pr " +
                              std::to_string(rep.pr_used) + ", prr " + std::to_string(rep.prr_used));
   }
-  double total_s = 0.0;
   AllocScope allocs;
-  for (auto _ : state) {
-    *ekf = *pre;
-    benchmark::ClobberMemory();
-    const auto t0 = Clock::now();
-    Status st = ekf->update(epoch, d.nav[fe], d.omega_ib_b[fe], rep);
+  const double total_s = time_on_fresh_copies(state, *pre, *ekf, [&](fsw::Ekf<L>& e) {
+    Status st = e.update(epoch, d.nav[fe], d.omega_ib_b[fe], rep);
     benchmark::DoNotOptimize(st);
-    benchmark::ClobberMemory();
-    const double dt = seconds_since(t0);
-    total_s += dt;
-    state.SetIterationTime(dt);
-  }
+  });
   finish(state, allocs, 2.0 * n_sats, total_s);
 }
 
@@ -696,20 +690,12 @@ void BM_ExecTickEkf(benchmark::State& state) {
     if (!out.ekf_ran || !out.ekf_updated || out.report.pr_used != kSatellites || out.report.prr_used != kSatellites)
       return fail(state, "the EKF tick did not use the whole epoch");
   }
-  double total_s = 0.0;
   AllocScope allocs;
-  for (auto _ : state) {
-    *ex = *snap;
-    benchmark::ClobberMemory();
-    const auto t0 = Clock::now();
-    Status st = ex->tick(in, out);
+  const double total_s = time_on_fresh_copies(state, *snap, *ex, [&](fsw::Executive<L>& e) {
+    Status st = e.tick(in, out);
     benchmark::DoNotOptimize(st);
     benchmark::DoNotOptimize(out);
-    benchmark::ClobberMemory();
-    const double dt = seconds_since(t0);
-    total_s += dt;
-    state.SetIterationTime(dt);
-  }
+  });
   finish(state, allocs, 0.0, total_s);
 }
 

@@ -195,8 +195,10 @@ LcmInputStatus from_msg(const sdins::gps_almanac_t& in, fsw::GpsAlmanac& out) {
 }
 
 // ---------------------------------------------------------------------------------------------
-void to_msg(const GnssPvtSample& in, sdins::gnss_pvt_t& out) {
-  out.utime = utime_from_t_s(in.t_s);
+namespace {
+/// The fields GnssPvtSample and gnss_pvt_t share (same names on both sides), in either direction.
+template <class From, class To>
+void copy_pvt_fields(const From& in, To& out) {
   out.t_s = in.t_s;
   out.gps_week = in.gps_week;
   out.gps_tow_s = in.gps_tow_s;
@@ -208,6 +210,12 @@ void to_msg(const GnssPvtSample& in, sdins::gnss_pvt_t& out) {
   }
   out.quality = in.quality;
   out.n_sat = in.n_sat;
+}
+}  // namespace
+
+void to_msg(const GnssPvtSample& in, sdins::gnss_pvt_t& out) {
+  out.utime = utime_from_t_s(in.t_s);
+  copy_pvt_fields(in, out);
 }
 
 LcmInputStatus from_msg(const sdins::gnss_pvt_t& in, GnssPvtSample& out, const GnssPvtLimits& limits) {
@@ -234,28 +242,26 @@ LcmInputStatus from_msg(const sdins::gnss_pvt_t& in, GnssPvtSample& out, const G
   if (in.quality < sdins::gnss_pvt_t::QUALITY_NONE || in.quality > sdins::gnss_pvt_t::QUALITY_DR || in.n_sat < 0 ||
       in.n_sat > 255)
     return LcmInputStatus::kOutOfRange;
-  out.t_s = in.t_s;
-  out.gps_week = in.gps_week;
-  out.gps_tow_s = in.gps_tow_s;
-  for (int i = 0; i < 3; ++i) {
-    out.llh[i] = in.llh[i];
-    out.vel_enu_mps[i] = in.vel_enu_mps[i];
-    out.pos_sigma_enu_m[i] = in.pos_sigma_enu_m[i];
-    out.vel_sigma_enu_mps[i] = in.vel_sigma_enu_mps[i];
-  }
-  out.quality = in.quality;
-  out.n_sat = in.n_sat;
+  copy_pvt_fields(in, out);
   return LcmInputStatus::kOk;
 }
 
 // ---------------------------------------------------------------------------------------------
+namespace {
+/// The time, position and velocity fields nav_solution_t and truth_t share.
+template <class Msg>
+void time_position_velocity_to_msg(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, Msg& out) {
+  out.utime = utime_from_t_s(t_s);
+  out.t_s = t_s;
+  out.lat_rad = llh.x();
+  out.lon_rad = llh.y();
+  out.height_m = llh.z();
+  for (int i = 0; i < 3; ++i) out.vel_enu_mps[i] = vel_enu_mps[i];
+}
+}  // namespace
+
 void to_msg(const fsw::NavState& nav, bool valid, bool ekf_updated, sdins::nav_solution_t& out) {
-  out.utime = utime_from_t_s(nav.t_s);
-  out.t_s = nav.t_s;
-  out.lat_rad = nav.llh.x();
-  out.lon_rad = nav.llh.y();
-  out.height_m = nav.llh.z();
-  for (int i = 0; i < 3; ++i) out.vel_enu_mps[i] = nav.vel_enu_mps[i];
+  time_position_velocity_to_msg(nav.t_s, nav.llh, nav.vel_enu_mps, out);
   attitude_to_msg(nav.q_b_n, out.q_b_n_wxyz, out.roll_rad, out.pitch_rad, out.heading_rad);
   out.valid = valid ? 1 : 0;
   out.ekf_updated = ekf_updated ? 1 : 0;
@@ -263,12 +269,7 @@ void to_msg(const fsw::NavState& nav, bool valid, bool ekf_updated, sdins::nav_s
 
 void truth_to_msg(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, const fsw::Mat3& C_b_n,
                   sdins::truth_t& out) {
-  out.utime = utime_from_t_s(t_s);
-  out.t_s = t_s;
-  out.lat_rad = llh.x();
-  out.lon_rad = llh.y();
-  out.height_m = llh.z();
-  for (int i = 0; i < 3; ++i) out.vel_enu_mps[i] = vel_enu_mps[i];
+  time_position_velocity_to_msg(t_s, llh, vel_enu_mps, out);
   fsw::Quat q(C_b_n);
   q.normalize();
   if (q.w() < 0.0) q.coeffs() *= -1.0;  // one sign for the same attitude
@@ -277,12 +278,7 @@ void truth_to_msg(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps
 
 void reference_to_msg(double t_s, const fsw::Vec3& llh, const fsw::Vec3& vel_enu_mps, sdins::truth_t& out) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-  out.utime = utime_from_t_s(t_s);
-  out.t_s = t_s;
-  out.lat_rad = llh.x();
-  out.lon_rad = llh.y();
-  out.height_m = llh.z();
-  for (int i = 0; i < 3; ++i) out.vel_enu_mps[i] = vel_enu_mps[i];
+  time_position_velocity_to_msg(t_s, llh, vel_enu_mps, out);
   for (double& q : out.q_b_n_wxyz) q = kNaN;
   out.roll_rad = kNaN;
   out.pitch_rad = kNaN;

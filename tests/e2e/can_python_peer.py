@@ -15,13 +15,13 @@ usage: can_python_peer.py SDINS WORKDIR
 """
 import os
 import re
-import select
 import signal
 import subprocess
 import sys
 import time
 
 import can
+from e2e_common import read_until  # beside this script
 
 GROUPS = ["ff15:7079:7468:6f6e:6465:6d6f:6d63:6173", "239.74.163.2"]  # python-can's IPv6 / IPv4 defaults
 
@@ -44,20 +44,10 @@ def compare(sent, got, what):
 
 def wait_for_line(proc, stream, pattern, timeout_s):
     """Reads lines from a child's pipe until one matches (bounded)."""
-    deadline = time.time() + timeout_s
-    buf = ""
-    while time.time() < deadline:
-        r, _, _ = select.select([stream], [], [], max(0.0, deadline - time.time()))
-        if not r:
-            break
-        chunk = os.read(stream.fileno(), 4096).decode(errors="replace")
-        if not chunk:
-            break
-        buf += chunk
-        if re.search(pattern, buf):
-            return buf
-    proc.kill()
-    raise AssertionError(f"no '{pattern}' from {proc.args} within {timeout_s} s; got: {buf!r}")
+    ok, buf = read_until(proc, stream, lambda text: re.search(pattern, text), timeout_s)
+    if not ok:
+        raise AssertionError(f"no '{pattern}' from {proc.args} within {timeout_s} s; got: {buf!r}")
+    return buf
 
 
 def dump_health(sdins, log):

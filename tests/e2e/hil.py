@@ -20,10 +20,11 @@ Exit 77 (CTest: skipped) with the reason when UDP multicast does not work on thi
 import binascii
 import json
 import os
-import select
 import subprocess
 import sys
 import time
+
+from e2e_common import read_until  # beside this script
 
 GROUPS = ["ff15:7079:7468:6f6e:6465:6d6f:6d63:6173", "239.74.163.2"]  # python-can's defaults
 
@@ -56,20 +57,10 @@ def usable_group(sdins, work, port):
 
 
 def wait_for(proc, stream, text, timeout_s):
-    deadline = time.time() + timeout_s
-    buf = ""
-    while time.time() < deadline:
-        r, _, _ = select.select([stream], [], [], max(0.0, deadline - time.time()))
-        if not r:
-            break
-        chunk = os.read(stream.fileno(), 4096).decode(errors="replace")
-        if not chunk:
-            break
-        buf += chunk
-        if text in buf:
-            return buf
-    proc.kill()
-    raise AssertionError(f"no '{text}' from {' '.join(proc.args)} within {timeout_s} s; got {buf!r}")
+    ok, buf = read_until(proc, stream, lambda got: text in got, timeout_s)
+    if not ok:
+        raise AssertionError(f"no '{text}' from {' '.join(proc.args)} within {timeout_s} s; got {buf!r}")
+    return buf
 
 
 def finish(proc, what, timeout_s):

@@ -13,39 +13,21 @@ counted, not crash.
 Exit 77 (CTest: skipped) with the reason when the recordings ($SDINS_RECORDINGS_DIR, else DATA_DIR:
 ../shared/data beside the source tree) or convbin are missing.
 """
+import functools
 import json
 import os
 import shutil
-import subprocess
 import sys
 
+from e2e_common import fresh_dir, need_convbin, need_datasets, recordings_dir, run_sdins  # beside this script
+
 sdins, data, work = sys.argv[1:4]
-# The one setting for the recordings (docs/data.md): $SDINS_RECORDINGS_DIR, else the default given.
-data = os.environ.get("SDINS_RECORDINGS_DIR") or data
-
-
-def skip(why):
-    print(f"SKIPPED: {why}")
-    sys.exit(77)
-
-
-for d in ("gnss-imu-drive", "gnss-imu-walk", "psins-tc"):
-    if not os.path.isdir(os.path.join(data, d)):
-        skip(f"data set {os.path.join(data, d)} is missing (the shared data directory is read in place, "
-             "set SDINS_RECORDINGS_DIR, docs/data.md)")
-if shutil.which("convbin") is None:
-    skip("RTKLIB's convbin is not installed (Debian package rtklib, in tools/setup)")
-
-shutil.rmtree(work, ignore_errors=True)
-os.makedirs(work)
-
-
-def run(*args):
-    p = subprocess.run([sdins, *args], capture_output=True, text=True)
-    if p.returncode != 0:
-        print(p.stdout, p.stderr)
-        raise SystemExit(f"sdins {' '.join(args)} failed with exit {p.returncode}")
-    return p.stdout
+data = recordings_dir(data)
+need_datasets(data, ("gnss-imu-drive", "gnss-imu-walk", "psins-tc"),
+              "the shared data directory is read in place, set SDINS_RECORDINGS_DIR, docs/data.md")
+need_convbin()
+fresh_dir(work)
+run = functools.partial(run_sdins, sdins)
 
 
 def near(a, b, tol, what):

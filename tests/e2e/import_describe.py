@@ -37,16 +37,13 @@ import shutil
 import subprocess
 import sys
 
+from e2e_common import fresh_dir, need_convbin, need_datasets, recordings_dir, run_sdins  # beside this script
+
 WEEK0_UNIX = 315964800
 GPS_WEEK_S = 604800.0
 
 
-def run(sdins, *args):
-    p = subprocess.run([sdins, *args], capture_output=True, text=True)
-    if p.returncode != 0:
-        print(p.stdout, p.stderr)
-        raise SystemExit(f"sdins {' '.join(args)} failed with exit {p.returncode}")
-    return p.stdout
+run = run_sdins  # run(sdins, *args)
 
 
 def read_csv(path):
@@ -396,8 +393,7 @@ def replay_nav(sdins, d, log, filter_config):
 
 
 def roundtrip(sdins, work, seeds):
-    shutil.rmtree(work, ignore_errors=True)
-    os.makedirs(work)
+    fresh_dir(work)
     sim_log = os.path.join(work, "sim.lcmlog")
     run(sdins, "sim", "--seed", "7", "--duration", "60", "--log", sim_log)
     sim = {}
@@ -480,16 +476,11 @@ def cli_faults(sdins, d):
 
 
 def recordings(sdins, data, descriptions, work):
-    data = os.environ.get("SDINS_RECORDINGS_DIR") or data
-    for r in ("gnss-imu-drive", "gnss-imu-walk", "psins-tc"):
-        if not os.path.isdir(os.path.join(data, r)):
-            print(f"SKIPPED: recording {os.path.join(data, r)} is missing (set SDINS_RECORDINGS_DIR, docs/data.md)")
-            sys.exit(77)
-    if shutil.which("convbin") is None:
-        print("SKIPPED: RTKLIB's convbin is not installed (Debian package rtklib, in tools/setup)")
-        sys.exit(77)
-    shutil.rmtree(work, ignore_errors=True)
-    os.makedirs(work)
+    data = recordings_dir(data)
+    need_datasets(data, ("gnss-imu-drive", "gnss-imu-walk", "psins-tc"), "set SDINS_RECORDINGS_DIR, docs/data.md",
+                  noun="recording")
+    need_convbin()
+    fresh_dir(work)
     for r, preset in (("gnss-imu-drive", "rtklib"), ("gnss-imu-walk", "rtklib"), ("psins-tc", "psins")):
         a, b = os.path.join(work, r + ".preset.lcmlog"), os.path.join(work, r + ".described.lcmlog")
         run(sdins, "import", preset, os.path.join(data, r), "--log", a)

@@ -10,37 +10,20 @@ values, and that filter.toml is a valid filter configuration (read back by `sdin
 --filter-config`). Exit 77 (CTest: skipped) with the reason when the recordings
 ($SDINS_RECORDINGS_DIR, else DATA_DIR) or convbin are missing.
 """
+import functools
 import json
 import math
 import os
-import shutil
-import subprocess
 import sys
 
+from e2e_common import fresh_dir, need_convbin, need_datasets, recordings_dir, run_sdins  # beside this script
+
 sdins, data, work = sys.argv[1:4]
-data = os.environ.get("SDINS_RECORDINGS_DIR") or data
-
-
-def skip(why):
-    print(f"SKIPPED: {why}")
-    sys.exit(77)
-
-
-for d in ("gnss-imu-drive", "gnss-imu-walk", "psins-tc"):
-    if not os.path.isdir(os.path.join(data, d)):
-        skip(f"data set {os.path.join(data, d)} is missing (set SDINS_RECORDINGS_DIR, docs/data.md)")
-if shutil.which("convbin") is None:
-    skip("RTKLIB's convbin is not installed (Debian package rtklib, in tools/setup)")
-shutil.rmtree(work, ignore_errors=True)
-os.makedirs(work)
-
-
-def run(*args):
-    p = subprocess.run([sdins, *args], capture_output=True, text=True)
-    print(p.stdout[-6000:], p.stderr[-2000:])
-    if p.returncode != 0:
-        raise SystemExit(f"sdins {' '.join(args)} failed with exit {p.returncode}")
-    return p.stdout
+data = recordings_dir(data)
+need_datasets(data, ("gnss-imu-drive", "gnss-imu-walk", "psins-tc"), "set SDINS_RECORDINGS_DIR, docs/data.md")
+need_convbin()
+fresh_dir(work)
+run = functools.partial(run_sdins, sdins, echo=True)
 
 
 def noise(name, fmt, extra=()):

@@ -14,32 +14,25 @@ Exit 77 (CTest: skipped) with the reason when the logs ($SDINS_RECORDINGS_DIR/px
 DATA_DIR/px4-ulog) are missing.
 """
 import csv
+import functools
 import json
 import math
 import os
 import random
-import shutil
 import subprocess
 import sys
 
+from e2e_common import fresh_dir, recordings_dir, run_sdins, skip  # beside this script
+
 sdins, data, work = sys.argv[1:4]
-data = os.environ.get("SDINS_RECORDINGS_DIR") or data
+data = recordings_dir(data)
 src = os.path.join(data, "px4-ulog")
 logs = {"sample_log_small": os.path.join(src, "sample_log_small.ulg"), "sample_px4_events": os.path.join(src, "sample_px4_events.ulg")}
 for p in logs.values():
     if not os.path.isfile(p):
-        print(f"SKIPPED: {p} is missing (the shared data directory is read in place, set SDINS_RECORDINGS_DIR, docs/data.md)")
-        sys.exit(77)
-shutil.rmtree(work, ignore_errors=True)
-os.makedirs(work)
-
-
-def run(*args):
-    p = subprocess.run([sdins, *args], capture_output=True, text=True)
-    if p.returncode != 0:
-        print(p.stdout, p.stderr)
-        raise SystemExit(f"sdins {' '.join(args)} failed with exit {p.returncode}")
-    return p.stdout
+        skip(f"{p} is missing (the shared data directory is read in place, set SDINS_RECORDINGS_DIR, docs/data.md)")
+fresh_dir(work)
+run = functools.partial(run_sdins, sdins)
 
 
 def table(log, channel):

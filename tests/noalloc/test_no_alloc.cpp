@@ -193,6 +193,45 @@ const FlightInputs& flight_inputs() {
   return in;
 }
 
+/// Loads table with the flight's almanac and ticks exec through its IMU samples five to a frame,
+/// with the raw epoch of each whole second converted (the executive's position as the hint) and
+/// delivered in the frame that ends at it. add(fi, ms) may add to the frame that ends at ms
+/// milliseconds before its tick; done(out) sees each tick's output. Counted: runs armed.
+template <class Layout, class Add, class Done>
+void tick_flight(const FlightInputs& in, fsw::Executive<Layout>& exec, fsw::GpsAlmanacTable& table, Add add, Done done) {
+  table.clear();
+  for (const auto& e : in.almanac) table.set(e);
+  fsw::GnssEpoch epoch;
+  fsw::GnssConversionStats conv;
+  fsw::FrameOutput out;
+  for (std::size_t k = 0; k + 5 <= in.imu.size(); k += 5) {
+    fsw::FrameInput fi;
+    fi.imu = &in.imu[k];
+    fi.n_imu = 5;
+    const std::size_t ms = k + 5;
+    if (ms % 1000 == 0) {
+      const fsw::Vec3 hint = exec.ins().state().llh;
+      if (fsw::gnss_epoch_from_raw(in.raw[ms / 1000 - 1], table, &hint, epoch, conv) == fsw::Status::kOk)
+        fi.gnss = &epoch;
+    }
+    add(fi, ms);
+    exec.tick(fi, out);
+    done(out);
+  }
+}
+
+/// Feeds app the flight's IMU samples, each solution 20 ms after its time (before the first IMU
+/// sample that late). Counted: runs armed.
+template <class App>
+void feed_app(const FlightInputs& in, App& app) {
+  fsw::FrameOutput out;
+  std::size_t next = 0;
+  for (const fsw::ImuSample& s : in.imu) {
+    while (next < in.pvt.size() && in.pvt[next].t_s <= s.t_s - 0.02) app.on_gnss_pvt(in.pvt[next++]);
+    app.on_imu(s, out);
+  }
+}
+
 template <class Layout>
 void fly_executive_without_allocating() {
   const FlightInputs& in = flight_inputs();
@@ -208,29 +247,19 @@ void fly_executive_without_allocating() {
   int updates = 0;
   {
     Armed a;
-    table.clear();
-    for (const auto& e : in.almanac) table.set(e);
-    fsw::GnssEpoch epoch;
-    fsw::GnssConversionStats conv;
-    fsw::FrameOutput out;
-    for (std::size_t k = 0; k + 5 <= in.imu.size(); k += 5) {
-      fsw::FrameInput fi;
-      fi.imu = &in.imu[k];
-      fi.n_imu = 5;
-      const std::size_t ms = k + 5;
-      if (ms % 1000 == 0) {
-        const fsw::Vec3 hint = exec.ins().state().llh;
-        if (fsw::gnss_epoch_from_raw(in.raw[ms / 1000 - 1], table, &hint, epoch, conv) == fsw::Status::kOk)
-          fi.gnss = &epoch;
-      }
-      exec.tick(fi, out);
-      if (out.ekf_updated) ++updates;
-    }
+    tick_flight(
+        in, exec, table, [](fsw::FrameInput&, std::size_t) {},
+        [&updates](const fsw::FrameOutput& out) {
+          if (out.ekf_updated) ++updates;
+        });
     // Rejection paths.
     fsw::FrameInput fi;
     fi.imu = &bad;
     fi.n_imu = 1;
+    fsw::FrameOutput out;
     exec.tick(fi, out);
+    fsw::GnssEpoch epoch;
+    fsw::GnssConversionStats conv;
     fsw::gnss_epoch_from_raw(bad_epoch, table, nullptr, epoch, conv);
   }
   EXPECT_GE(updates, 110);
@@ -257,26 +286,15 @@ void fly_pvt_without_allocating() {
   long n_exec = 0;
   {
     Armed a;
-    table.clear();
-    for (const auto& e : in.almanac) table.set(e);
-    fsw::GnssEpoch epoch;
-    fsw::GnssConversionStats conv;
-    fsw::FrameOutput out;
-    for (std::size_t k = 0; k + 5 <= in.imu.size(); k += 5) {
-      fsw::FrameInput fi;
-      fi.imu = &in.imu[k];
-      fi.n_imu = 5;
-      const std::size_t ms = k + 5;
-      if (ms % 250 == 0) fi.pvt = &in.pvt[ms / 250 - 1];
-      if (ms % 1000 == 0) {
-        const fsw::Vec3 hint = exec.ins().state().llh;
-        if (fsw::gnss_epoch_from_raw(in.raw[ms / 1000 - 1], table, &hint, epoch, conv) == fsw::Status::kOk)
-          fi.gnss = &epoch;
-      }
-      if (ms == 60000) fi.pvt = &bad;
-      exec.tick(fi, out);
-      if (out.ekf_updated && out.report.pvt) ++pvt_updates;
-    }
+    tick_flight(
+        in, exec, table,
+        [&in, &bad](fsw::FrameInput& fi, std::size_t ms) {
+          if (ms % 250 == 0) fi.pvt = &in.pvt[ms / 250 - 1];
+          if (ms == 60000) fi.pvt = &bad;
+        },
+        [&pvt_updates](const fsw::FrameOutput& out) {
+          if (out.ekf_updated && out.report.pvt) ++pvt_updates;
+        });
     n_exec = g_allocs;
   }
   EXPECT_GE(pvt_updates, 300);
@@ -301,12 +319,7 @@ TEST(NoAlloc, FlightAppOnGnssPvtDoesNotAllocate) {
   bad.quality = 0;
   {
     Armed a;
-    fsw::FrameOutput out;
-    std::size_t next = 0;
-    for (const fsw::ImuSample& s : in.imu) {
-      while (next < in.pvt.size() && in.pvt[next].t_s <= s.t_s - 0.02) app.on_gnss_pvt(in.pvt[next++]);
-      app.on_imu(s, out);
-    }
+    feed_app(in, app);
     app.on_gnss_pvt(bad);
   }
   EXPECT_TRUE(app.initialised());
@@ -364,12 +377,7 @@ void fly_app_init_mode_without_allocating(fsw::InitMode mode) {
   ASSERT_EQ(app.init(cfg), fsw::Status::kOk);
   {
     Armed a;
-    fsw::FrameOutput out;
-    std::size_t next = 0;
-    for (const fsw::ImuSample& s : in.imu) {
-      while (next < in.pvt.size() && in.pvt[next].t_s <= s.t_s - 0.02) app.on_gnss_pvt(in.pvt[next++]);
-      app.on_imu(s, out);
-    }
+    feed_app(in, app);
   }
   if (mode == fsw::InitMode::kVelocityMatching) {
     EXPECT_TRUE(app.initialised());

@@ -9,6 +9,7 @@
 #include <limits>
 #include <random>
 
+#include "diagnosis_test_util.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "lcm_test_util.hpp"
 #include "sim/effects.hpp"
@@ -18,14 +19,8 @@
 
 namespace {
 
-sim::Scenario baseline_scenario(double duration_s, std::uint64_t seed) {
-  sim::Scenario sc;
-  sc.duration_s = duration_s;
-  sc.seed = seed;
-  sc.imu.errors = sim::ImuErrorSet::kBaseline;
-  return sc;
-}
-
+using diagnosis_test::baseline_scenario;
+using diagnosis_test::kSanitized;
 
 struct Hidden {
   const char* effect;
@@ -49,12 +44,6 @@ constexpr Hidden kConfounded[] = {
     {"gyro_g_sensitivity", "z", 2.0, 5.0},
     {"gyro_misalignment", "zy", 40.0, 80.0},
 };
-
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;  // ~10x slower: the statistical tests run in the release stage
-#else
-constexpr bool kSanitized = false;
-#endif
 
 std::string assignment(const Hidden& h, double v) {
   return std::string(h.effect) + (h.component[0] ? std::string(".") + h.component : "") + "=" + std::to_string(v);

@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 
+#include "diagnosis_test_util.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "lcm_test_util.hpp"
 #include "sim/effects.hpp"
@@ -18,19 +19,9 @@
 
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-
-sim::Scenario aircraft(double duration_s, std::uint64_t seed) {
-  sim::Scenario sc;
-  sc.duration_s = duration_s;
-  sc.seed = seed;
-  sc.imu.errors = sim::ImuErrorSet::kBaseline;
-  return sc;
-}
+using diagnosis_test::baseline_scenario;
+using diagnosis_test::kSanitized;
+using diagnosis_test::name_of;
 
 /// The scenario's data through an LCM log and its reader (time-tag order), as `sdins diagnose --log`
 /// sees it. (In the simulator's own order an epoch follows the IMU sample of its true time, which
@@ -57,10 +48,6 @@ tools::RecordedData through_a_log(const tools::RecordedData& stream, const std::
   return logged;
 }
 
-std::string name_of(const tools::Finding& f) {
-  return std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component);
-}
-
 }  // namespace
 
 // A large hidden IMU-GNSS time offset (only it hidden; the default bank-to-turn flight, whose
@@ -75,7 +62,7 @@ TEST(DiagnosisChain, LargeHiddenTimeOffsetIsNamedWithinTenMillisecondsAndNothing
     std::uint64_t seed;
   };
   for (const Case c : {Case{0.25, 7}, Case{-0.4, 8}}) {
-    sim::Scenario sc = aircraft(600.0, c.seed);
+    sim::Scenario sc = baseline_scenario(600.0, c.seed);
     ASSERT_EQ(sim::apply_effect_assignment(sc.effects, "imu_gnss_time_offset=" + std::to_string(c.offset_s)), "");
     const tools::DiagnosisChain ch = tools::diagnose_chain(through_a_log(tools::record_scenario(sc, c.seed), "diag_chain_offset.lcmlog"),
                                                        tools::default_diagnosis_config());
@@ -154,7 +141,7 @@ TEST(DiagnosisChain, CorrectionsGoToTheModelOrTheData) {
 // flight then initialises right (the chain's first search starts from it).
 TEST(DiagnosisChain, SidewaysMountingYawIsFoundByTheInitialHeadingProfile) {
   if (kSanitized) GTEST_SKIP() << "statistical test: release stage";
-  sim::Scenario sc = aircraft(300.0, 21);
+  sim::Scenario sc = baseline_scenario(300.0, 21);
   const tools::RecordedData as_configured = tools::record_scenario(sc, 21);
   sc.imu.mounting_rpy_deg = {0.0, 5.0, 90.0};
   const tools::RecordedData data = tools::record_scenario(sc, 21);

@@ -10,29 +10,21 @@
 #include <string>
 #include <vector>
 
+#include "diagnosis_test_util.hpp"
 #include "sim/scenario.hpp"
 #include "tools/diagnosis_chain.hpp"
 #include "tools/diagnosis_mounting.hpp"
 
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-
-std::string name_of(const tools::Finding& f) {
-  return std::string(fsw::effect_info(f.effect).name) + (f.component.empty() ? "" : "." + f.component);
-}
+using diagnosis_test::baseline_scenario;
+using diagnosis_test::kSanitized;
+using diagnosis_test::name_of;
 
 /// The default bank-to-turn aircraft with biases and noise only, its IMU mounted at rpy [deg],
 /// through the whole chain (the track initialisation of the shipped configuration).
 tools::DiagnosisChain chain_of_mounted_flight(const std::array<double, 3>& rpy, std::uint64_t seed) {
-  sim::Scenario sc;
-  sc.duration_s = 300.0;
-  sc.seed = seed;
-  sc.imu.errors = sim::ImuErrorSet::kBaseline;
+  sim::Scenario sc = baseline_scenario(300.0, seed);
   sc.imu.mounting_rpy_deg = rpy;
   const tools::DiagnosisChain ch = tools::diagnose_chain(tools::record_scenario(sc, seed), tools::default_diagnosis_config());
   const tools::MountingFromTravel& m = ch.travel;

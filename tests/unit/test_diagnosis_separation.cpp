@@ -12,6 +12,7 @@
 #include <limits>
 
 #include "cfg/data_dir.hpp"
+#include "diagnosis_test_util.hpp"
 #include "sim/effects.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
@@ -23,12 +24,7 @@ namespace {
 using sim::Scenario;
 using sim::Segment;
 using sim::SegmentType;
-
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;  // ~10x slower: the statistical tests run in the release stage
-#else
-constexpr bool kSanitized = false;
-#endif
+using diagnosis_test::kSanitized;
 
 Scenario read_back(const Scenario& sc) {
   const sim::ScenarioWriteResult w = sim::write_scenario_toml(sc, "a test\nof two lines");

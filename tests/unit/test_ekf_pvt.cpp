@@ -65,6 +65,14 @@ fsw::GnssPvtMeasurement solution_at(const fsw::NavState& nav, const Vec3& pos_of
   return m;
 }
 
+/// A solution pos_offset_enu_m away from nav (velocity of nav) with a 0.1 m position sigma: the
+/// gate rejects an offset of a few metres.
+fsw::GnssPvtMeasurement precise_solution_at(const fsw::NavState& nav, const Vec3& pos_offset_enu_m) {
+  fsw::GnssPvtMeasurement m = solution_at(nav, pos_offset_enu_m, Vec3::Zero());
+  m.pos_sigma_enu_m = Vec3::Constant(0.1);
+  return m;
+}
+
 }  // namespace
 
 // Every column of H (position, velocity, attitude in the phi convention of frames.hpp, lever arm,
@@ -273,12 +281,10 @@ TEST(EkfPvt, PositionJumpRunawayReopensTheFilter) {
   ASSERT_EQ(ekf.init(cfg), fsw::Status::kOk);
   const fsw::NavState nav = static_nav();
   fsw::EkfUpdateReport rep;
-  fsw::GnssPvtMeasurement good = solution_at(nav, Vec3::Zero(), Vec3::Zero());
-  good.pos_sigma_enu_m = Vec3::Constant(0.1);
+  const fsw::GnssPvtMeasurement good = precise_solution_at(nav, Vec3::Zero());
   for (int k = 0; k < 3; ++k) ASSERT_EQ(ekf.update_pvt(good, nav, Vec3::Zero(), rep), fsw::Status::kOk);
   EXPECT_EQ(rep.pos_used, 3);
-  fsw::GnssPvtMeasurement jump = solution_at(nav, Vec3(5.0, -5.0, 5.0), Vec3::Zero());
-  jump.pos_sigma_enu_m = Vec3::Constant(0.1);
+  const fsw::GnssPvtMeasurement jump = precise_solution_at(nav, Vec3(5.0, -5.0, 5.0));
   for (int k = 0; k < 5; ++k) {
     ASSERT_EQ(ekf.update_pvt(jump, nav, Vec3::Zero(), rep), fsw::Status::kOk);
     EXPECT_EQ(rep.pos_rejected, 3) << k;
@@ -305,11 +311,9 @@ TEST(EkfPvt, OneAxisGatedEveryUpdateIsARunaway) {
   ASSERT_EQ(ekf.init(cfg), fsw::Status::kOk);
   const fsw::NavState nav = static_nav();
   fsw::EkfUpdateReport rep;
-  fsw::GnssPvtMeasurement good = solution_at(nav, Vec3::Zero(), Vec3::Zero());
-  good.pos_sigma_enu_m = Vec3::Constant(0.1);
+  const fsw::GnssPvtMeasurement good = precise_solution_at(nav, Vec3::Zero());
   for (int k = 0; k < 5; ++k) ASSERT_EQ(ekf.update_pvt(good, nav, Vec3::Zero(), rep), fsw::Status::kOk);
-  fsw::GnssPvtMeasurement east = solution_at(nav, Vec3(50.0, 0.0, 0.0), Vec3::Zero());
-  east.pos_sigma_enu_m = Vec3::Constant(0.1);
+  const fsw::GnssPvtMeasurement east = precise_solution_at(nav, Vec3(50.0, 0.0, 0.0));
   for (int k = 0; k < 4; ++k) {
     ASSERT_EQ(ekf.update_pvt(east, nav, Vec3::Zero(), rep), fsw::Status::kOk);
     EXPECT_EQ(rep.pos_rejected, 1) << k;

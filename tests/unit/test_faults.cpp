@@ -362,10 +362,7 @@ TEST(TimeTagGate, ReplayKeepsTheLogAfterOneFarAheadSample) {
   const std::string path = lcm_test::scratch("faults_far_ahead.lcmlog");
   {
     hal::LcmLogSink sink;
-    hal::LcmTelemetryConfig cfg;
-    cfg.lcm_url = "none";
-    cfg.log_path = path;
-    ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
+    ASSERT_EQ(lcm_test::open_log_only(sink, path), hal::LcmLogStatus::kOk);
     for (int k = 0; k < 2000; ++k) {
       hal::ImuRecord r = imu_at(k);
       if (k == 400) r.sample.t_s += 50.0;  // 50 s ahead
@@ -374,10 +371,7 @@ TEST(TimeTagGate, ReplayKeepsTheLogAfterOneFarAheadSample) {
     ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
   }
   hal::LcmReplayReader rd;
-  ASSERT_EQ(rd.open(path, hal::LcmReplayConfig{}), hal::LcmLogStatus::kOk);
-  fsw::InputEvent in;
-  std::vector<double> t;
-  while (rd.next(in) == hal::LcmLogStatus::kOk) t.push_back(in.t_s);
+  const std::vector<double> t = lcm_test::replayed_times(rd, path);
   EXPECT_EQ(t.size(), 1999u);  // every good sample
   EXPECT_TRUE(std::is_sorted(t.begin(), t.end()));
   EXPECT_EQ(rd.stats().time_tag_rejected, 1u);

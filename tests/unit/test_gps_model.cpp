@@ -60,6 +60,15 @@ GpsConfig error_free() {
   return c;
 }
 
+/// Error free, and every healthy satellite above the horizon reported: no elevation mask, as many
+/// channels as the flight software has.
+GpsConfig every_satellite_in_view() {
+  GpsConfig c = error_free();
+  c.elevation_mask_deg = 0.0;
+  c.max_channels = fsw::kMaxGnssChannels;
+  return c;
+}
+
 /// A vehicle at rest relative to the Earth with attitude C_b_n.
 sim::TruthSample static_truth(double t_s, const Vec3& llh = kSite, const Mat3& C_b_n = Mat3::Identity()) {
   sim::TruthSample s;
@@ -246,9 +255,7 @@ TEST(GpsRangeRate, MatchesNumericalDerivativeOfRange) {
 
 TEST(GpsVisibility, ElevationMaskIsRespected) {
   const std::vector<sim::AlmanacEntry> alm = shipped();
-  GpsConfig cfg = error_free();
-  cfg.elevation_mask_deg = 0.0;
-  cfg.max_channels = fsw::kMaxGnssChannels;
+  GpsConfig cfg = every_satellite_in_view();
   GpsModel all(cfg, alm, sim::EffectSet{}, 1);
   const fsw::GnssEpoch e = measure(all, static_truth(0.0));
   ASSERT_GE(e.n_obs, 8);
@@ -290,9 +297,7 @@ TEST(GpsVisibility, ElevationMaskIsRespected) {
 
 TEST(GpsVisibility, ChannelLimitKeepsTheHighestInPrnOrder) {
   const std::vector<sim::AlmanacEntry> alm = shipped();
-  GpsConfig cfg = error_free();
-  cfg.elevation_mask_deg = 0.0;
-  cfg.max_channels = fsw::kMaxGnssChannels;
+  GpsConfig cfg = every_satellite_in_view();
   GpsModel all(cfg, alm, sim::EffectSet{}, 1);
   const fsw::GnssEpoch e = measure(all, static_truth(0.0));
   ASSERT_GT(e.n_obs, 4);
@@ -533,9 +538,7 @@ TEST(GpsEffects, LeverArmMovesThePseudorangeAlongTheLineOfSight) {
 
 TEST(GpsEffects, TroposphereAndIonosphereAddPositiveDelays) {
   const std::vector<sim::AlmanacEntry> alm = shipped();
-  GpsConfig cfg = error_free();
-  cfg.elevation_mask_deg = 0.0;
-  cfg.max_channels = fsw::kMaxGnssChannels;
+  GpsConfig cfg = every_satellite_in_view();
   GpsModel plain(cfg, alm, sim::EffectSet{}, 1);
   const fsw::GnssEpoch a = measure(plain, static_truth(0.0));
   for (const Effect effect : {Effect::kTroposphericDelay, Effect::kIonosphericDelay}) {

@@ -13,6 +13,7 @@
 #include "hal/lcm_convert.hpp"
 #include "hal/lcm_channels.hpp"
 #include "hal/lcm_types.hpp"
+#include "lcm_test_util.hpp"
 
 namespace {
 
@@ -20,14 +21,8 @@ using fsw::Vec3;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-bool bits_equal(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
-
-template <class Msg>
-std::vector<std::uint8_t> encode(const Msg& m) {
-  std::vector<std::uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
-  EXPECT_EQ(m.encode(b.data(), 0, static_cast<int>(b.size())), static_cast<int>(b.size()));
-  return b;
-}
+using lcm_test::bits_equal;
+using lcm_test::encode;
 
 /// Awkward doubles: negative zero, subnormal, extremes, values that print badly in decimal.
 const double kAwkward[] = {-0.0, 4.9406564584124654e-324, 1.7976931348623157e308, 0.1, -1.0 / 3.0,

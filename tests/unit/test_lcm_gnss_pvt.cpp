@@ -17,11 +17,11 @@
 namespace {
 
 using fsw::Vec3;
+using lcm_test::bits_equal;
+using lcm_test::encode;
 using Kind = fsw::InputEvent::Kind;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-bool bits_equal(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
 
 bool same_pvt(const hal::GnssPvtSample& a, const hal::GnssPvtSample& b) {
   bool eq = bits_equal(a.t_s, b.t_s) && a.gps_week == b.gps_week && bits_equal(a.gps_tow_s, b.gps_tow_s) &&
@@ -30,13 +30,6 @@ bool same_pvt(const hal::GnssPvtSample& a, const hal::GnssPvtSample& b) {
     eq = eq && bits_equal(a.llh[i], b.llh[i]) && bits_equal(a.vel_enu_mps[i], b.vel_enu_mps[i]) &&
          bits_equal(a.pos_sigma_enu_m[i], b.pos_sigma_enu_m[i]) && bits_equal(a.vel_sigma_enu_mps[i], b.vel_sigma_enu_mps[i]);
   return eq;
-}
-
-template <class Msg>
-std::vector<std::uint8_t> encode(const Msg& m) {
-  std::vector<std::uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
-  EXPECT_EQ(m.encode(b.data(), 0, static_cast<int>(b.size())), static_cast<int>(b.size()));
-  return b;
 }
 
 /// A solution like a line of the drive data set's .pos file, with awkward low bits.
@@ -203,10 +196,7 @@ TEST(LcmGnssPvt, ReferenceOnTruthHasNoAttitude) {
 TEST(LcmGnssPvt, ReplayReaderDeliversSolutionsInTimeOrderWhenAsked) {
   const std::string path = lcm_test::scratch("gnss_pvt_replay.lcmlog");
   hal::LcmLogSink sink;
-  hal::LcmTelemetryConfig cfg;
-  cfg.lcm_url = "none";
-  cfg.log_path = path;
-  ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
+  ASSERT_EQ(lcm_test::open_log_only(sink, path), hal::LcmLogStatus::kOk);
   std::vector<hal::GnssPvtSample> pvts;
   std::vector<std::size_t> pending;  // index into pvts, written 50 samples late
   int n_imu = 0, n_truth = 0, n_gnss = 0;

@@ -21,9 +21,9 @@
 namespace {
 
 using fsw::Vec3;
+using lcm_test::bits_equal;
+using lcm_test::encode;
 using Kind = fsw::InputEvent::Kind;
-
-bool bits_equal(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
 
 hal::ImuRecord record(const fsw::InputEvent& e) { return hal::ImuRecord{e.imu, e.imu_counter, e.imu_status}; }
 
@@ -43,13 +43,6 @@ bool same_gnss(const fsw::GnssRawEpoch& a, const fsw::GnssRawEpoch& b) {
          bits_equal(a.meas[k].pseudorange_rate_mps, b.meas[k].pseudorange_rate_mps) &&
          bits_equal(a.meas[k].cn0_dbhz, b.meas[k].cn0_dbhz);
   return eq;
-}
-
-template <class Msg>
-std::vector<std::uint8_t> encode(const Msg& m) {
-  std::vector<std::uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
-  EXPECT_EQ(m.encode(b.data(), 0, static_cast<int>(b.size())), static_cast<int>(b.size()));
-  return b;
 }
 
 hal::ImuRecord imu_at(int k) {
@@ -76,10 +69,7 @@ TEST(LcmReplay, SimulatedRunReplaysBitExactInputsInTimeOrder) {
 
   const std::string path = lcm_test::scratch("replay_sim.lcmlog");
   hal::LcmLogSink sink;
-  hal::LcmTelemetryConfig cfg;
-  cfg.lcm_url = "none";
-  cfg.log_path = path;
-  ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
+  ASSERT_EQ(lcm_test::open_log_only(sink, path), hal::LcmLogStatus::kOk);
   EXPECT_FALSE(sink.telemetry().network_active());
 
   std::vector<fsw::InputEvent> expected;  // in the order they must come back
@@ -299,10 +289,7 @@ TEST(LcmReplay, BadInputsAreCountedAndEveryGoodInputDelivered) {
 TEST(LcmReplay, ReorderWindowSortsLateInputsAndCountsTooLateOnes) {
   const std::string path = lcm_test::scratch("replay_window.lcmlog");
   hal::LcmLogSink sink;
-  hal::LcmTelemetryConfig cfg;
-  cfg.lcm_url = "none";
-  cfg.log_path = path;
-  ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
+  ASSERT_EQ(lcm_test::open_log_only(sink, path), hal::LcmLogStatus::kOk);
   for (int k = 0; k < 3000; ++k) {
     if (k == 1500) {  // written at t = 1.5 s: epoch at 1.2 s (in the window), epoch at 0.3 s (too late)
       for (double t : {1.2, 0.3}) {
@@ -346,10 +333,7 @@ TEST(LcmReplay, ReorderWindowSortsLateInputsAndCountsTooLateOnes) {
 TEST(LcmReplay, WildTimeTagBehindTheWindowIsDroppedEvenBeforeAnythingWasReturned) {
   const std::string path = lcm_test::scratch("replay_wild_time.lcmlog");
   hal::LcmLogSink sink;
-  hal::LcmTelemetryConfig cfg;
-  cfg.lcm_url = "none";
-  cfg.log_path = path;
-  ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
+  ASSERT_EQ(lcm_test::open_log_only(sink, path), hal::LcmLogStatus::kOk);
   for (int k = 0; k <= 100; ++k) ASSERT_EQ(sink.write_imu(imu_at(k)), hal::LcmLogStatus::kOk);
   hal::ImuRecord wild = imu_at(101);
   wild.sample.t_s = -1.4873979575313448e305;
@@ -359,10 +343,7 @@ TEST(LcmReplay, WildTimeTagBehindTheWindowIsDroppedEvenBeforeAnythingWasReturned
   ASSERT_EQ(sink.write_imu(late_ok), hal::LcmLogStatus::kOk);
   ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
   hal::LcmReplayReader rd;
-  ASSERT_EQ(rd.open(path, hal::LcmReplayConfig{}), hal::LcmLogStatus::kOk);
-  fsw::InputEvent in;
-  std::vector<double> t;
-  while (rd.next(in) == hal::LcmLogStatus::kOk) t.push_back(in.t_s);
+  const std::vector<double> t = lcm_test::replayed_times(rd, path);
   ASSERT_EQ(t.size(), 102u);
   EXPECT_TRUE(std::is_sorted(t.begin(), t.end()));
   EXPECT_EQ(t.front(), imu_at(0).sample.t_s);
@@ -374,10 +355,7 @@ TEST(LcmReplay, WildTimeTagBehindTheWindowIsDroppedEvenBeforeAnythingWasReturned
 TEST(LcmReplay, SinkWritesEncodedMessagesStampedWithNavigationTime) {
   const std::string path = lcm_test::scratch("sink.lcmlog");
   hal::LcmLogSink sink;
-  hal::LcmTelemetryConfig cfg;
-  cfg.lcm_url = "none";
-  cfg.log_path = path;
-  ASSERT_EQ(sink.open(cfg), hal::LcmLogStatus::kOk);
+  ASSERT_EQ(lcm_test::open_log_only(sink, path), hal::LcmLogStatus::kOk);
   fsw::NavState nav;
   nav.t_s = 12.25;
   nav.llh = Vec3(0.5, 1.5, 100.0);

@@ -9,10 +9,15 @@ renamed instead (removed on any exception, SIGINT and SIGTERM included). A symbo
 followed: the file it names is replaced. Every failure raises OutputError naming the file and
 the OS error, which the scripts turn into a one-line message and exit status 1.
 
+load_json(path) reads a script's input JSON; a missing or malformed file raises InputError.
+run_script(prog, main) runs main(sys.argv) as the script's body and turns an InputError, an
+OutputError or any other failure into one line "PROG: error: ..." and exit status 1.
+
 Importing this module makes SIGTERM raise SystemExit(143), so a terminated script unwinds through
 the clean-up like SIGINT (KeyboardInterrupt) does.
 """
 import errno
+import json
 import os
 import signal
 import sys
@@ -21,6 +26,33 @@ import tempfile
 
 class OutputError(Exception):
     """A figure could not be written (the message names the file and the OS error)."""
+
+
+class InputError(Exception):
+    """An input file is missing or malformed (the message names the file)."""
+
+
+def load_json(path):
+    """The JSON value in path; InputError when the file is missing or not valid JSON."""
+    if not os.path.isfile(path):
+        raise InputError(f"{path} not found")
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError) as e:
+        raise InputError(f"{path} is not valid JSON: {e}")
+
+
+def run_script(prog, main):
+    """sys.exit(main(sys.argv)), every failure kept to one line on stderr and exit status 1."""
+    try:
+        sys.exit(main(sys.argv))
+    except (InputError, OutputError) as e:
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        sys.exit(1)
+    except Exception as e:  # keep failures to one line for `sdins paper`
+        print(f"{prog}: error: {type(e).__name__}: {e}", file=sys.stderr)
+        sys.exit(1)
 
 
 def _on_sigterm(signum, frame):  # noqa: ARG001

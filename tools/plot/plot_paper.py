@@ -21,7 +21,6 @@ the rest (panel title says "initial transient clipped").  NaN values are drawn a
 Exit code 1 with a one-line message when summary.json or a CSV is missing or malformed.
 """
 import csv
-import json
 import math
 import os
 import re
@@ -33,7 +32,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from plot_io import OutputError, save_figure  # noqa: E402  (beside this script)
+from plot_io import InputError, load_json, run_script, save_figure  # noqa: E402  (beside this script)
 
 PROG = "plot_paper.py"
 DPI = 150
@@ -53,21 +52,11 @@ MODEL_COLOR = {"15": "C3", "24": "C0", "15c": "C7", "15t": "C1"}
 NEES_DOF = 9
 
 
-class InputError(Exception):
-    pass
-
-
 # ----------------------------------------------------------------------------- input
 
 def load_summary(out_dir):
     path = os.path.join(out_dir, "summary.json")
-    if not os.path.isfile(path):
-        raise InputError(f"{path} not found")
-    try:
-        with open(path) as f:
-            summary = json.load(f)
-    except (OSError, ValueError) as e:
-        raise InputError(f"{path} is not valid JSON: {e}")
+    summary = load_json(path)
     if not isinstance(summary, dict) or not isinstance(summary.get("cases"), list) or not summary["cases"]:
         raise InputError(f"{path}: expected an object with a non-empty list 'cases'")
     cases, seen = [], set()
@@ -377,11 +366,4 @@ def main(argv):
 
 if __name__ == "__main__":
     warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN slices etc.: plotted as gaps
-    try:
-        sys.exit(main(sys.argv))
-    except (InputError, OutputError) as e:
-        print(f"{PROG}: error: {e}", file=sys.stderr)
-        sys.exit(1)
-    except Exception as e:  # keep failures to one line for `sdins paper`
-        print(f"{PROG}: error: {type(e).__name__}: {e}", file=sys.stderr)
-        sys.exit(1)
+    run_script(PROG, main)

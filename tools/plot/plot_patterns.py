@@ -9,7 +9,6 @@ patterns.png
     right: the final E and U residual 1-sigma of both filters per pattern.
 Exit code 1 with a one-line message when patterns.json is missing or malformed.
 """
-import json
 import math
 import os
 import sys
@@ -19,24 +18,14 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from plot_io import OutputError, save_figure  # noqa: E402  (beside this script)
+from plot_io import InputError, load_json, run_script, save_figure  # noqa: E402  (beside this script)
 
 PROG = "plot_patterns.py"
 
 
-class InputError(Exception):
-    pass
-
-
 def load(out_dir):
     path = os.path.join(out_dir, "patterns.json")
-    if not os.path.isfile(path):
-        raise InputError(f"{path} not found")
-    try:
-        with open(path) as f:
-            j = json.load(f)
-    except (OSError, ValueError) as e:
-        raise InputError(f"{path} is not valid JSON: {e}")
+    j = load_json(path)
     pats = j.get("patterns") if isinstance(j, dict) else None
     if not isinstance(pats, list) or not pats:
         raise InputError(f"{path}: expected a non-empty list 'patterns'")
@@ -97,11 +86,4 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main(sys.argv))
-    except (InputError, OutputError) as e:
-        print(f"{PROG}: error: {e}", file=sys.stderr)
-        sys.exit(1)
-    except Exception as e:  # keep failures to one line for `sdins paper`
-        print(f"{PROG}: error: {type(e).__name__}: {e}", file=sys.stderr)
-        sys.exit(1)
+    run_script(PROG, main)

@@ -235,6 +235,30 @@ void drain(hal::CanRxAssembler& rx, long long& items) {
   }
 }
 
+/// Receives frames from bus into on_frame(f), counted in n, until opt.count of them (0: no limit),
+/// a signal ("SIGNAL: <stopped>" printed; the signal's exit code) or a silent bus for opt.timeout_s
+/// (printed; exit code 2 when a count was asked for, else 0). Returns the exit code.
+template <class OnFrame>
+int receive_frames(hal::CanBus& bus, const char* stopped, long long& n, OnFrame on_frame) {
+  while (opt.count <= 0 || n < opt.count) {
+    hal::CanFrame f;
+    // docs/faults.md: a signal ends the wait at once; the frames received so far are kept.
+    const hal::CanBusStatus st = bus.receive(f, opt.timeout_s, tools::interrupt_flag());
+    if (st == hal::CanBusStatus::kStopped) {
+      std::printf("%s: %s\n", tools::interrupt_signal_name().c_str(), stopped);
+      return tools::interrupt_exit_code();
+    }
+    if (st == hal::CanBusStatus::kTimeout) {
+      std::printf("silent bus: no frame for %.3f s\n", opt.timeout_s);
+      return opt.count > 0 ? 2 : 0;
+    }
+    if (st != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
+    on_frame(f);
+    ++n;
+  }
+  return 0;
+}
+
 int run_dump() {
   hal::CanRxAssembler rx;
   long long items = 0;
@@ -265,25 +289,10 @@ int run_dump() {
   hal::CanBus bus;
   if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
   std::fprintf(stderr, "sdins can dump: listening on %s\n", opt.bus.c_str());
-  int rc = 0;
-  while (opt.count <= 0 || frames < opt.count) {
-    hal::CanFrame f;
-    const hal::CanBusStatus st = bus.receive(f, opt.timeout_s, tools::interrupt_flag());
-    if (st == hal::CanBusStatus::kStopped) {
-      std::printf("%s: stopped\n", tools::interrupt_signal_name().c_str());
-      rc = tools::interrupt_exit_code();
-      break;
-    }
-    if (st == hal::CanBusStatus::kTimeout) {
-      std::printf("silent bus: no frame for %.3f s\n", opt.timeout_s);
-      rc = opt.count > 0 ? 2 : 0;
-      break;
-    }
-    if (st != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
-    ++frames;
+  const int rc = receive_frames(bus, "stopped", frames, [&](const hal::CanFrame& f) {
     rx.push(f, f.timestamp_s);
     drain(rx, items);
-  }
+  });
   rx.flush();
   drain(rx, items);
   std::printf("frames=%lld decoded_items=%lld\n", frames, items);
@@ -302,25 +311,9 @@ int run_record() {
   std::fflush(stderr);
   const std::string iface = opt.iface;
   long long n = 0;
-  int rc = 0;
-  while (opt.count <= 0 || n < opt.count) {
-    hal::CanFrame f;
-    // docs/faults.md: a signal ends the wait at once; the frames received so far are kept.
-    const hal::CanBusStatus st = bus.receive(f, opt.timeout_s, tools::interrupt_flag());
-    if (st == hal::CanBusStatus::kStopped) {
-      std::printf("%s: recording stopped\n", tools::interrupt_signal_name().c_str());
-      rc = tools::interrupt_exit_code();
-      break;
-    }
-    if (st == hal::CanBusStatus::kTimeout) {
-      std::printf("silent bus: no frame for %.3f s\n", opt.timeout_s);
-      rc = opt.count > 0 ? 2 : 0;
-      break;
-    }
-    if (st != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
+  const int rc = receive_frames(bus, "recording stopped", n, [&](const hal::CanFrame& f) {
     if (!w.write(f, iface)) throw std::runtime_error("cannot write " + w.error());
-    ++n;
-  }
+  });
   if (!w.close()) throw std::runtime_error("cannot write " + w.error());
   std::printf("recorded %lld frames -> %s\n", n, opt.out.c_str());
   print_bus_stats(bus);

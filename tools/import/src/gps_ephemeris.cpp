@@ -21,13 +21,6 @@ double wrap_pi(double a) {
   return a;
 }
 
-/// Normalises (week, tow) so that tow is in [0, 604800).
-void normalise(int& week, double& tow) {
-  const double k = std::floor(tow / kWeek);
-  tow -= k * kWeek;
-  week += static_cast<int>(k);
-}
-
 // Parameters of the fit, in this order.
 enum Param { kE = 0, kI0, kOmegaDot, kSqrtA, kOmega0, kArgPerigee, kM0, kParams };
 
@@ -80,23 +73,12 @@ void ephemeris_position_clock(const GpsEphemeris& eph, int week, double tow_s, f
             eph.tgd_s;
 }
 
-AlmanacFit fit_almanac(const GpsEphemeris& eph, int start_week, double start_tow_s, double span_s) {
-  AlmanacFit fit;
-  span_s = std::max(span_s, 1.0);
-  // toa: the window's centre, a whole second.
-  int toa_week = start_week;
-  double toa = std::round(start_tow_s + 0.5 * span_s);
-  normalise(toa_week, toa);
-  fsw::GpsAlmanac& alm = fit.almanac;
-  alm.prn = eph.prn;
-  alm.health = eph.health;
-  alm.toa_s = toa;
-  alm.week_mod_1024 = toa_week % 1024;
+namespace {
 
-  // Initial elements: the ephemeris' Keplerian elements moved to the toa.
+/// The ephemeris' Keplerian elements moved to the almanac's toa (toa_week, toa): the fit's start.
+void initial_elements(const GpsEphemeris& eph, int toa_week, double toa, double* p) {
   const double tk0 = ephemeris_tk_s(eph, toa_week, toa);
   const double a0 = eph.sqrt_a_sqrtm * eph.sqrt_a_sqrtm;
-  double p[kParams];
   p[kE] = eph.eccentricity;
   p[kI0] = eph.i0_rad + eph.idot_radps * tk0;
   p[kOmegaDot] = eph.omega_dot_radps;
@@ -104,44 +86,63 @@ AlmanacFit fit_almanac(const GpsEphemeris& eph, int start_week, double start_tow
   p[kOmega0] = wrap_pi(eph.omega0_rad + (eph.omega_dot_radps - kWe) * tk0 + kWe * (toa - eph.toe_s));
   p[kArgPerigee] = eph.arg_perigee_rad;
   p[kM0] = wrap_pi(eph.m0_rad + (std::sqrt(kGM / (a0 * a0 * a0)) + eph.delta_n_radps) * tk0);
+}
 
-  // Fit epochs: about 60 over the window (2 .. 30 s apart), ends included.
+/// The ephemeris' positions and clock at the fit epochs: about 60 over the window (2 .. 30 s
+/// apart), ends included; times in seconds of start_week (not normalised).
+struct FitEpochs {
+  int start_week = 0;
+  std::vector<double> t;
+  std::vector<fsw::Vec3> r;
+  std::vector<double> clock;
+  int size() const { return static_cast<int>(t.size()); }
+};
+
+FitEpochs fit_epochs(const GpsEphemeris& eph, int start_week, double start_tow_s, double span_s) {
   const int n_fit = std::clamp(static_cast<int>(std::ceil(span_s / 2.0)), 2, 60) + 1;
-  std::vector<double> t_fit(static_cast<std::size_t>(n_fit));
-  std::vector<fsw::Vec3> r_fit(t_fit.size());
-  std::vector<double> c_fit(t_fit.size());
+  FitEpochs f;
+  f.start_week = start_week;
+  f.t.resize(static_cast<std::size_t>(n_fit));
+  f.r.resize(f.t.size());
+  f.clock.resize(f.t.size());
   for (int j = 0; j < n_fit; ++j) {
-    t_fit[static_cast<std::size_t>(j)] = start_tow_s + span_s * j / (n_fit - 1);
-    ephemeris_position_clock(eph, start_week, t_fit[static_cast<std::size_t>(j)], r_fit[static_cast<std::size_t>(j)],
-                             c_fit[static_cast<std::size_t>(j)]);
+    const auto u = static_cast<std::size_t>(j);
+    f.t[u] = start_tow_s + span_s * j / (n_fit - 1);
+    ephemeris_position_clock(eph, start_week, f.t[u], f.r[u], f.clock[u]);
   }
-  const auto residuals = [&](const double* q, Eigen::VectorXd& res) {
-    fsw::GpsAlmanac a = alm;
-    set_params(a, q);
-    res.resize(3 * n_fit);
-    for (int j = 0; j < n_fit; ++j) {
-      fsw::Vec3 r, v;
-      int w = start_week;
-      double t = t_fit[static_cast<std::size_t>(j)];
-      normalise(w, t);
-      fsw::satellite_pv_ecef(a, w, t, r, v);
-      res.segment<3>(3 * j) = r - r_fit[static_cast<std::size_t>(j)];
-    }
-  };
+  return f;
+}
+
+/// The almanac alm with orbit elements q against the ephemeris positions of the fit epochs.
+void orbit_residuals(const fsw::GpsAlmanac& alm, const double* q, const FitEpochs& f, Eigen::VectorXd& res) {
+  fsw::GpsAlmanac a = alm;
+  set_params(a, q);
+  res.resize(3 * f.size());
+  for (int j = 0; j < f.size(); ++j) {
+    fsw::Vec3 r, v;
+    const fsw::GpsTime g = fsw::gps_time(f.start_week, f.t[static_cast<std::size_t>(j)]);
+    fsw::satellite_pv_ecef(a, g.week, g.tow_s, r, v);
+    res.segment<3>(3 * j) = r - f.r[static_cast<std::size_t>(j)];
+  }
+}
+
+/// Gauss-Newton on the orbit elements p (from their initial values; at most 30 iterations, a step
+/// kept only when it does not raise the residual); sets fit.iterations and fit.converged.
+void fit_orbit(const fsw::GpsAlmanac& alm, const FitEpochs& f, double* p, AlmanacFit& fit) {
   // Finite-difference steps (central differences), about 1 mm of orbit each.
   const double h[kParams] = {1e-10, 1e-10, 1e-14, 1e-7, 1e-10, 1e-10, 1e-10};
   Eigen::VectorXd res, rp, rm;
-  residuals(p, res);
+  orbit_residuals(alm, p, f, res);
   for (int it = 0; it < 30; ++it) {
     fit.iterations = it + 1;
-    Eigen::MatrixXd J(3 * n_fit, kParams);
+    Eigen::MatrixXd J(3 * f.size(), kParams);
     for (int k = 0; k < kParams; ++k) {
       double q[kParams];
       std::copy(p, p + kParams, q);
       q[k] = p[k] + h[k];
-      residuals(q, rp);
+      orbit_residuals(alm, q, f, rp);
       q[k] = p[k] - h[k];
-      residuals(q, rm);
+      orbit_residuals(alm, q, f, rm);
       J.col(k) = (rp - rm) / (2.0 * h[k]);
     }
     // Column scaling, then a rank-revealing minimum-norm solve (e, omega and M0 are nearly
@@ -160,7 +161,7 @@ AlmanacFit fit_almanac(const GpsEphemeris& eph, int start_week, double start_tow
       q[kM0] += fsw::kPi;
     }
     Eigen::VectorXd res_new;
-    residuals(q, res_new);
+    orbit_residuals(alm, q, f, res_new);
     const double before = res.norm(), after = res_new.norm();
     if (after <= before) {
       std::copy(q, q + kParams, p);
@@ -171,35 +172,33 @@ AlmanacFit fit_almanac(const GpsEphemeris& eph, int start_week, double start_tow
       break;
     }
   }
-  p[kOmega0] = wrap_pi(p[kOmega0]);
-  p[kArgPerigee] = wrap_pi(p[kArgPerigee]);
-  p[kM0] = wrap_pi(p[kM0]);
-  set_params(alm, p);
+}
 
-  // Clock: af0 + af1 (t - toa) by least squares on the ephemeris clock.
-  {
-    Eigen::MatrixXd A(n_fit, 2);
-    Eigen::VectorXd b(n_fit);
-    for (int j = 0; j < n_fit; ++j) {
-      int w = start_week;
-      double t = t_fit[static_cast<std::size_t>(j)];
-      normalise(w, t);
-      A(j, 0) = 1.0;
-      A(j, 1) = fsw::time_from_applicability_s(alm, w, t);
-      b[j] = c_fit[static_cast<std::size_t>(j)];
-    }
-    const Eigen::Vector2d x = A.colPivHouseholderQr().solve(b);
-    alm.af0_s = x[0];
-    alm.af1_sps = x[1];
+/// af0 + af1 (t - toa) of alm by least squares on the ephemeris clock at the fit epochs.
+void fit_clock(const FitEpochs& f, fsw::GpsAlmanac& alm) {
+  Eigen::MatrixXd A(f.size(), 2);
+  Eigen::VectorXd b(f.size());
+  for (int j = 0; j < f.size(); ++j) {
+    const fsw::GpsTime g = fsw::gps_time(f.start_week, f.t[static_cast<std::size_t>(j)]);
+    A(j, 0) = 1.0;
+    A(j, 1) = fsw::time_from_applicability_s(alm, g.week, g.tow_s);
+    b[j] = f.clock[static_cast<std::size_t>(j)];
   }
+  const Eigen::Vector2d x = A.colPivHouseholderQr().solve(b);
+  alm.af0_s = x[0];
+  alm.af1_sps = x[1];
+}
 
-  // Errors on a finer grid (every ~1 s, at most 2000 epochs).
+/// The fitted almanac's errors against the ephemeris on a finer grid than the fit's (every ~1 s,
+/// at most 2000 epochs): fit.samples and the worst and RMS errors.
+void evaluate_fit(const GpsEphemeris& eph, int start_week, double start_tow_s, double span_s, AlmanacFit& fit) {
+  const fsw::GpsAlmanac& alm = fit.almanac;
   const int n_eval = std::clamp(static_cast<int>(std::ceil(span_s)), 10, 2000) + 1;
   double sum2 = 0.0;
   for (int j = 0; j < n_eval; ++j) {
-    int w = start_week;
-    double t = start_tow_s + span_s * j / (n_eval - 1);
-    normalise(w, t);
+    const fsw::GpsTime g = fsw::gps_time(start_week, start_tow_s + span_s * j / (n_eval - 1));
+    const int w = g.week;
+    const double t = g.tow_s;
     fsw::Vec3 r_e, r_p, r_m, r_a, v_a;
     double c_e = 0.0, c_dummy = 0.0;
     ephemeris_position_clock(eph, w, t, r_e, c_e);
@@ -217,6 +216,33 @@ AlmanacFit fit_almanac(const GpsEphemeris& eph, int start_week, double start_tow
   }
   fit.samples = n_eval;
   fit.rms_pos_err_m = std::sqrt(sum2 / n_eval);
+}
+
+}  // namespace
+
+AlmanacFit fit_almanac(const GpsEphemeris& eph, int start_week, double start_tow_s, double span_s) {
+  AlmanacFit fit;
+  span_s = std::max(span_s, 1.0);
+  // toa: the window's centre, a whole second.
+  const fsw::GpsTime toa_time = fsw::gps_time(start_week, std::round(start_tow_s + 0.5 * span_s));
+  const int toa_week = toa_time.week;
+  const double toa = toa_time.tow_s;
+  fsw::GpsAlmanac& alm = fit.almanac;
+  alm.prn = eph.prn;
+  alm.health = eph.health;
+  alm.toa_s = toa;
+  alm.week_mod_1024 = toa_week % 1024;
+
+  double p[kParams];
+  initial_elements(eph, toa_week, toa, p);
+  const FitEpochs epochs = fit_epochs(eph, start_week, start_tow_s, span_s);
+  fit_orbit(alm, epochs, p, fit);
+  p[kOmega0] = wrap_pi(p[kOmega0]);
+  p[kArgPerigee] = wrap_pi(p[kArgPerigee]);
+  p[kM0] = wrap_pi(p[kM0]);
+  set_params(alm, p);
+  fit_clock(epochs, alm);
+  evaluate_fit(eph, start_week, start_tow_s, span_s, fit);
   if (!std::isfinite(fit.max_pos_err_m) || !std::isfinite(fit.max_clock_err_m)) fit.converged = false;
   return fit;
 }

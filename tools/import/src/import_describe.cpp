@@ -156,11 +156,6 @@ std::vector<Row> gate_rows(std::vector<Row> rows, std::size_t k_time, double sca
 // ---------------------------------------------------------------------------------------------
 // Time
 
-/// GPS seconds since 1980-01-06 as week and seconds of week.
-GpsTime gps_from_seconds(double g) {
-  const double w = std::floor(g / fsw::kSecondsPerWeek);
-  return GpsTime{static_cast<int>(w), g - w * fsw::kSecondsPerWeek};
-}
 double gps_seconds(const GpsTime& t) { return static_cast<double>(t.week) * fsw::kSecondsPerWeek + t.tow_s; }
 
 /// The clock pair: GPS = offset + (1 + drift) * local, least squares over the GNSS rows.
@@ -233,7 +228,7 @@ bool placed(double gps_s, GpsTime& out, std::string& why) {
     why = "GPS time out of range (before 1980-01-06 or past week 9999)";
     return false;
   }
-  out = gps_from_seconds(gps_s);
+  out = fsw::gps_time(0, gps_s);
   return true;
 }
 

@@ -136,32 +136,22 @@ std::int64_t days_from_civil(std::int64_t y, unsigned m, unsigned d) {
   return era * 146097 + static_cast<std::int64_t>(doe) - 719468;
 }
 
-constexpr std::int64_t kWeekSeconds = 604800;
-
-GpsTime gps_from_seconds(std::int64_t gps_seconds, double fraction_s) {
-  std::int64_t week = gps_seconds / kWeekSeconds;
-  std::int64_t rem = gps_seconds - week * kWeekSeconds;
-  if (rem < 0) {
-    rem += kWeekSeconds;
-    --week;
-  }
-  GpsTime t;
-  t.week = static_cast<int>(week);
-  t.tow_s = static_cast<double>(rem) + fraction_s;
-  if (t.tow_s >= fsw::kSecondsPerWeek) {
-    t.tow_s -= fsw::kSecondsPerWeek;
-    ++t.week;
-  } else if (t.tow_s < 0.0) {
-    t.tow_s += fsw::kSecondsPerWeek;
-    --t.week;
-  }
-  return t;
-}
-
 }  // namespace
 
+GpsTime gps_time_from_count(std::int64_t count, std::int64_t per_second, double fraction_s) {
+  const std::int64_t per_week = static_cast<std::int64_t>(fsw::kSecondsPerWeek) * per_second;
+  std::int64_t week = count / per_week;
+  std::int64_t rem = count - week * per_week;
+  if (rem < 0) {
+    rem += per_week;
+    --week;
+  }
+  // 1.0 / per_second is the double nearest 1/per_second (1e-6 for microseconds), exact for seconds.
+  return fsw::gps_time(static_cast<int>(week), static_cast<double>(rem) * (1.0 / static_cast<double>(per_second)) + fraction_s);
+}
+
 GpsTime gps_time_from_gtime(std::int64_t seconds, double fraction_s) {
-  return gps_from_seconds(seconds - kGpsEpochGtime_s, fraction_s);
+  return gps_time_from_count(seconds - kGpsEpochGtime_s, 1, fraction_s);
 }
 
 bool gps_time_from_calendar(int year, int month, int day, int hour, int minute, double second, GpsTime& out) {
@@ -176,7 +166,7 @@ bool gps_time_from_calendar(int year, int month, int day, int hour, int minute, 
   const double whole = std::floor(second);
   const std::int64_t secs = (days - gps_day0) * 86400 + hour * 3600 + minute * 60 + static_cast<std::int64_t>(whole);
   if (secs < 0) return false;
-  out = gps_from_seconds(secs, second - whole);
+  out = gps_time_from_count(secs, 1, second - whole);
   return true;
 }
 
@@ -274,6 +264,84 @@ bool parse_pos_time(std::string_view a, std::string_view b, GpsTime& t) {
   return true;
 }
 
+/// Data-token indices of the .pos columns (the time takes data tokens 0 and 1), from the column
+/// header; -1 for a column it does not have.
+struct PosColumns {
+  int lat = -1, lon = -1, h = -1, q = -1, ns = -1, sdn = -1, sde = -1, sdu = -1;
+  int vn = -1, ve = -1, vu = -1, sdvn = -1, sdve = -1, sdvu = -1;
+  std::size_t n_tokens = 0;  ///< data tokens of a line
+  bool has_velocity() const { return vn >= 0 && ve >= 0 && vu >= 0 && sdvn >= 0 && sdve >= 0 && sdvu >= 0; }
+};
+
+/// Reads a '%' comment line (without the '%') as the column header: false when it is another
+/// comment. A header is read whole into cols: no column index of an earlier header may survive
+/// into a layout with fewer columns (found by fuzz_importers: an out-of-range read). Throws for
+/// a layout other than GPST latitude/longitude/height or one without the columns needed.
+bool read_pos_header(std::string_view comment, PosColumns& cols) {
+  const auto tok = split_ws(comment);
+  if (tok.size() < 4 || !(tok[1].find("latitude") == 0 || tok[1].find("x-ecef") == 0 || tok[1].find("e-baseline") == 0))
+    return false;
+  if (tok[1] != "latitude(deg)")
+    throw std::runtime_error("RTKLIB .pos with positions as '" + std::string(tok[1]) +
+                             "': only latitude(deg)/longitude(deg)/height(m) is supported (rnx2rtkp -a off, "
+                             "out-solformat llh, degrees)");
+  if (tok[0] != "GPST")
+    throw std::runtime_error("RTKLIB .pos time system '" + std::string(tok[0]) + "': only GPST is supported (out-timesys gpst)");
+  // The header's name of each column read; any other column is passed over.
+  static constexpr std::pair<std::string_view, int PosColumns::*> kNames[] = {
+      {"latitude(deg)", &PosColumns::lat}, {"longitude(deg)", &PosColumns::lon}, {"height(m)", &PosColumns::h},
+      {"Q", &PosColumns::q},               {"ns", &PosColumns::ns},              {"sdn(m)", &PosColumns::sdn},
+      {"sde(m)", &PosColumns::sde},        {"sdu(m)", &PosColumns::sdu},         {"vn(m/s)", &PosColumns::vn},
+      {"ve(m/s)", &PosColumns::ve},        {"vu(m/s)", &PosColumns::vu},         {"sdvn", &PosColumns::sdvn},
+      {"sdve", &PosColumns::sdve},         {"sdvu", &PosColumns::sdvu}};
+  PosColumns c;
+  // Header token k (k >= 1) is data token k + 1: the time is two data tokens.
+  for (std::size_t k = 1; k < tok.size(); ++k)
+    for (const auto& [name, column] : kNames)
+      if (tok[k] == name) c.*column = static_cast<int>(k) + 1;
+  c.n_tokens = tok.size() + 1;
+  if (c.lat < 0 || c.lon < 0 || c.h < 0 || c.q < 0 || c.ns < 0 || c.sdn < 0 || c.sde < 0 || c.sdu < 0)
+    throw std::runtime_error("RTKLIB .pos column header lacks one of latitude, longitude, height, Q, ns, sdn, sde, sdu");
+  cols = c;
+  return true;
+}
+
+/// One data line (its tokens) as a solution at time t: "" when it is one, else why the line is
+/// rejected. The solution passes the GNSS_PVT reader's own validation (t_s is set later).
+std::string pos_solution(const std::vector<std::string_view>& tok, const PosColumns& c, GpsTime& t,
+                         hal::GnssPvtSample& p) {
+  if (tok.size() != c.n_tokens) return "wrong field count";
+  if (!parse_pos_time(tok[0], tok[1], t)) return "bad time";
+  std::vector<double> v(tok.size(), 0.0);
+  bool ok = true;
+  for (std::size_t k = 2; k < tok.size() && ok; ++k) ok = parse_double(tok[k], v[k]);
+  if (!ok) return "unparsable number";
+  bool finite = true;
+  for (std::size_t k = 2; k < tok.size(); ++k) finite = finite && std::isfinite(v[k]);
+  if (!finite) return "non-finite value";
+  const auto at = [&v](int i) { return v[static_cast<std::size_t>(i)]; };
+  p.gps_week = t.week;
+  p.gps_tow_s = t.tow_s;
+  p.llh = fsw::Vec3(at(c.lat) * fsw::kDegToRad, at(c.lon) * fsw::kDegToRad, at(c.h));
+  p.pos_sigma_enu_m = fsw::Vec3(at(c.sde), at(c.sdn), at(c.sdu));
+  if (c.has_velocity()) {
+    p.vel_enu_mps = fsw::Vec3(at(c.ve), at(c.vn), at(c.vu));
+    p.vel_sigma_enu_mps = fsw::Vec3(at(c.sdve), at(c.sdvn), at(c.sdvu));
+  } else {
+    p.vel_sigma_enu_mps = fsw::Vec3::Constant(hal::kGnssPvtNoVelocity);
+  }
+  const double q = at(c.q), ns = at(c.ns);
+  if (q != std::floor(q) || ns != std::floor(ns) || std::abs(q) > 1e6 || std::abs(ns) > 1e6) return "Q or ns not an integer";
+  p.quality = static_cast<int>(q);
+  p.n_sat = static_cast<int>(ns);
+  sdins::gnss_pvt_t m{};
+  hal::to_msg(p, m);
+  hal::GnssPvtSample check;
+  const hal::LcmInputStatus st = hal::from_msg(m, check);
+  if (st != hal::LcmInputStatus::kOk) return std::string("implausible solution (GNSS_PVT validation: ") + hal::to_string(st) + ")";
+  return "";
+}
+
 }  // namespace
 
 PosFile read_rtklib_pos(std::istream& in) {
@@ -281,10 +349,7 @@ PosFile read_rtklib_pos(std::istream& in) {
   std::string line;
   bool terminated = true;
   std::uint64_t line_no = 0;
-  // Column indices (in data tokens; the time takes tokens 0 and 1).
-  int i_lat = -1, i_lon = -1, i_h = -1, i_q = -1, i_ns = -1, i_sdn = -1, i_sde = -1, i_sdu = -1;
-  int i_vn = -1, i_ve = -1, i_vu = -1, i_sdvn = -1, i_sdve = -1, i_sdvu = -1;
-  std::size_t n_cols = 0;
+  PosColumns cols;
   bool have_header = false;
   bool have_prev = false;
   GpsTime prev;  // the first line's time: the gate's origin
@@ -300,43 +365,9 @@ PosFile read_rtklib_pos(std::istream& in) {
     const std::string_view s = trim(line);
     if (s.empty()) continue;
     if (s.front() == '%') {
-      const auto tok = split_ws(s.substr(1));
-      if (tok.size() >= 4 && (tok[1].find("latitude") == 0 || tok[1].find("x-ecef") == 0 || tok[1].find("e-baseline") == 0)) {
-        if (tok[1] != "latitude(deg)")
-          throw std::runtime_error("RTKLIB .pos with positions as '" + std::string(tok[1]) +
-                                   "': only latitude(deg)/longitude(deg)/height(m) is supported (rnx2rtkp -a off, "
-                                   "out-solformat llh, degrees)");
-        if (tok[0] != "GPST")
-          throw std::runtime_error("RTKLIB .pos time system '" + std::string(tok[0]) +
-                                   "': only GPST is supported (out-timesys gpst)");
+      if (read_pos_header(s.substr(1), cols)) {
         out.time_system = "GPST";
-        // A later column header replaces an earlier one whole: no column index of the old one may
-        // survive into a layout with fewer columns (found by fuzz_importers: an out-of-range read).
-        i_lat = i_lon = i_h = i_q = i_ns = i_sdn = i_sde = i_sdu = -1;
-        i_vn = i_ve = i_vu = i_sdvn = i_sdve = i_sdvu = -1;
-        // Header token k (k >= 1) is data token k + 1: the time is two data tokens.
-        for (std::size_t k = 1; k < tok.size(); ++k) {
-          const std::string_view n = tok[k];
-          const int idx = static_cast<int>(k) + 1;
-          if (n == "latitude(deg)") i_lat = idx;
-          else if (n == "longitude(deg)") i_lon = idx;
-          else if (n == "height(m)") i_h = idx;
-          else if (n == "Q") i_q = idx;
-          else if (n == "ns") i_ns = idx;
-          else if (n == "sdn(m)") i_sdn = idx;
-          else if (n == "sde(m)") i_sde = idx;
-          else if (n == "sdu(m)") i_sdu = idx;
-          else if (n == "vn(m/s)") i_vn = idx;
-          else if (n == "ve(m/s)") i_ve = idx;
-          else if (n == "vu(m/s)") i_vu = idx;
-          else if (n == "sdvn") i_sdvn = idx;
-          else if (n == "sdve") i_sdve = idx;
-          else if (n == "sdvu") i_sdvu = idx;
-        }
-        n_cols = tok.size() + 1;
-        if (i_lat < 0 || i_lon < 0 || i_h < 0 || i_q < 0 || i_ns < 0 || i_sdn < 0 || i_sde < 0 || i_sdu < 0)
-          throw std::runtime_error("RTKLIB .pos column header lacks one of latitude, longitude, height, Q, ns, sdn, sde, sdu");
-        out.has_velocity = i_vn >= 0 && i_ve >= 0 && i_vu >= 0 && i_sdvn >= 0 && i_sdve >= 0 && i_sdvu >= 0;
+        out.has_velocity = cols.has_velocity();
         have_header = true;
       }
       continue;
@@ -349,58 +380,11 @@ PosFile read_rtklib_pos(std::istream& in) {
       out.lines.reject(line_no, "partial last line (no newline)");
       continue;
     }
-    const auto tok = split_ws(s);
-    if (tok.size() != n_cols) {
-      out.lines.reject(line_no, "wrong field count");
-      continue;
-    }
     GpsTime t;
-    if (!parse_pos_time(tok[0], tok[1], t)) {
-      out.lines.reject(line_no, "bad time");
-      continue;
-    }
-    std::vector<double> v(tok.size(), 0.0);
-    bool ok = true;
-    for (std::size_t k = 2; k < tok.size() && ok; ++k) ok = parse_double(tok[k], v[k]);
-    if (!ok) {
-      out.lines.reject(line_no, "unparsable number");
-      continue;
-    }
-    bool finite = true;
-    for (std::size_t k = 2; k < tok.size(); ++k) finite = finite && std::isfinite(v[k]);
-    if (!finite) {
-      out.lines.reject(line_no, "non-finite value");
-      continue;
-    }
     hal::GnssPvtSample p;
-    p.gps_week = t.week;
-    p.gps_tow_s = t.tow_s;
-    p.llh = fsw::Vec3(v[static_cast<std::size_t>(i_lat)] * fsw::kDegToRad, v[static_cast<std::size_t>(i_lon)] * fsw::kDegToRad,
-                      v[static_cast<std::size_t>(i_h)]);
-    p.pos_sigma_enu_m = fsw::Vec3(v[static_cast<std::size_t>(i_sde)], v[static_cast<std::size_t>(i_sdn)],
-                                  v[static_cast<std::size_t>(i_sdu)]);
-    if (out.has_velocity) {
-      p.vel_enu_mps = fsw::Vec3(v[static_cast<std::size_t>(i_ve)], v[static_cast<std::size_t>(i_vn)],
-                                v[static_cast<std::size_t>(i_vu)]);
-      p.vel_sigma_enu_mps = fsw::Vec3(v[static_cast<std::size_t>(i_sdve)], v[static_cast<std::size_t>(i_sdvn)],
-                                      v[static_cast<std::size_t>(i_sdvu)]);
-    } else {
-      p.vel_sigma_enu_mps = fsw::Vec3::Constant(hal::kGnssPvtNoVelocity);
-    }
-    const double q = v[static_cast<std::size_t>(i_q)], ns = v[static_cast<std::size_t>(i_ns)];
-    if (q != std::floor(q) || ns != std::floor(ns) || std::abs(q) > 1e6 || std::abs(ns) > 1e6) {
-      out.lines.reject(line_no, "Q or ns not an integer");
-      continue;
-    }
-    p.quality = static_cast<int>(q);
-    p.n_sat = static_cast<int>(ns);
-    // The same validation the GNSS_PVT reader applies (t_s is set by the importer; any finite value).
-    sdins::gnss_pvt_t m{};
-    hal::to_msg(p, m);
-    hal::GnssPvtSample check;
-    const hal::LcmInputStatus st = hal::from_msg(m, check);
-    if (st != hal::LcmInputStatus::kOk) {
-      out.lines.reject(line_no, std::string("implausible solution (GNSS_PVT validation: ") + hal::to_string(st) + ")");
+    const std::string why = pos_solution(split_ws(s), cols, t, p);
+    if (!why.empty()) {
+      out.lines.reject(line_no, why);
       continue;
     }
     // Time order through the time-tag gate (docs/faults.md): seconds since the first line's week.
@@ -734,24 +718,25 @@ std::string_view field(std::string_view line, std::size_t pos, std::size_t len) 
   return line.substr(pos, std::min(len, line.size() - pos));
 }
 
-}  // namespace
+/// The observation types of each system in the order of their columns (SYS / # / OBS TYPES).
+struct RinexObsTypes {
+  std::map<char, std::vector<std::string>> by_sys;
+  /// The column of observation type t of system sys, -1 when the file has none.
+  int index(char sys, const char* t) const {
+    const auto it = by_sys.find(sys);
+    if (it == by_sys.end()) return -1;
+    for (std::size_t i = 0; i < it->second.size(); ++i)
+      if (it->second[i] == t) return static_cast<int>(i);
+    return -1;
+  }
+};
 
-std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) {
-  std::vector<RinexObsEpoch> out;
-  // Epoch times through the time-tag gate (docs/faults.md): more than 600 s ahead or any step
-  // back is a jump; a lone one costs its epoch only.
-  struct ObsRow {
-    std::uint64_t line;
-    RinexObsEpoch ep;
-  };
-  std::vector<ObsRow> rows;
-  LineTimeGate<ObsRow> gate(st.lines, rows, gate_config(600.0, 0.0, true));
-  bool have_week0 = false;
-  int week0 = 0;
+/// Reads the header through END OF HEADER (ln counts the lines read): the version into st, the
+/// observation types returned. Throws for a file that is not RINEX 3 observations.
+RinexObsTypes read_rinex3_obs_header(std::istream& in, std::uint64_t& ln, RinexObsStats& st) {
+  RinexObsTypes types;
   std::string line;
   bool terminated = true;
-  std::uint64_t ln = 0;
-  std::map<char, std::vector<std::string>> types;
   char cont_sys = 0;
   int cont_left = 0;
   bool header_done = false;
@@ -772,22 +757,56 @@ std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) 
         cont_left = static_cast<int>(n);
       }
       for (int k = 0; k < 13 && cont_left > 0; ++k, --cont_left)
-        types[cont_sys].emplace_back(trim(field(line, start + 4 * static_cast<std::size_t>(k), 3)));
+        types.by_sys[cont_sys].emplace_back(trim(field(line, start + 4 * static_cast<std::size_t>(k), 3)));
     } else if (lab == "END OF HEADER") {
       header_done = true;
     }
   }
   if (!header_done) throw std::runtime_error("RINEX obs: no END OF HEADER");
   if (st.version.empty()) throw std::runtime_error("RINEX obs: no RINEX VERSION / TYPE line");
-  const auto idx = [&](char sys, const char* t) -> int {
-    const auto it = types.find(sys);
-    if (it == types.end()) return -1;
-    for (std::size_t i = 0; i < it->second.size(); ++i)
-      if (it->second[i] == t) return static_cast<int>(i);
-    return -1;
-  };
-  if (idx('G', "C1C") < 0) throw std::runtime_error("RINEX obs: no GPS C1C observations in the header");
+  if (types.index('G', "C1C") < 0) throw std::runtime_error("RINEX obs: no GPS C1C observations in the header");
+  return types;
+}
 
+/// One satellite line of an epoch (complete, with its newline) as s: nullptr when it is one, else
+/// why the line is rejected. An observation the file has no column for, or left blank, is absent.
+const char* rinex_obs_satellite(const std::string& line, const RinexObsTypes& types, RinexObsSat& s) {
+  if (line.size() < 3) return "short satellite line";
+  s.sys = line[0];
+  std::int64_t prn = 0;
+  if (!parse_int(field(line, 1, 2), prn)) return "bad satellite id";
+  s.prn = static_cast<int>(prn);
+  const auto get = [&](const char* t, double& v, bool& has) {
+    const int i = types.index(s.sys, t);
+    has = false;
+    if (i < 0) return true;
+    const std::string_view f = trim(field(line, 3 + 16 * static_cast<std::size_t>(i), 14));
+    if (f.empty()) return true;
+    has = parse_double(f, v) && std::isfinite(v);
+    return has;
+  };
+  const bool ok = get("C1C", s.c1c_m, s.has_c1c) & get("D1C", s.d1c_hz, s.has_d1c) & get("S1C", s.s1c_dbhz, s.has_s1c);
+  return ok ? nullptr : "unparsable observation";
+}
+
+}  // namespace
+
+std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) {
+  std::vector<RinexObsEpoch> out;
+  // Epoch times through the time-tag gate (docs/faults.md): more than 600 s ahead or any step
+  // back is a jump; a lone one costs its epoch only.
+  struct ObsRow {
+    std::uint64_t line;
+    RinexObsEpoch ep;
+  };
+  std::vector<ObsRow> rows;
+  LineTimeGate<ObsRow> gate(st.lines, rows, gate_config(600.0, 0.0, true));
+  bool have_week0 = false;
+  int week0 = 0;
+  std::uint64_t ln = 0;
+  const RinexObsTypes types = read_rinex3_obs_header(in, ln, st);
+  std::string line;
+  bool terminated = true;
   while (getline_counted(in, line, terminated)) {
     ++ln;
     if (line.empty() || line[0] != '>') {
@@ -821,30 +840,9 @@ std::vector<RinexObsEpoch> read_rinex3_obs(std::istream& in, RinexObsStats& st) 
         epoch_ok = false;
         continue;
       }
-      if (line.size() < 3) {
-        st.lines.reject(ln, "short satellite line");
-        continue;
-      }
       RinexObsSat s;
-      s.sys = line[0];
-      std::int64_t prn = 0;
-      if (!parse_int(field(line, 1, 2), prn)) {
-        st.lines.reject(ln, "bad satellite id");
-        continue;
-      }
-      s.prn = static_cast<int>(prn);
-      const auto get = [&](const char* t, double& v, bool& has) {
-        const int i = idx(s.sys, t);
-        has = false;
-        if (i < 0) return true;
-        const std::string_view f = trim(field(line, 3 + 16 * static_cast<std::size_t>(i), 14));
-        if (f.empty()) return true;
-        has = parse_double(f, v) && std::isfinite(v);
-        return has;
-      };
-      const bool ok = get("C1C", s.c1c_m, s.has_c1c) & get("D1C", s.d1c_hz, s.has_d1c) & get("S1C", s.s1c_dbhz, s.has_s1c);
-      if (!ok) {
-        st.lines.reject(ln, "unparsable observation");
+      if (const char* why = rinex_obs_satellite(line, types, s)) {
+        st.lines.reject(ln, why);
         continue;
       }
       ++st.lines.accepted;

@@ -23,7 +23,7 @@ namespace tools {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr std::int64_t kWeek_us = 604800LL * 1000000LL;
+constexpr std::int64_t kWeek_us = static_cast<std::int64_t>(fsw::kSecondsPerWeek) * 1000000;
 
 /// One topic instance of the file: fields by name, values by message index.
 class Topic {
@@ -331,6 +331,40 @@ struct ImuReadStats {
   double covered_s = 0.0;            ///< sum of the integration intervals
 };
 
+/// The samples an IMU reader keeps, with the time and the counter of the last one.
+struct KeptImu {
+  std::vector<BootImu> samples;
+  std::int64_t prev_us = 0;
+  std::int32_t counter = 0;
+
+  /// Time since the previous sample kept (the integration interval idt_s for the first).
+  double since_s(std::int64_t ts_us, double idt_s) const {
+    return samples.empty() ? idt_s : static_cast<double>(ts_us - prev_us) * 1e-6;
+  }
+  bool increasing(std::int64_t ts_us) const { return samples.empty() || ts_us > prev_us; }
+
+  /// Keeps s (its increments set), as both readers do: the interval statistics (since_s over 1.5
+  /// integration intervals idt_s is a gap: lost samples), the counter advanced by the samples the
+  /// interval held, the clipping status and the counts.
+  void keep(BootImu& s, double since, double idt_s, bool accel_clipped, bool gyro_clipped, ImuReadStats& st) {
+    if (since > 1.5 * idt_s) {
+      ++st.gaps;
+      st.longest_gap_s = std::max(st.longest_gap_s, since);
+    } else {
+      st.max_interval_mismatch_s = std::max(st.max_interval_mismatch_s, std::abs(since - idt_s));
+    }
+    counter += samples.empty() ? 0 : std::max<std::int32_t>(1, static_cast<std::int32_t>(std::lround(since / idt_s)));
+    s.rec.counter = counter;
+    if (accel_clipped) s.rec.status |= sdins::imu_sample_t::STATUS_ACCEL_SATURATED;
+    if (gyro_clipped) s.rec.status |= sdins::imu_sample_t::STATUS_GYRO_SATURATED;
+    if (s.rec.status != 0) ++st.clipped;
+    st.covered_s += idt_s;
+    prev_us = s.boot_us;
+    ++st.lines.accepted;
+    samples.push_back(s);
+  }
+};
+
 /// sensor_combined: mean rates over the integration interval ending at `timestamp`; the
 /// increments cover the interval since the previous sample (rate x interval).
 std::vector<BootImu> read_sensor_combined(const Topic& t, ImuReadStats& st) {
@@ -338,9 +372,7 @@ std::vector<BootImu> read_sensor_combined(const Topic& t, ImuReadStats& st) {
                     &adt = t.need("accelerometer_integral_dt");
   const ulog::Field *arel = t.field("accelerometer_timestamp_relative"), *aclip = t.field("accelerometer_clipping"),
                     *gclip = t.field("gyro_clipping");
-  std::vector<BootImu> out;
-  std::int64_t prev = 0;
-  std::int32_t counter = 0;
+  KeptImu kept;
   for (std::size_t k : gated(t, st.lines, 1.0)) {
     const std::uint64_t line = k + 1;
     const std::int64_t ts = t.sample_time_us(k);
@@ -354,44 +386,28 @@ std::vector<BootImu> read_sensor_combined(const Topic& t, ImuReadStats& st) {
       st.lines.reject(line, "integration interval 0");
       continue;
     }
-    if (!out.empty() && ts <= prev) {
+    if (!kept.increasing(ts)) {
       st.lines.reject(line, "timestamp not increasing");
       continue;
     }
     BootImu s;
     s.boot_us = ts;
-    s.dt_boot_s = out.empty() ? idt : static_cast<double>(ts - prev) * 1e-6;
-    if (s.dt_boot_s > 1.5 * idt) {
-      ++st.gaps;
-      st.longest_gap_s = std::max(st.longest_gap_s, s.dt_boot_s);
-    } else {
-      st.max_interval_mismatch_s = std::max(st.max_interval_mismatch_s, std::abs(s.dt_boot_s - idt));
-    }
+    s.dt_boot_s = kept.since_s(ts, idt);
     if (std::isfinite(rel)) st.max_accel_time_offset_s = std::max(st.max_accel_time_offset_s, std::abs(rel) * 1e-6);
     for (int i = 0; i < 3; ++i) {
       s.rec.sample.dtheta_rad[i] = t.get(k, &g, static_cast<std::uint32_t>(i)) * s.dt_boot_s;
       s.rec.sample.dv_mps[i] = t.get(k, &a, static_cast<std::uint32_t>(i)) * s.dt_boot_s;
     }
-    counter += out.empty() ? 0 : std::max<std::int32_t>(1, static_cast<std::int32_t>(std::lround(s.dt_boot_s / idt)));
-    s.rec.counter = counter;
-    if (t.get(k, aclip) > 0.0) s.rec.status |= sdins::imu_sample_t::STATUS_ACCEL_SATURATED;
-    if (t.get(k, gclip) > 0.0) s.rec.status |= sdins::imu_sample_t::STATUS_GYRO_SATURATED;
-    if (s.rec.status != 0) ++st.clipped;
-    st.covered_s += idt;
-    prev = ts;
-    ++st.lines.accepted;
-    out.push_back(s);
+    kept.keep(s, s.dt_boot_s, idt, t.get(k, aclip) > 0.0, t.get(k, gclip) > 0.0, st);
   }
-  return out;
+  return kept.samples;
 }
 
 /// vehicle_imu: increments over delta_angle_dt ending at timestamp_sample, as logged.
 std::vector<BootImu> read_vehicle_imu(const Topic& t, ImuReadStats& st) {
   const ulog::Field &da = t.need("delta_angle"), &dv = t.need("delta_velocity"), &dadt = t.need("delta_angle_dt");
   const ulog::Field *vclip = t.field("delta_velocity_clipping"), *aclip = t.field("delta_angle_clipping");
-  std::vector<BootImu> out;
-  std::int64_t prev = 0;
-  std::int32_t counter = 0;
+  KeptImu kept;
   for (std::size_t k : gated(t, st.lines, 1.0)) {
     const std::uint64_t line = k + 1;
     const std::int64_t ts = t.sample_time_us(k);
@@ -400,35 +416,21 @@ std::vector<BootImu> read_vehicle_imu(const Topic& t, ImuReadStats& st) {
       st.lines.reject(line, "integration interval 0");
       continue;
     }
-    if (!out.empty() && ts <= prev) {
+    if (!kept.increasing(ts)) {
       st.lines.reject(line, "timestamp_sample not increasing");
       continue;
     }
     BootImu s;
     s.boot_us = ts;
     s.dt_boot_s = idt;  // the increments cover their own interval; a longer gap before it is lost data
-    const double since = out.empty() ? idt : static_cast<double>(ts - prev) * 1e-6;
-    if (since > 1.5 * idt) {
-      ++st.gaps;
-      st.longest_gap_s = std::max(st.longest_gap_s, since);
-    } else {
-      st.max_interval_mismatch_s = std::max(st.max_interval_mismatch_s, std::abs(since - idt));
-    }
+    const double since = kept.since_s(ts, idt);
     for (int i = 0; i < 3; ++i) {
       s.rec.sample.dtheta_rad[i] = t.get(k, &da, static_cast<std::uint32_t>(i));
       s.rec.sample.dv_mps[i] = t.get(k, &dv, static_cast<std::uint32_t>(i));
     }
-    counter += out.empty() ? 0 : std::max<std::int32_t>(1, static_cast<std::int32_t>(std::lround(since / idt)));
-    s.rec.counter = counter;
-    if (t.get(k, vclip) > 0.0) s.rec.status |= sdins::imu_sample_t::STATUS_ACCEL_SATURATED;
-    if (t.get(k, aclip) > 0.0) s.rec.status |= sdins::imu_sample_t::STATUS_GYRO_SATURATED;
-    if (s.rec.status != 0) ++st.clipped;
-    st.covered_s += idt;
-    prev = ts;
-    ++st.lines.accepted;
-    out.push_back(s);
+    kept.keep(s, since, idt, t.get(k, vclip) > 0.0, t.get(k, aclip) > 0.0, st);
   }
-  return out;
+  return kept.samples;
 }
 
 /// Fraction of the topic's time span its integration intervals cover (1: no lost samples).
@@ -648,13 +650,13 @@ double param(const ulog::File& f, const char* name) {
 
 nlohmann::json time_fit_json(const UlogClockFit& clock, const UlogImportOptions& opt, double ekf2_delay_ms,
                              std::int64_t last_utc_us) {
-  const double boot0_gps = clock.gps_s(clock.boot0_us);
+  const GpsTime first_fix = fsw::gps_time(0, clock.gps_s(clock.boot0_us));
   return {
       {"pairs", clock.pairs},
       {"outliers", clock.outliers},
       {"first_fix_boot_s", static_cast<double>(clock.boot0_us) * 1e-6},
-      {"first_fix_gps_week", static_cast<int>(std::floor(boot0_gps / 604800.0))},
-      {"first_fix_gps_tow_s", boot0_gps - 604800.0 * std::floor(boot0_gps / 604800.0)},
+      {"first_fix_gps_week", first_fix.week},
+      {"first_fix_gps_tow_s", first_fix.tow_s},
       {"offset_s", clock.offset_s},
       {"drift_ppm", clock.drift * 1e6},
       {"fitted_drift_ppm", clock.fitted_drift * 1e6},
@@ -753,7 +755,7 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
   double first_gps = clock.gps_s(gps.front().boot_us - latency_us);
   if (!imu.empty()) first_gps = std::min(first_gps, clock.gps_s(imu.front().boot_us));
   for (const GpsRow& r : gps) first_gps = std::min(first_gps, static_cast<double>(gps_us_from_utc_us(r.utc_us)) * 1e-6);
-  const int week0 = static_cast<int>(std::floor(first_gps / 604800.0));
+  const int week0 = fsw::gps_time(0, first_gps).week;
   const std::int64_t week0_us = static_cast<std::int64_t>(week0) * kWeek_us;
 
   Converted c;
@@ -766,8 +768,9 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
   for (const GpsRow& g : gps) {
     hal::GnssPvtSample p = g.pvt;
     const std::int64_t gus = gps_us_from_utc_us(g.utc_us);  // the receiver's own time of the fix
-    p.gps_week = static_cast<int>(gus / kWeek_us);
-    p.gps_tow_s = static_cast<double>(gus % kWeek_us) * 1e-6;
+    const GpsTime fix = gps_time_from_count(gus, 1000000);
+    p.gps_week = fix.week;
+    p.gps_tow_s = fix.tow_s;
     p.t_s = static_cast<double>(gus - week0_us) * 1e-6;
     c.pvt.push_back(p);
   }

@@ -23,7 +23,7 @@ struct GpsEphemeris {
   int prn = 0;
   int week = 0;          ///< full GPS week of toe
   double toe_s = 0.0;    ///< ephemeris reference time, seconds of `week`
-  double toc_s = 0.0;    ///< clock reference time, seconds of `week` (may lie outside [0, 604800) at a week boundary)
+  double toc_s = 0.0;    ///< clock reference time, seconds of `week` (may lie outside [0, fsw::kSecondsPerWeek) at a week boundary)
   double af0_s = 0.0, af1_sps = 0.0, af2_sps2 = 0.0;
   double crs_m = 0.0, crc_m = 0.0;
   double cus_rad = 0.0, cuc_rad = 0.0, cis_rad = 0.0, cic_rad = 0.0;

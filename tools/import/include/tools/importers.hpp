@@ -8,7 +8,7 @@
 // Conventions of the imported logs:
 // - time: t_s = GPS time in seconds since the start of the GPS week of the recording's earliest
 //   sample (ImportTimeScale): within that week t_s is the GPS time of week, so it can be compared
-//   directly with gps_tow_s and with the source files; it keeps counting past 604800 s across a
+//   directly with gps_tow_s and with the source files; it keeps counting past fsw::kSecondsPerWeek across a
 //   week rollover. IMU, GNSS_RAW, GNSS_PVT, TRUTH and GPS_ALMANAC share it.
 // - IMU: body axes x forward, y right, z down (fsw/frames.hpp) through a signed axis permutation
 //   per data set (AxisMap); increments in rad and m/s over (t_s - dt_s, t_s].
@@ -36,10 +36,16 @@ namespace tools {
 /// of the GPS epoch 1980-01-06 00:00:00.
 inline constexpr std::int64_t kGpsEpochGtime_s = 315964800;
 
-struct GpsTime {
-  int week = 0;          ///< full GPS week
-  double tow_s = 0.0;    ///< seconds of the week, [0, 604800)
-};
+/// Full GPS week and seconds of the week: the flight software's type (one GPS time, one week wrap:
+/// fsw::gps_time).
+using GpsTime = fsw::GpsTime;
+
+/// GPS time of `count` units of 1 / per_second s since the GPS epoch (whole seconds: 1,
+/// microseconds: 1000000), plus fraction_s. The whole weeks are split off in integers before
+/// anything is a double, so the seconds of the week keep the count's resolution (a double of the
+/// ~1.4e9 s since 1980 resolves only 0.24 us, and would lose a fraction kept apart), then
+/// fsw::gps_time wraps. The importers' one integer week split.
+GpsTime gps_time_from_count(std::int64_t count, std::int64_t per_second, double fraction_s = 0.0);
 
 /// GPS time from RTKLIB gtime_t seconds (integer part and fraction, kept apart for precision).
 GpsTime gps_time_from_gtime(std::int64_t seconds, double fraction_s);
