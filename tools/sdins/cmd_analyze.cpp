@@ -20,12 +20,12 @@ using fsw::kDegToRad;
 using fsw::kRadToArcsec;
 using nlohmann::json;
 
-struct Options {
+struct AnalyzeOptions {
   std::string out = "out/analysis";
   ScenarioOptions scenario;
   double gamma_arcsec = 20.0;
   bool plots = true;
-} opt;
+} analyze_opt;
 
 json vec_arcsec(const fsw::Vec3& v) { return json::array({v.x() * kRadToArcsec, v.y() * kRadToArcsec, v.z() * kRadToArcsec}); }
 
@@ -72,15 +72,15 @@ void register_analyze(CLI::App& app) {
       "Paper section II: self-alignment errors, attitude error under single-axis rotation with one gyro "
       "misalignment (5 and 10 arcsec), and the bank-to-turn accumulation of the heading error for each of the "
       "six gyro misalignments. Writes CSV, PNG plots, summary.md and analysis.json to --out.");
-  sub->add_option("--out", opt.out, "output directory")->capture_default_str();
-  add_scenario_options(sub, opt.scenario);
-  sub->add_option("--gamma", opt.gamma_arcsec, "gyro misalignment for the bank-to-turn cases [arcsec]")
+  sub->add_option("--out", analyze_opt.out, "output directory")->capture_default_str();
+  add_scenario_options(sub, analyze_opt.scenario);
+  sub->add_option("--gamma", analyze_opt.gamma_arcsec, "gyro misalignment for the bank-to-turn cases [arcsec]")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 3600.0));
-  sub->add_flag("!--no-plots", opt.plots, "skip the PNG plots (matplotlib)");
+  sub->add_flag("!--no-plots", analyze_opt.plots, "skip the PNG plots (matplotlib)");
 }
 
-int run_analyze() { return run_analysis(opt.scenario.load(), opt.out, opt.gamma_arcsec, opt.plots); }
+int run_analyze() { return run_analysis(analyze_opt.scenario.load(), analyze_opt.out, analyze_opt.gamma_arcsec, analyze_opt.plots); }
 
 int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gamma_arcsec, bool plots) {
   namespace fs = std::filesystem;

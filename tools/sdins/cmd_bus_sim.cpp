@@ -13,7 +13,7 @@
 namespace sdins {
 namespace {
 
-struct Options {
+struct BusSimOptions {
   ScenarioOptions scenario;
   std::string bus;
   bool lockstep = false;
@@ -23,7 +23,7 @@ struct Options {
   int pace_every = 1;
   double ack_timeout_s = 10.0;
   std::string json;
-} opt;
+} bus_sim_opt;
 
 }  // namespace
 
@@ -31,46 +31,46 @@ void register_bus_sim(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "bus-sim", "Play a scenario's simulated IMU and GPS receiver onto a CAN bus for `sdins fsw`: in lockstep "
                  "(as fast as the flight software acknowledges, no frame dropped) or in real time.");
-  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; append ?scope=lan to reach the network)")->required();
-  add_scenario_options(sub, opt.scenario);
+  sub->add_option("--can", bus_sim_opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; append ?scope=lan to reach the network)")->required();
+  add_scenario_options(sub, bus_sim_opt.scenario);
   auto* mode = sub->add_option_group("mode");
-  CLI::Option* lockstep = mode->add_flag("--lockstep", opt.lockstep, "wait for FSW_ACK: never more than --window IMU samples ahead");
-  CLI::Option* realtime = mode->add_flag("--realtime", opt.realtime, "pace the IMU samples on CLOCK_MONOTONIC (clock_nanosleep)");
+  CLI::Option* lockstep = mode->add_flag("--lockstep", bus_sim_opt.lockstep, "wait for FSW_ACK: never more than --window IMU samples ahead");
+  CLI::Option* realtime = mode->add_flag("--realtime", bus_sim_opt.realtime, "pace the IMU samples on CLOCK_MONOTONIC (clock_nanosleep)");
   mode->require_option(1);
-  sub->add_option("--window", opt.window, "lockstep: IMU samples allowed beyond the last acknowledged [samples]")
+  sub->add_option("--window", bus_sim_opt.window, "lockstep: IMU samples allowed beyond the last acknowledged [samples]")
       ->capture_default_str()
       ->check(CLI::Range(1, 65535))
       ->needs(lockstep);  // docs/faults.md: an option that would do nothing is refused
-  sub->add_option("--speed", opt.speed, "realtime: time factor (2 = twice as fast)")
+  sub->add_option("--speed", bus_sim_opt.speed, "realtime: time factor (2 = twice as fast)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber)
       ->needs(realtime);
-  sub->add_option("--pace-every", opt.pace_every, "realtime: sleep before every N-th IMU sample [samples]")
+  sub->add_option("--pace-every", bus_sim_opt.pace_every, "realtime: sleep before every N-th IMU sample [samples]")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000))
       ->needs(realtime);
-  sub->add_option("--ack-timeout", opt.ack_timeout_s,
+  sub->add_option("--ack-timeout", bus_sim_opt.ack_timeout_s,
                   "give up when no flight software answers / acknowledges for this long [s]")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  sub->add_option("--json", opt.json, "write the run's counters as JSON");
+  sub->add_option("--json", bus_sim_opt.json, "write the run's counters as JSON");
 }
 
 int run_bus_sim() {
-  tools::require_distinct({opt.json}, {opt.scenario.file});
-  const sim::Scenario sc = opt.scenario.load();
+  tools::require_distinct({bus_sim_opt.json}, {bus_sim_opt.scenario.file});
+  const sim::Scenario sc = bus_sim_opt.scenario.load();
   sim::SensorStream stream(sc);
   hal::CanBus bus;
-  if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
+  if (bus.open(bus_sim_opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
   tools::BusSimConfig cfg;
-  cfg.lockstep = opt.lockstep;
-  cfg.window_imu = opt.window;
-  cfg.speed = opt.speed;
-  cfg.pace_every = opt.pace_every;
-  cfg.ack_timeout_s = opt.ack_timeout_s;
+  cfg.lockstep = bus_sim_opt.lockstep;
+  cfg.window_imu = bus_sim_opt.window;
+  cfg.speed = bus_sim_opt.speed;
+  cfg.pace_every = bus_sim_opt.pace_every;
+  cfg.ack_timeout_s = bus_sim_opt.ack_timeout_s;
   cfg.seed = sc.seed;
   std::fprintf(stderr, "sdins bus-sim: %s, %s on %s, %.3f s, seed %llu\n", sc.name.c_str(),
-               opt.lockstep ? "lockstep" : "realtime", opt.bus.c_str(), sc.duration_s,
+               bus_sim_opt.lockstep ? "lockstep" : "realtime", bus_sim_opt.bus.c_str(), sc.duration_s,
                static_cast<unsigned long long>(sc.seed));
   const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the run, counters printed
   const tools::BusSimResult r = tools::run_bus_sim(bus, stream, cfg, &tools::interrupt_flag());
@@ -80,8 +80,8 @@ int run_bus_sim() {
   std::printf("acks: %lld received, final %s (fsw took %u frames, %u IMU, %u nav frames); foreign frames %lld\n",
               r.acks_received, r.final_ack ? "yes" : "no", r.last_ack.frames, r.last_ack.imu_frames,
               r.last_ack.nav_frames, r.foreign_frames);
-  if (opt.lockstep)
-    std::printf("lockstep: window %d, max ahead %lld IMU samples, window full %lld times (%.3f s waited)\n", opt.window,
+  if (bus_sim_opt.lockstep)
+    std::printf("lockstep: window %d, max ahead %lld IMU samples, window full %lld times (%.3f s waited)\n", bus_sim_opt.window,
                 r.max_ahead_imu, r.window_waits, r.window_wait_s);
   else
     std::printf("realtime: %lld paced sleeps, lateness mean %.6f s max %.6f s\n", r.paced, r.late_mean_s,
@@ -89,7 +89,7 @@ int run_bus_sim() {
   std::printf("encoder: %lld IMU rejected, %lld flagged, %lld measurements skipped, %lld epochs rejected, %lld "
               "almanac rejected; tx busy retries %lld\n",
               r.imu_rejected, r.imu_flagged, r.gps_skipped, r.gps_rejected, r.almanac_rejected, r.tx_busy_retries);
-  if (!opt.json.empty()) tools::write_json_file(opt.json, tools::to_json(r));
+  if (!bus_sim_opt.json.empty()) tools::write_json_file(bus_sim_opt.json, tools::to_json(r));
   if (tools::interrupted()) {
     std::fprintf(stderr, "sdins bus-sim: stopped by %s\n", tools::interrupt_signal_name().c_str());
     return tools::interrupt_exit_code();

@@ -25,7 +25,7 @@
 namespace sdins {
 namespace {
 
-struct Options {
+struct CanOptions {
   // encode
   ScenarioOptions scenario;
   std::string out;
@@ -40,7 +40,7 @@ struct Options {
   bool realtime = false;
   double speed = 1.0;
   double gap_s = 0.0;
-} opt;
+} can_opt;
 
 CLI::App* g_encode = nullptr;
 CLI::App* g_dump = nullptr;
@@ -73,13 +73,13 @@ class ExpectedCsv {
 };
 
 int run_encode() {
-  tools::require_distinct({opt.out, opt.expected}, {opt.scenario.file});
-  const sim::Scenario sc = opt.scenario.load();
+  tools::require_distinct({can_opt.out, can_opt.expected}, {can_opt.scenario.file});
+  const sim::Scenario sc = can_opt.scenario.load();
   sim::SensorStream stream(sc);
   hal::CandumpWriter w;
-  if (!w.open(opt.out)) throw std::runtime_error(w.error());
+  if (!w.open(can_opt.out)) throw std::runtime_error(w.error());
   ExpectedCsv csv;
-  if (!opt.expected.empty()) csv.open(opt.expected);
+  if (!can_opt.expected.empty()) csv.open(can_opt.expected);
 
   // One encoder state per bus (IMU residual and counter, GPS epoch sequence), as
   // hal::can::CanStepEncoder keeps it; frames are written one by one to pair them with the CSV.
@@ -93,7 +93,7 @@ int run_encode() {
   int imu_rejected = 0, imu_flagged = 0, gps_skipped = 0, gps_rejected = 0, alm_rejected = 0;
   auto put = [&](hal::CanFrame& f, double t) {
     f.timestamp_s = t;
-    if (!w.write(f, opt.iface)) throw std::runtime_error(w.error());
+    if (!w.write(f, can_opt.iface)) throw std::runtime_error(w.error());
     ++line;
   };
   const double pi = hal::can::kSemicircle_rad;
@@ -188,7 +188,7 @@ int run_encode() {
   if (!w.close()) throw std::runtime_error("cannot write " + w.error());
   csv.commit();
   std::printf("sdins can encode: %d frames (%ld IMU samples, %ld GPS epochs, %ld almanac) -> %s\n", w.frames(), n_imu,
-              n_epochs, n_alm, opt.out.c_str());
+              n_epochs, n_alm, can_opt.out.c_str());
   std::printf("  encoder: %d IMU samples rejected, %d flagged, %d measurements skipped, %d epochs rejected, %d almanac "
               "entries rejected\n",
               imu_rejected, imu_flagged, gps_skipped, gps_rejected, alm_rejected);
@@ -209,14 +209,14 @@ void drain(hal::CanRxAssembler& rx, long long& items) {
   fsw::ImuSample s;
   while (rx.pop_imu(s)) {
     ++items;
-    if (!opt.quiet)
+    if (!can_opt.quiet)
       std::printf("imu t=%.9f dt=%.9f dtheta_rad=%.11e,%.11e,%.11e dv_mps=%.9e,%.9e,%.9e\n", s.t_s, s.dt_s,
                   s.dtheta_rad(0), s.dtheta_rad(1), s.dtheta_rad(2), s.dv_mps(0), s.dv_mps(1), s.dv_mps(2));
   }
   fsw::GnssRawEpoch e;
   while (rx.pop_gps(e)) {
     ++items;
-    if (opt.quiet) continue;
+    if (can_opt.quiet) continue;
     std::printf("gps t=%.9f week=%d tow_s=%.9f n_meas=%d\n", e.t_s, e.gps_week, e.gps_tow_s, e.n_meas);
     for (int i = 0; i < e.n_meas; ++i) {
       const fsw::GnssRawMeasurement& m = e.meas[static_cast<std::size_t>(i)];
@@ -227,7 +227,7 @@ void drain(hal::CanRxAssembler& rx, long long& items) {
   fsw::GpsAlmanac a;
   while (rx.pop_almanac(a)) {
     ++items;
-    if (!opt.quiet)
+    if (!can_opt.quiet)
       std::printf("almanac prn=%d health=%d week=%d toa_s=%.4f e=%.10e i0_rad=%.12f omegadot_radps=%.6e sqrtA=%.8f "
                   "omega0_rad=%.12f w_rad=%.12f M0_rad=%.12f af0_s=%.6e af1_sps=%.6e\n",
                   a.prn, a.health, a.week_mod_1024, a.toa_s, a.eccentricity, a.inclination_rad, a.omega_dot_radps,
@@ -235,22 +235,22 @@ void drain(hal::CanRxAssembler& rx, long long& items) {
   }
 }
 
-/// Receives frames from bus into on_frame(f), counted in n, until opt.count of them (0: no limit),
-/// a signal ("SIGNAL: <stopped>" printed; the signal's exit code) or a silent bus for opt.timeout_s
+/// Receives frames from bus into on_frame(f), counted in n, until can_opt.count of them (0: no limit),
+/// a signal ("SIGNAL: <stopped>" printed; the signal's exit code) or a silent bus for can_opt.timeout_s
 /// (printed; exit code 2 when a count was asked for, else 0). Returns the exit code.
 template <class OnFrame>
 int receive_frames(hal::CanBus& bus, const char* stopped, long long& n, OnFrame on_frame) {
-  while (opt.count <= 0 || n < opt.count) {
+  while (can_opt.count <= 0 || n < can_opt.count) {
     hal::CanFrame f;
     // docs/faults.md: a signal ends the wait at once; the frames received so far are kept.
-    const hal::CanBusStatus st = bus.receive(f, opt.timeout_s, tools::interrupt_flag());
+    const hal::CanBusStatus st = bus.receive(f, can_opt.timeout_s, tools::interrupt_flag());
     if (st == hal::CanBusStatus::kStopped) {
       std::printf("%s: %s\n", tools::interrupt_signal_name().c_str(), stopped);
       return tools::interrupt_exit_code();
     }
     if (st == hal::CanBusStatus::kTimeout) {
-      std::printf("silent bus: no frame for %.3f s\n", opt.timeout_s);
-      return opt.count > 0 ? 2 : 0;
+      std::printf("silent bus: no frame for %.3f s\n", can_opt.timeout_s);
+      return can_opt.count > 0 ? 2 : 0;
     }
     if (st != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
     on_frame(f);
@@ -263,32 +263,32 @@ int run_dump() {
   hal::CanRxAssembler rx;
   long long items = 0;
   long long frames = 0;
-  if (!opt.log.empty()) {
+  if (!can_opt.log.empty()) {
     hal::CandumpReader r;
-    if (!r.open(opt.log)) throw std::runtime_error(r.error());
+    if (!r.open(can_opt.log)) throw std::runtime_error(r.error());
     hal::CanFrame f;
     std::string iface;
-    while ((opt.count <= 0 || frames < opt.count) && r.next(f, iface)) {
+    while ((can_opt.count <= 0 || frames < can_opt.count) && r.next(f, iface)) {
       ++frames;
       rx.push(f, f.timestamp_s);
       drain(rx, items);
     }
     rx.flush();
     drain(rx, items);
-    std::printf("log %s: %d lines, %d frames, %d malformed lines\n", opt.log.c_str(), r.lines(), r.frames(),
+    std::printf("log %s: %d lines, %d frames, %d malformed lines\n", can_opt.log.c_str(), r.lines(), r.frames(),
                 r.bad_lines());
     for (const std::string& p : r.problems()) std::printf("  %s\n", p.c_str());
     print_health(rx.health());
     if (!r.error().empty()) throw std::runtime_error(r.error());
     // docs/faults.md: an input with nothing valid in it is an error, not an empty success.
     if (r.frames() == 0)
-      throw std::runtime_error(opt.log + ": no valid candump frame in " + std::to_string(r.lines()) + " lines");
+      throw std::runtime_error(can_opt.log + ": no valid candump frame in " + std::to_string(r.lines()) + " lines");
     return 0;
   }
   const tools::InterruptPolling polling;  // SIGINT/SIGTERM end the dump with the counters so far
   hal::CanBus bus;
-  if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
-  std::fprintf(stderr, "sdins can dump: listening on %s\n", opt.bus.c_str());
+  if (bus.open(can_opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
+  std::fprintf(stderr, "sdins can dump: listening on %s\n", can_opt.bus.c_str());
   const int rc = receive_frames(bus, "stopped", frames, [&](const hal::CanFrame& f) {
     rx.push(f, f.timestamp_s);
     drain(rx, items);
@@ -304,36 +304,36 @@ int run_dump() {
 int run_record() {
   const tools::InterruptPolling polling;  // SIGINT/SIGTERM end the recording: the log is kept complete
   hal::CanBus bus;
-  if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
+  if (bus.open(can_opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
   hal::CandumpWriter w;
-  if (!w.open(opt.out)) throw std::runtime_error(w.error());
-  std::fprintf(stderr, "sdins can record: listening on %s\n", opt.bus.c_str());
+  if (!w.open(can_opt.out)) throw std::runtime_error(w.error());
+  std::fprintf(stderr, "sdins can record: listening on %s\n", can_opt.bus.c_str());
   std::fflush(stderr);
-  const std::string iface = opt.iface;
+  const std::string iface = can_opt.iface;
   long long n = 0;
   const int rc = receive_frames(bus, "recording stopped", n, [&](const hal::CanFrame& f) {
     if (!w.write(f, iface)) throw std::runtime_error("cannot write " + w.error());
   });
   if (!w.close()) throw std::runtime_error("cannot write " + w.error());
-  std::printf("recorded %lld frames -> %s\n", n, opt.out.c_str());
+  std::printf("recorded %lld frames -> %s\n", n, can_opt.out.c_str());
   print_bus_stats(bus);
   return rc;
 }
 
 int run_play() {
   hal::CandumpReader r;
-  if (!r.open(opt.log)) throw std::runtime_error(r.error());
+  if (!r.open(can_opt.log)) throw std::runtime_error(r.error());
   hal::CanBus bus;
-  if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
+  if (bus.open(can_opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
   using Clock = std::chrono::steady_clock;
   const Clock::time_point t0 = Clock::now();
   long long n = 0;
   const auto send = [&](const hal::CanFrame& f, double play_s) {
-    if (opt.realtime)
+    if (can_opt.realtime)
       std::this_thread::sleep_until(
-          t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(play_s / opt.speed)));
-    else if (opt.gap_s > 0.0 && n > 0)
-      std::this_thread::sleep_for(std::chrono::duration<double>(opt.gap_s));
+          t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(play_s / can_opt.speed)));
+    else if (can_opt.gap_s > 0.0 && n > 0)
+      std::this_thread::sleep_for(std::chrono::duration<double>(can_opt.gap_s));
     const hal::CanBusStatus st = bus.send(f);
     if (st != hal::CanBusStatus::kOk)
       throw std::runtime_error("send frame " + std::to_string(n + 1) + ": " + hal::to_string(st) + ": " + bus.last_error());
@@ -346,8 +346,8 @@ int run_play() {
   std::string iface;
   double play_s = 0.0;
   bool log_left = true;
-  while (opt.count <= 0 || n < opt.count) {
-    if (!opt.realtime) {
+  while (can_opt.count <= 0 || n < can_opt.count) {
+    if (!can_opt.realtime) {
       if (!r.next(f, iface)) break;
       send(f, 0.0);
     } else if (pacer.pop(f, play_s)) {
@@ -361,9 +361,9 @@ int run_play() {
       log_left = false;
     }
   }
-  std::printf("played %lld frames from %s (%d lines, %d malformed)\n", n, opt.log.c_str(), r.lines(), r.bad_lines());
+  std::printf("played %lld frames from %s (%d lines, %d malformed)\n", n, can_opt.log.c_str(), r.lines(), r.bad_lines());
   for (const std::string& p : r.problems()) std::printf("  %s\n", p.c_str());
-  if (opt.realtime) {
+  if (can_opt.realtime) {
     const hal::TimeTagGateStats& g = pacer.stats();
     std::printf("time tags: %llu outliers (sent without pacing), %llu new time bases",
                 static_cast<unsigned long long>(g.rejected()), static_cast<unsigned long long>(g.new_bases));
@@ -383,40 +383,40 @@ void register_can(CLI::App& app) {
 
   g_encode = can->add_subcommand("encode", "Fly a scenario's IMU and GPS receiver models and write the protocol frames "
                                            "to a candump log (frame timestamps = simulation time).");
-  add_scenario_options(g_encode, opt.scenario);
-  g_encode->add_option("--out", opt.out, "candump log to write")->required();
-  g_encode->add_option("--expected", opt.expected,
+  add_scenario_options(g_encode, can_opt.scenario);
+  g_encode->add_option("--out", can_opt.out, "candump log to write")->required();
+  g_encode->add_option("--expected", can_opt.expected,
                        "also write a CSV of the physical value every signal must decode to (line,message,signal,"
                        "value,tolerance), from the encoder's inputs");
-  g_encode->add_option("--iface", opt.iface, "interface name in the log")->capture_default_str();
+  g_encode->add_option("--iface", can_opt.iface, "interface name in the log")->capture_default_str();
 
   g_dump = can->add_subcommand("dump", "Decode frames from a bus (--can) or a candump log (--log) and print the "
                                        "physical values, then the receive health counters.");
   auto* src = g_dump->add_option_group("source");
-  src->add_option("--can", opt.bus, "bus to listen on");
-  src->add_option("--log", opt.log, "candump log to decode");
+  src->add_option("--can", can_opt.bus, "bus to listen on");
+  src->add_option("--log", can_opt.log, "candump log to decode");
   src->require_option(1);
-  g_dump->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent / the log ends)")->capture_default_str()->check(CLI::NonNegativeNumber);
-  g_dump->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the dump [s]")->capture_default_str()->check(tools::positive());
-  g_dump->add_flag("--quiet", opt.quiet, "print only the counters");
+  g_dump->add_option("--count", can_opt.count, "stop after N frames (0: until the bus is silent / the log ends)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  g_dump->add_option("--timeout", can_opt.timeout_s, "a bus silent this long ends the dump [s]")->capture_default_str()->check(tools::positive());
+  g_dump->add_flag("--quiet", can_opt.quiet, "print only the counters");
 
   g_record = can->add_subcommand("record", "Record frames from a bus into a candump log.");
-  g_record->add_option("--can", opt.bus, "bus to listen on")->required();
-  g_record->add_option("--out", opt.out, "candump log to write")->required();
-  g_record->add_option("--count", opt.count, "stop after N frames (0: until the bus is silent)")->capture_default_str()->check(CLI::NonNegativeNumber);
-  g_record->add_option("--timeout", opt.timeout_s, "a bus silent this long ends the recording [s]")->capture_default_str()->check(tools::positive());
-  g_record->add_option("--iface", opt.iface, "interface name in the log")->capture_default_str();
+  g_record->add_option("--can", can_opt.bus, "bus to listen on")->required();
+  g_record->add_option("--out", can_opt.out, "candump log to write")->required();
+  g_record->add_option("--count", can_opt.count, "stop after N frames (0: until the bus is silent)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  g_record->add_option("--timeout", can_opt.timeout_s, "a bus silent this long ends the recording [s]")->capture_default_str()->check(tools::positive());
+  g_record->add_option("--iface", can_opt.iface, "interface name in the log")->capture_default_str();
 
   g_play = can->add_subcommand("play", "Send the frames of a candump log onto a bus.");
-  g_play->add_option("log", opt.log, "candump log")->required();
-  g_play->add_option("--can", opt.bus, "bus to send on")->required();
-  g_play->add_option("--count", opt.count, "send only the first N frames (0: all)")->capture_default_str()->check(CLI::NonNegativeNumber);
-  CLI::Option* realtime = g_play->add_flag("--realtime", opt.realtime, "pace the frames by the log's timestamps");
-  g_play->add_option("--speed", opt.speed, "with --realtime: time factor (2 = twice as fast)")
+  g_play->add_option("log", can_opt.log, "candump log")->required();
+  g_play->add_option("--can", can_opt.bus, "bus to send on")->required();
+  g_play->add_option("--count", can_opt.count, "send only the first N frames (0: all)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  CLI::Option* realtime = g_play->add_flag("--realtime", can_opt.realtime, "pace the frames by the log's timestamps");
+  g_play->add_option("--speed", can_opt.speed, "with --realtime: time factor (2 = twice as fast)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber)
       ->needs(realtime);  // docs/faults.md: an option that would do nothing is refused
-  g_play->add_option("--gap", opt.gap_s, "without --realtime: pause between frames [s]")
+  g_play->add_option("--gap", can_opt.gap_s, "without --realtime: pause between frames [s]")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber)
       ->excludes(realtime);

@@ -22,7 +22,7 @@
 
 namespace sdins {
 namespace {
-struct Options {
+struct DiagnoseOptions {
   std::string log;
   std::string json;
   std::string report;
@@ -33,7 +33,7 @@ struct Options {
   std::vector<std::string> profile;
   bool profile_only = false;
   bool no_chain = false;
-} opt;
+} diagnose_opt;
 
 nlohmann::json innovations_json(const tools::InnovationStats& s) {
   return {{"epochs", s.epochs},
@@ -442,37 +442,37 @@ void register_diagnose(CLI::App& app) {
       "score): tests every component of the effect catalogue as an extension of the baseline model with a "
       "chi-square test at a stated family-wise false-alarm rate, names the significant ones (and those the data "
       "cannot tell apart), re-runs with the extended model and measures the gain.");
-  sub->add_option("--log", opt.log, "LCM log to diagnose")->required()->check(CLI::ExistingFile);
-  sub->add_option("--json", opt.json, "write the result as JSON (docs/diagnosis.md)")->required();
-  sub->add_option("--report", opt.report, "write a markdown report with plots and CSV traces into this directory");
+  sub->add_option("--log", diagnose_opt.log, "LCM log to diagnose")->required()->check(CLI::ExistingFile);
+  sub->add_option("--json", diagnose_opt.json, "write the result as JSON (docs/diagnosis.md)")->required();
+  sub->add_option("--report", diagnose_opt.report, "write a markdown report with plots and CSV traces into this directory");
   // Not model_help(): in the diagnosis the 15-state baseline has no consider states; what it leaves
   // out (the misalignments among them) is what the catalogue tests.
-  sub->add_option("--baseline", opt.baseline,
+  sub->add_option("--baseline", diagnose_opt.baseline,
                   "baseline model the effect catalogue extends (with the receiver clock and Gauss-Markov GPS "
                   "errors in both): 15 (position, velocity, attitude, gyro and accelerometer biases; the "
                   "misalignments are not modelled, they are among the components tested), 24 (the 15 plus 3 "
                   "accelerometer and 6 gyro misalignments, estimated)")
       ->check(CLI::IsMember(model_names(kFlightModels)))
       ->capture_default_str();
-  sub->add_option("--alpha", opt.alpha, "family-wise false-alarm rate of the diagnosis")
+  sub->add_option("--alpha", diagnose_opt.alpha, "family-wise false-alarm rate of the diagnosis")
       ->check(CLI::Range(1e-9, 0.5))
       ->capture_default_str();
-  sub->add_option("--intervals", opt.intervals,
+  sub->add_option("--intervals", diagnose_opt.intervals,
                   "95% interval of each finding and group member alone: profile (the profile likelihood over the whole recording, "
                   "docs/diagnosis-intervals.md) or filter (the filter's estimate +- 1.96 sigma, faster)")
       ->check(CLI::IsMember({"profile", "filter"}))
       ->capture_default_str();
-  sub->add_option("--profile", opt.profile,
+  sub->add_option("--profile", diagnose_opt.profile,
                   "also the profile-likelihood 95% interval of this component (effect.component, catalogue name) on "
                   "top of the extended model, finding or not (repeatable; JSON `profiles`): an independent check of "
                   "a value known from elsewhere");
-  sub->add_flag("--profile-only", opt.profile_only,
+  sub->add_flag("--profile-only", diagnose_opt.profile_only,
                "no search: only the baseline run and the --profile components on top of it, each with the filter's "
                "and the profile-likelihood interval (the coverage study, docs/diagnosis-intervals.md)");
-  sub->add_flag("--no-chain", opt.no_chain,
+  sub->add_flag("--no-chain", diagnose_opt.no_chain,
                "search once: do not apply a timing or geometry finding (time offset, clock drift, lever arm) to the "
                "recording and search again from the corrected data (docs/diagnosis.md, the chain)");
-  sub->add_option("--flight-config,--filter-config", opt.flight_config,
+  sub->add_option("--flight-config,--filter-config", diagnose_opt.flight_config,
                   "flight configuration TOML for the data set (config/README.md): sensor noise, rates, GNSS input "
                   "(raw or solutions), initialisation, priors and outage pattern of the diagnosis, applied on top of the "
                   "shipped flight configuration <data dir>/config/default.toml (default: none, the shipped file alone)");
@@ -510,16 +510,16 @@ void load(Diagnosis& d) {
   tools::DiagnosisConfig& cfg = d.cfg;
   tools::RecordedData& data = d.data;
   std::string& load_report = d.load_report;
-  tools::apply_flight_config(cfg, cfg::flight_config(opt.flight_config));
+  tools::apply_flight_config(cfg, cfg::flight_config(diagnose_opt.flight_config));
   std::string err;
-  if (!tools::load_recorded_data(opt.log, data, err, load_report)) throw std::runtime_error(err);
-  std::printf("diagnose: %s: %s\n", opt.log.c_str(), load_report.c_str());
+  if (!tools::load_recorded_data(diagnose_opt.log, data, err, load_report)) throw std::runtime_error(err);
+  std::printf("diagnose: %s: %s\n", diagnose_opt.log.c_str(), load_report.c_str());
   // What the recording as given says of itself (before any correction of the chain).
-  d.evidence = tools::recording_evidence(data, opt.log);
-  cfg.alpha = opt.alpha;
-  cfg.profile_intervals = opt.intervals == "profile";
-  if (!tools::set_diagnosis_baseline(cfg, parse_model(opt.baseline, "--baseline", kFlightModels)))
-    throw std::runtime_error("--baseline: " + opt.baseline + " is not a diagnosis baseline");
+  d.evidence = tools::recording_evidence(data, diagnose_opt.log);
+  cfg.alpha = diagnose_opt.alpha;
+  cfg.profile_intervals = diagnose_opt.intervals == "profile";
+  if (!tools::set_diagnosis_baseline(cfg, parse_model(diagnose_opt.baseline, "--baseline", kFlightModels)))
+    throw std::runtime_error("--baseline: " + diagnose_opt.baseline + " is not a diagnosis baseline");
 }
 
 /// The search: the baseline alone (--profile-only), one search (--no-chain) or the chain.
@@ -532,13 +532,13 @@ void search(Diagnosis& d) {
     std::printf("  %s\n", m.c_str());
     tools::throw_if_interrupted("diagnose stopped (" + m + "); no output written");
   };
-  if (opt.profile_only && opt.profile.empty()) throw std::runtime_error("--profile-only needs at least one --profile");
-  d.chained = !opt.profile_only && !opt.no_chain;
-  if (opt.profile_only) {
+  if (diagnose_opt.profile_only && diagnose_opt.profile.empty()) throw std::runtime_error("--profile-only needs at least one --profile");
+  d.chained = !diagnose_opt.profile_only && !diagnose_opt.no_chain;
+  if (diagnose_opt.profile_only) {
     r.baseline = fsw::to_string(cfg.baseline);
     r.base = tools::run_diagnosis_model(data, cfg, cfg.baseline_states);
     r.extended = r.base;
-  } else if (opt.no_chain) {
+  } else if (diagnose_opt.no_chain) {
     r = tools::diagnose(data, cfg, progress);
   } else {
     // The chain (docs/diagnosis.md): the last search on the corrected recording, its findings those
@@ -561,7 +561,7 @@ nlohmann::json profile_components(const Diagnosis& d) {
   const tools::RecordedData& data = d.data;
   const tools::DiagnosisResult& r = d.r;
   nlohmann::json profiles = nlohmann::json::array();
-  for (const std::string& name : opt.profile) {
+  for (const std::string& name : diagnose_opt.profile) {
     const int c = tools::candidate_index(name);
     if (c < 0) throw std::runtime_error("--profile: unknown component '" + name + "' (catalogue names, docs/diagnosis.md)");
     const fsw::Effect e = tools::diagnosis_candidates()[static_cast<std::size_t>(c)].effect;
@@ -592,7 +592,7 @@ nlohmann::json profile_components(const Diagnosis& d) {
 /// The manoeuvre that separates each confounded group (docs/diagnosis-separation.md).
 void separate_groups(Diagnosis& d) {
   const tools::DiagnosisResult& r = d.r;
-  const tools::FlownScenario flown = tools::scenario_from_sidecar(opt.log);
+  const tools::FlownScenario flown = tools::scenario_from_sidecar(diagnose_opt.log);
   const auto t_sep = std::chrono::steady_clock::now();
   d.seps = tools::suggest_separations(r, d.cfg, flown, [](const std::string& m) {
         std::printf("  %s\n", m.c_str());
@@ -633,7 +633,7 @@ void check_evidence_and_name_model(Diagnosis& d) {
   for (const tools::AppliedCorrection& a : chain.applied)
     if (std::find(applied_names.begin(), applied_names.end(), a.name) == applied_names.end()) applied_names.push_back(a.name);
   std::string& ext_name = d.ext_name;
-  ext_name = opt.baseline;
+  ext_name = diagnose_opt.baseline;
   for (const std::string& s : applied_names) ext_name += "+" + s + "(applied)";
   for (const std::string& s : d.r.extended_model) ext_name += "+" + s;
 }
@@ -731,9 +731,9 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   const std::string& load_report = d.load_report;
   const auto& cands = tools::diagnosis_candidates();
   nlohmann::json j;
-  j["baseline"] = opt.baseline;
-  j["log"] = opt.log;
-  j["filter_config"] = opt.flight_config;
+  j["baseline"] = diagnose_opt.baseline;
+  j["log"] = diagnose_opt.log;
+  j["filter_config"] = diagnose_opt.flight_config;
   j["gnss_source"] = cfg::to_string(cfg.gnss_source);
   j["data"] = {{"imu_samples", data.imu.size()},
                {"gnss_epochs", data.gnss.size()},
@@ -748,7 +748,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                  {"threshold", r.threshold_z2},
                  {"max_variance_ratio", cfg.max_variance_ratio},
                  {"max_correlation", cfg.max_correlation},
-                 {"intervals", opt.intervals}};
+                 {"intervals", diagnose_opt.intervals}};
   nlohmann::json screening = nlohmann::json::array();
   for (std::size_t c = 0; c < cands.size() && c < r.screening_z2.size(); ++c)
     if (std::find(cfg.baseline_states.begin(), cfg.baseline_states.end(), static_cast<int>(c)) == cfg.baseline_states.end())
@@ -779,7 +779,7 @@ void print_summary(const Diagnosis& d) {
   const std::vector<tools::Separation>& seps = d.seps;
   const std::string& ext_name = d.ext_name;
   const bool pvt = cfg.gnss_source == cfg::GnssSource::kPvt;
-  std::printf("baseline %s: NIS %.3f, %s innovation RMS %.3f m / %.4f m/s", opt.baseline.c_str(),
+  std::printf("baseline %s: NIS %.3f, %s innovation RMS %.3f m / %.4f m/s", diagnose_opt.baseline.c_str(),
               r.base.innovations.nis_mean, pvt ? "position/velocity" : "pseudorange/rate", rms(r.base.innovations, pvt),
               rms_rate(r.base.innovations, pvt));
   if (r.base.nav.available)
@@ -819,7 +819,7 @@ void print_summary(const Diagnosis& d) {
       std::printf("  separated by: %s (%.0f s more flight): members' correlation %.4f -> %.3f predicted (%s %.2f)%s\n",
                   sp.label.c_str(), sp.added_s, sp.flown_correlation, sp.predicted_correlation,
                   sp.separates ? "below" : "NOT below", sp.max_correlation,
-                  opt.report.empty() ? "" : "; scenario file in the report");
+                  diagnose_opt.report.empty() ? "" : "; scenario file in the report");
     else
       std::printf("  to separate them, fly: %s (%s)\n", sp.label.c_str(), sp.note.c_str());
   }
@@ -972,7 +972,7 @@ bool write_report(const Diagnosis& d, const nlohmann::json& j) {
   const tools::DiagnosisResult& r = d.r;
   const std::vector<tools::Separation>& seps = d.seps;
   const auto& cands = tools::diagnosis_candidates();
-  tools::RunDirectory run_dir(opt.report);  // docs/faults.md: summary.json removed now, written last
+  tools::RunDirectory run_dir(diagnose_opt.report);  // docs/faults.md: summary.json removed now, written last
   write_traces(run_dir.path("baseline.csv"), r.base);
   write_traces(run_dir.path("extended.csv"), r.extended);
   std::vector<std::string> files = {"diagnosis.json", "report.md", "baseline.csv", "extended.csv"};
@@ -983,12 +983,12 @@ bool write_report(const Diagnosis& d, const nlohmann::json& j) {
     files.push_back(file);
   }
   tools::write_json_file(run_dir.path("diagnosis.json"), j);
-  const int rc = run_plot_script("plot_diagnosis.py", "'" + opt.report + "'");
+  const int rc = run_plot_script("plot_diagnosis.py", "'" + diagnose_opt.report + "'");
   tools::TextOutput md_out(run_dir.path("report.md"));
   std::ostream& md = md_out.os();
-  md << "# Diagnosis of `" << opt.log << "`\n\n";
+  md << "# Diagnosis of `" << diagnose_opt.log << "`\n\n";
   md << "Data: " << d.load_report << ".\n\n";
-  md << "Baseline model: " << opt.baseline << " states (+ clock, + Gauss-Markov GPS errors). Each of the "
+  md << "Baseline model: " << diagnose_opt.baseline << " states (+ clock, + Gauss-Markov GPS errors). Each of the "
      << cands.size() << " catalogue components was tried as one extra state; " << r.tested
      << " are observable with this data (posterior variance <= " << cfg.max_variance_ratio
      << " x prior); the test is Wald chi-square(1) at a family-wise false-alarm rate of " << cfg.alpha
@@ -1011,19 +1011,19 @@ bool write_report(const Diagnosis& d, const nlohmann::json& j) {
   }
   md_out.commit();
   run_dir.finish({{"command", "diagnose"},
-                  {"log", opt.log},
+                  {"log", diagnose_opt.log},
                   {"complete", true},
                   {"findings", r.findings.size()},
                   {"plots", rc == 0},
                   {"files", files}});
-  std::printf("report: %s/report.md\n", opt.report.c_str());
+  std::printf("report: %s/report.md\n", diagnose_opt.report.c_str());
   return rc == 0;
 }
 
 }  // namespace
 
 int run_diagnose() {
-  tools::require_distinct({opt.json, opt.report}, {opt.log, opt.flight_config});
+  tools::require_distinct({diagnose_opt.json, diagnose_opt.report}, {diagnose_opt.log, diagnose_opt.flight_config});
   const tools::InterruptPolling polling;
   Diagnosis d;
   load(d);
@@ -1032,10 +1032,10 @@ int run_diagnose() {
   separate_groups(d);
   check_evidence_and_name_model(d);
   const nlohmann::json j = diagnosis_json(d);
-  tools::write_json_file(opt.json, j);
+  tools::write_json_file(diagnose_opt.json, j);
   print_summary(d);
   bool plots_failed = false;
-  if (!opt.report.empty()) plots_failed = !write_report(d, j);
+  if (!diagnose_opt.report.empty()) plots_failed = !write_report(d, j);
   if (plots_failed) {  // docs/faults.md: an output not written fails the command; the rest is complete
     std::fprintf(stderr, "sdins diagnose: error: the report's figures could not be made (plot_diagnosis.py's message "
                          "above); the JSON and report.md are complete\n");

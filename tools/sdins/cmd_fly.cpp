@@ -14,11 +14,11 @@
 
 namespace sdins {
 namespace {
-struct Options {
+struct FlyOptions {
   ScenarioOptions scenario;
   std::string errors;
   std::string csv;
-} opt;
+} fly_opt;
 }  // namespace
 
 void register_fly(CLI::App& app) {
@@ -26,25 +26,25 @@ void register_fly(CLI::App& app) {
       "fly", "Free-inertial flight of a scenario: truth simulator -> IMU error model -> fsw mechanization at the "
              "navigation rate of config/default.toml (200 Hz), no aiding. Prints position/velocity/attitude error "
              "against truth every 60 s.");
-  add_scenario_options(sub, opt.scenario);
-  sub->add_option("--errors", opt.errors, "override the IMU error set (default: the scenario's)")->check(CLI::IsMember({"paper", "baseline", "none"}));
-  sub->add_option("--csv", opt.csv, "write the 1 Hz error history to this CSV file");
+  add_scenario_options(sub, fly_opt.scenario);
+  sub->add_option("--errors", fly_opt.errors, "override the IMU error set (default: the scenario's)")->check(CLI::IsMember({"paper", "baseline", "none"}));
+  sub->add_option("--csv", fly_opt.csv, "write the 1 Hz error history to this CSV file");
 }
 
 int run_fly() {
-  sim::Scenario sc = opt.scenario.load();
-  if (opt.errors == "paper") sc.imu.errors = sim::ImuErrorSet::kPaper;
-  if (opt.errors == "baseline") sc.imu.errors = sim::ImuErrorSet::kBaseline;
-  if (opt.errors == "none") sc.imu.errors = sim::ImuErrorSet::kNone;
+  sim::Scenario sc = fly_opt.scenario.load();
+  if (fly_opt.errors == "paper") sc.imu.errors = sim::ImuErrorSet::kPaper;
+  if (fly_opt.errors == "baseline") sc.imu.errors = sim::ImuErrorSet::kBaseline;
+  if (fly_opt.errors == "none") sc.imu.errors = sim::ImuErrorSet::kNone;
   std::string err;
   auto motion = sim::FlightMotion::create(sc, err);
   if (!motion) throw std::runtime_error(err);
   sim::ImuModel imu(sim::draw_imu_errors(sc.imu, sc.effects, sc.seed), sc.seed);
   // docs/faults.md: the CSV goes to a temporary file renamed into place when complete.
   std::optional<tools::TextOutput> csv_out;
-  if (!opt.csv.empty()) {
-    tools::require_distinct({opt.csv}, {opt.scenario.file});
-    csv_out.emplace(opt.csv);
+  if (!fly_opt.csv.empty()) {
+    tools::require_distinct({fly_opt.csv}, {fly_opt.scenario.file});
+    csv_out.emplace(fly_opt.csv);
     csv_out->os() << "t_s,dpos_E_m,dpos_N_m,dpos_U_m,dvel_E_mps,dvel_N_mps,dvel_U_mps,phi_E_arcsec,phi_N_arcsec,phi_U_arcsec\n";
   }
   tools::FreeInertialConfig cfg;

@@ -17,13 +17,13 @@
 namespace sdins {
 namespace {
 
-struct Options {
+struct FswOptions {
   std::string bus;
   FswRunOptions run;  ///< --model, --log, --lcm-url, --nav-decimation, --json, --filter-config
   bool realtime = false;
   double idle_timeout_s = 5.0;
   int fifo_priority = 50;
-} opt;
+} fsw_opt;
 
 void warn(const std::string& m) { std::fprintf(stderr, "sdins fsw: %s\n", m.c_str()); }
 
@@ -34,31 +34,31 @@ void register_fsw(CLI::App& app) {
       "fsw", "Run the flight software fed by a CAN bus (IMU and GPS frames of hal/can/sdins.dbc), with LCM "
              "telemetry and log; answers `sdins bus-sim` with FSW_ACK. Exit 0: end of run; 2: silent bus; 130/143: "
              "stopped by SIGINT/SIGTERM (summary, log and --json complete).");
-  sub->add_option("--can", opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; append ?scope=lan to reach the network)")->required();
-  add_fsw_run_options(sub, opt.run, "");
-  CLI::Option* realtime = sub->add_flag("--realtime", opt.realtime,
+  sub->add_option("--can", fsw_opt.bus, "bus: socketcan:IFACE, udp:PORT, udp:GROUP:PORT (this host only; append ?scope=lan to reach the network)")->required();
+  add_fsw_run_options(sub, fsw_opt.run, "");
+  CLI::Option* realtime = sub->add_flag("--realtime", fsw_opt.realtime,
                 "real-time mode: SCHED_FIFO when permitted, minor-frame execution times (overruns), IMU lateness");
-  sub->add_option("--fifo-priority", opt.fifo_priority, "realtime: SCHED_FIFO priority")
+  sub->add_option("--fifo-priority", fsw_opt.fifo_priority, "realtime: SCHED_FIFO priority")
       ->capture_default_str()
       ->check(CLI::Range(1, 99))
       ->needs(realtime);  // docs/faults.md: an option that would do nothing is refused
-  sub->add_option("--idle-timeout", opt.idle_timeout_s, "stop after this long without frames [s]")
+  sub->add_option("--idle-timeout", fsw_opt.idle_timeout_s, "stop after this long without frames [s]")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
 }
 
 int run_fsw() {
-  tools::require_distinct({opt.run.log, opt.run.json}, {opt.run.flight_config});
+  tools::require_distinct({fsw_opt.run.log, fsw_opt.run.json}, {fsw_opt.run.flight_config});
   tools::FswRunConfig cfg;
-  const cfg::FlightConfig flight = opt.run.flight();  // the shipped config/default.toml, --flight-config on top
+  const cfg::FlightConfig flight = fsw_opt.run.flight();  // the shipped config/default.toml, --flight-config on top
   cfg::require_raw_gnss(flight, "--flight-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
-  cfg.node = opt.run.node_config(flight);
-  cfg.realtime = opt.realtime;
-  cfg.fifo_priority = opt.fifo_priority;
-  cfg.idle_timeout_s = opt.idle_timeout_s;
+  cfg.node = fsw_opt.run.node_config(flight);
+  cfg.realtime = fsw_opt.realtime;
+  cfg.fifo_priority = fsw_opt.fifo_priority;
+  cfg.idle_timeout_s = fsw_opt.idle_timeout_s;
   hal::CanBus bus;
-  if (bus.open(opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
-  std::fprintf(stderr, "sdins fsw: %s-state model listening on %s\n", opt.run.model.c_str(), opt.bus.c_str());
+  if (bus.open(fsw_opt.bus) != hal::CanBusStatus::kOk) throw std::runtime_error(bus.last_error());
+  std::fprintf(stderr, "sdins fsw: %s-state model listening on %s\n", fsw_opt.run.model.c_str(), fsw_opt.bus.c_str());
   // SIGINT/SIGTERM (docs/faults.md): the loop stops, the log is closed complete, the summary and
   // --json are written, exit 128 + signal.
   const tools::InterruptPolling polling;
@@ -112,13 +112,13 @@ int run_fsw() {
   if (r.realtime && r.minor_frames_timed > 0)
     std::printf("realtime: longest minor frame %.6f s at INS time %.3f s (%s)\n", r.exec_max_s, r.exec_max_t_s,
                 r.exec_max_work.c_str());
-  std::printf("bus %s: %s\n", opt.bus.c_str(), hal::to_string(r.bus).c_str());
+  std::printf("bus %s: %s\n", fsw_opt.bus.c_str(), hal::to_string(r.bus).c_str());
   if (r.bus.foreign_dropped > 0)
     std::printf("WARNING: %llu datagrams from other hosts dropped (the bus is local to this host; docs/can.md: "
                 "?scope=lan to take frames from the network)\n",
                 static_cast<unsigned long long>(r.bus.foreign_dropped));
   std::printf("wall time: %.3f s\n", r.wall_s);
-  if (!opt.run.json.empty()) tools::write_json_file(opt.run.json, tools::to_json(r));
+  if (!fsw_opt.run.json.empty()) tools::write_json_file(fsw_opt.run.json, tools::to_json(r));
   if (r.exit == tools::FswExit::kStopped) return tools::interrupt_exit_code();
   return r.exit == tools::FswExit::kEndOfRun ? 0 : 2;
 }

@@ -20,13 +20,13 @@
 namespace sdins {
 namespace {
 
-struct Options {
+struct LogOptions {
   std::string log;
   bool json = false;
   std::size_t show_rejections = 20;
   std::string channel;
   std::string csv;
-} opt;
+} log_opt;
 
 CLI::App* info_cmd = nullptr;
 CLI::App* export_cmd = nullptr;
@@ -97,7 +97,7 @@ void print_reader_rejections(const hal::LcmLogReadStats& st, std::size_t show, s
 
 int run_info() {
   hal::LcmLogReader reader;
-  open_log(reader, opt.log);
+  open_log(reader, log_opt.log);
   std::vector<ChannelSummary> channels;
   std::unordered_map<std::string, std::size_t> index;
   bool have_ts = false;
@@ -148,15 +148,15 @@ int run_info() {
   // docs/faults.md: a log with no valid event is an error (exit 1), after the summary is printed.
   const auto nothing_valid = [&] {
     if (st.events > 0) return 0;
-    std::fprintf(stderr, "sdins: error: %s: no valid LCM event in %llu bytes (%llu rejections)\n", opt.log.c_str(),
+    std::fprintf(stderr, "sdins: error: %s: no valid LCM event in %llu bytes (%llu rejections)\n", log_opt.log.c_str(),
                  static_cast<unsigned long long>(reader.file_size()),
                  static_cast<unsigned long long>(st.total_rejections()));
     return 1;
   };
 
-  if (opt.json) {
+  if (log_opt.json) {
     nlohmann::json j;
-    j["log"] = opt.log;
+    j["log"] = log_opt.log;
     j["bytes"] = reader.file_size();
     j["events"] = st.events;
     j["event_timestamp_min_us"] = ts_first;
@@ -191,7 +191,7 @@ int run_info() {
     return nothing_valid();
   }
 
-  std::printf("log %s: %" PRIu64 " bytes, %" PRIu64 " events, %zu channels\n", opt.log.c_str(), reader.file_size(),
+  std::printf("log %s: %" PRIu64 " bytes, %" PRIu64 " events, %zu channels\n", log_opt.log.c_str(), reader.file_size(),
               st.events, channels.size());
   if (have_ts)
     std::printf("event timestamps: %.6f .. %.6f s (span %.6f s)\n", static_cast<double>(ts_first) * 1e-6,
@@ -212,25 +212,25 @@ int run_info() {
     std::printf("%-16s %10" PRIu64 "  %-30s %-28s %s\n", c.name.c_str(), c.messages, c.type_text().c_str(), span,
                 rej.c_str());
   }
-  print_reader_rejections(st, opt.show_rejections, stdout);
+  print_reader_rejections(st, log_opt.show_rejections, stdout);
   return nothing_valid();
 }
 
 int run_export() {
-  tools::require_distinct({opt.csv}, {opt.log});
+  tools::require_distinct({log_opt.csv}, {log_opt.log});
   hal::LcmLogReader reader;
-  open_log(reader, opt.log);
+  open_log(reader, log_opt.log);
   // docs/faults.md: the CSV is written to a temporary file and renamed into place only when complete.
-  tools::TextOutput csv_out(opt.csv);
+  tools::TextOutput csv_out(log_opt.csv);
   std::ostream& csv = csv_out.os();
-  const hal::LcmTypeInfo* expected = hal::lcm_channel_type(opt.channel);
+  const hal::LcmTypeInfo* expected = hal::lcm_channel_type(log_opt.channel);
   const hal::LcmTypeInfo* type = nullptr;
   std::vector<std::string> header;
   hal::LcmRow row;
   std::uint64_t rows = 0, on_channel = 0, wrong_type = 0, unknown_type = 0, decode_failed = 0;
   hal::LcmLogEvent ev;
   while (reader.next(ev) == hal::LcmLogStatus::kOk) {
-    if (ev.channel != opt.channel) continue;
+    if (ev.channel != log_opt.channel) continue;
     ++on_channel;
     const hal::LcmTypeInfo* t = hal::find_lcm_type(hal::lcm_fingerprint(ev.data, ev.data_len));
     if (t == nullptr) {
@@ -251,7 +251,7 @@ int run_export() {
       for (std::size_t i = 0; i < header.size(); ++i) csv << (i ? "," : "") << header[i];
       csv << '\n';
     } else if (row.names() != header) {
-      throw std::runtime_error("message " + std::to_string(on_channel) + " on " + opt.channel +
+      throw std::runtime_error("message " + std::to_string(on_channel) + " on " + log_opt.channel +
                                " has a different field layout than the first (e.g. another EKF model); "
                                "a CSV needs one header");
     }
@@ -261,17 +261,17 @@ int run_export() {
     ++rows;
   }
   if (rows == 0) {
-    print_reader_rejections(reader.stats(), opt.show_rejections, stderr);
-    throw std::runtime_error("no message of a known type on channel '" + opt.channel + "' of " + opt.log +
+    print_reader_rejections(reader.stats(), log_opt.show_rejections, stderr);
+    throw std::runtime_error("no message of a known type on channel '" + log_opt.channel + "' of " + log_opt.log +
                              " (see sdins log info); no CSV written");
   }
   csv_out.commit();
   std::fprintf(stderr, "%s: %" PRIu64 " rows of %s from channel %s (%" PRIu64
                        " messages on it; skipped: %" PRIu64 " wrong_type, %" PRIu64 " unknown_type, %" PRIu64
                        " decode_failed)\n",
-               opt.csv.c_str(), rows, type != nullptr ? type->name.c_str() : "-", opt.channel.c_str(), on_channel,
+               log_opt.csv.c_str(), rows, type != nullptr ? type->name.c_str() : "-", log_opt.channel.c_str(), on_channel,
                wrong_type, unknown_type, decode_failed);
-  print_reader_rejections(reader.stats(), opt.show_rejections, stderr);
+  print_reader_rejections(reader.stats(), log_opt.show_rejections, stderr);
   return 0;
 }
 
@@ -283,17 +283,17 @@ void register_log(CLI::App& app) {
   info_cmd = sub->add_subcommand(
       "info", "List a log's channels with message counts, message type (from the LCM fingerprint), time span, and "
               "the reader's and decoders' rejection counts (truncated or corrupted logs are read past the damage).");
-  info_cmd->add_option("log", opt.log, "LCM log file")->required();
-  info_cmd->add_flag("--json", opt.json, "print the summary as JSON");
-  info_cmd->add_option("--show-rejections", opt.show_rejections, "list at most this many rejections with their offsets")
+  info_cmd->add_option("log", log_opt.log, "LCM log file")->required();
+  info_cmd->add_flag("--json", log_opt.json, "print the summary as JSON");
+  info_cmd->add_option("--show-rejections", log_opt.show_rejections, "list at most this many rejections with their offsets")
       ->capture_default_str();
   export_cmd = sub->add_subcommand(
       "export", "Write one channel of a log as CSV: one row per message, a header of field names carrying their units "
                 "(arrays as name[i]; array slots beyond a count field are empty cells).");
-  export_cmd->add_option("log", opt.log, "LCM log file")->required();
-  export_cmd->add_option("--channel", opt.channel, "channel to export, e.g. NAV_SOLUTION")->required();
-  export_cmd->add_option("--csv", opt.csv, "output CSV file")->required();
-  export_cmd->add_option("--show-rejections", opt.show_rejections, "list at most this many reader rejections")
+  export_cmd->add_option("log", log_opt.log, "LCM log file")->required();
+  export_cmd->add_option("--channel", log_opt.channel, "channel to export, e.g. NAV_SOLUTION")->required();
+  export_cmd->add_option("--csv", log_opt.csv, "output CSV file")->required();
+  export_cmd->add_option("--show-rejections", log_opt.show_rejections, "list at most this many reader rejections")
       ->capture_default_str();
 }
 

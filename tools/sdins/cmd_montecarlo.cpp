@@ -16,14 +16,14 @@
 namespace sdins {
 namespace {
 
-struct Options {
+struct MontecarloOptions {
   ScenarioOptions scenario;
   int runs = 100;
   std::string models = "15,24";
   int threads = 0;
   std::string out = "out/montecarlo";
   std::string flight_config;
-} opt;
+} montecarlo_opt;
 
 }  // namespace
 
@@ -48,41 +48,41 @@ void register_montecarlo(CLI::App& app) {
       "scenario through the fsw executive, on all cores; writes per-epoch statistics across runs (residual attitude "
       "error mean and 1-sigma, filter sigma, position/velocity RMS, NEES) and summary.json. In a build with MPI, "
       "under mpirun -np K the runs are split across the K ranks and rank 0 writes the (identical) results.");
-  add_scenario_options(sub, opt.scenario);
-  sub->add_option("--runs", opt.runs, "number of runs")->check(CLI::Range(1, 100000))->capture_default_str();
-  sub->add_option("--models", opt.models,
+  add_scenario_options(sub, montecarlo_opt.scenario);
+  sub->add_option("--runs", montecarlo_opt.runs, "number of runs")->check(CLI::Range(1, 100000))->capture_default_str();
+  sub->add_option("--models", montecarlo_opt.models,
                   "filters to run on the same data, a comma-separated list of: " + model_help(kMonteCarloModels))
       ->capture_default_str();
-  sub->add_option("--threads", opt.threads,
+  sub->add_option("--threads", montecarlo_opt.threads,
                   "worker threads per process (0: all cores; under mpirun with more than one rank: 1 per rank)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
-  sub->add_option("--out", opt.out, "output directory")->capture_default_str();
-  add_mc_flight_config_option(sub, opt.flight_config);
+  sub->add_option("--out", montecarlo_opt.out, "output directory")->capture_default_str();
+  add_mc_flight_config_option(sub, montecarlo_opt.flight_config);
 }
 
 int run_montecarlo() {
   // Under MPI every rank runs this; an error on any of them aborts the whole job.
   return run_guarded([] {
-    const sim::Scenario sc = opt.scenario.load();
+    const sim::Scenario sc = montecarlo_opt.scenario.load();
     tools::MonteCarloConfig mc;
-    mc.runs = opt.runs;
-    mc.models = parse_models(opt.models);
-    mc.threads = opt.threads;
-    mc.flight = tools::monte_carlo_flight_config(opt.flight_config);
+    mc.runs = montecarlo_opt.runs;
+    mc.models = parse_models(montecarlo_opt.models);
+    mc.threads = montecarlo_opt.threads;
+    mc.flight = tools::monte_carlo_flight_config(montecarlo_opt.flight_config);
     tools::validate_overlay(sc, mc);  // before any output: the overlaid configuration meets the rules
     // docs/faults.md: summary.json marks a complete run; removed now, written last.
-    tools::require_distinct({opt.out}, {opt.scenario.file, opt.flight_config});
+    tools::require_distinct({montecarlo_opt.out}, {montecarlo_opt.scenario.file, montecarlo_opt.flight_config});
     std::optional<tools::RunDirectory> dir;
-    if (mpi_world().rank == 0) dir.emplace(opt.out);
+    if (mpi_world().rank == 0) dir.emplace(montecarlo_opt.out);
     const tools::InterruptPolling polling;
-    const CaseResult r = run_case(sc, mc, opt.out, "");
+    const CaseResult r = run_case(sc, mc, montecarlo_opt.out, "");
     if (!r.written) return 0;  // a non-root MPI rank: rank 0 writes everything
     nlohmann::json j;
     j["scenario"] = sc.name;
     j["duration_s"] = sc.duration_s;
     j["runs"] = mc.runs;
-    j["filter_config"] = opt.flight_config.empty() ? std::string("shipped") : opt.flight_config;
+    j["filter_config"] = montecarlo_opt.flight_config.empty() ? std::string("shipped") : montecarlo_opt.flight_config;
     j["models"] = r.models;
     j["timing"] = r.timing;
     // docs/faults.md: a run in which no pseudorange was used (e.g. every satellite unhealthy) has a
@@ -92,7 +92,7 @@ int run_montecarlo() {
     j["gnss_used"] = gnss_used;
     dir->finish(j);
     print_case(r);
-    std::printf("outputs in %s\n", opt.out.c_str());
+    std::printf("outputs in %s\n", montecarlo_opt.out.c_str());
     if (!gnss_used) {
       std::fprintf(stderr, "sdins montecarlo: no pseudorange was used by a filter in any run (no healthy satellite "
                            "in view?): the statistics describe unaided inertial navigation\n");

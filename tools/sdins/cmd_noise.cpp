@@ -15,7 +15,7 @@
 
 namespace sdins {
 namespace {
-struct Options {
+struct NoiseOptions {
   std::string log;
   std::string out;
   tools::RestDetectorConfig rest;
@@ -24,7 +24,7 @@ struct Options {
   std::string filter_config;
   bool plots = true;
   int segment = -1;  ///< -1: all rest segments pooled
-} opt;
+} noise_opt;
 
 /// The configured filter values beside the data's (config/README.md units).
 nlohmann::json configured_json(const cfg::FlightConfig& f) {
@@ -40,7 +40,7 @@ nlohmann::json configured_json(const cfg::FlightConfig& f) {
 
 void print_configured(const nlohmann::json& from_data, const nlohmann::json& cfg) {
   std::printf("filter configuration: from the data vs '%s' (%s):\n", cfg["name"].get<std::string>().c_str(),
-              opt.filter_config.empty() ? "the shipped config/default.toml" : opt.filter_config.c_str());
+              noise_opt.filter_config.empty() ? "the shipped config/default.toml" : noise_opt.filter_config.c_str());
   for (const char* k : {"arw_deg_per_rthr", "vrw_mps_per_rthr", "gyro_bias_rw_radps_per_rts", "accel_bias_rw_mps2_per_rts",
                         "gyro_bias_sigma_degph"}) {
     const double d = from_data[k]["value"].get<double>(), c = cfg[k].get<double>();
@@ -55,61 +55,61 @@ void register_noise(CLI::App& app) {
                "Allan deviation of every gyro and accelerometer axis with 95% intervals, angle/velocity random walk, "
                "bias instability and rate random walk where the rest supports them, the filter configuration values "
                "with their sources, and the simulator's IMU model for comparison (docs/noise.md).");
-  sub->add_option("LOG", opt.log, "LCM log with the IMU channel (and GNSS_PVT or GNSS_RAW + GPS_ALMANAC for the speed)")
+  sub->add_option("LOG", noise_opt.log, "LCM log with the IMU channel (and GNSS_PVT or GNSS_RAW + GPS_ALMANAC for the speed)")
       ->required();
-  sub->add_option("--out", opt.out,
+  sub->add_option("--out", noise_opt.out,
                   "result directory: summary.json (everything), filter.toml (the [imu] values with their sources), "
                   "sim_imu.toml (the scenario keys that reproduce the terms), allan.png")
       ->required();
-  sub->add_option("--window", opt.rest.window_s, "rest detector window [s]")->check(CLI::Range(0.05, 60.0))->capture_default_str();
-  sub->add_option("--threshold-factor", opt.rest.threshold_factor,
+  sub->add_option("--window", noise_opt.rest.window_s, "rest detector window [s]")->check(CLI::Range(0.05, 60.0))->capture_default_str();
+  sub->add_option("--threshold-factor", noise_opt.rest.threshold_factor,
                   "a window is quiet when its specific-force and rate scatter are at most this x the quiet reference "
                   "(the median of the quietest half-minimum-rest of windows)")
       ->check(CLI::Range(1.0, 100.0))
       ->capture_default_str();
-  sub->add_option("--min-rest", opt.rest.min_rest_s, "shortest rest segment kept [s] (after trimming)")
+  sub->add_option("--min-rest", noise_opt.rest.min_rest_s, "shortest rest segment kept [s] (after trimming)")
       ->check(CLI::Range(1.0, 86400.0))
       ->capture_default_str();
-  sub->add_option("--margin", opt.rest.margin_s, "trimmed at each end of a rest run [s]")->check(CLI::Range(0.0, 60.0))->capture_default_str();
-  sub->add_option("--max-speed", opt.rest.max_speed_mps, "GNSS ground speed at rest, at most [m/s]")
+  sub->add_option("--margin", noise_opt.rest.margin_s, "trimmed at each end of a rest run [s]")->check(CLI::Range(0.0, 60.0))->capture_default_str();
+  sub->add_option("--max-speed", noise_opt.rest.max_speed_mps, "GNSS ground speed at rest, at most [m/s]")
       ->check(CLI::Range(0.0, 10.0))
       ->capture_default_str();
-  sub->add_flag("--no-gnss", opt.no_gnss, "detect rest from the IMU alone (ignore the log's GNSS)");
-  sub->add_option("--segment", opt.segment,
+  sub->add_flag("--no-gnss", noise_opt.no_gnss, "detect rest from the IMU alone (ignore the log's GNSS)");
+  sub->add_option("--segment", noise_opt.segment,
                   "analyse only rest segment K (0-based, in time order; default: all segments pooled)")
       ->check(CLI::Range(0, 1000));
-  add_scenario_options(sub, opt.scenario);
-  sub->add_option("--flight-config,--filter-config", opt.filter_config,
+  add_scenario_options(sub, noise_opt.scenario);
+  sub->add_option("--flight-config,--filter-config", noise_opt.filter_config,
                   "flight configuration to compare with (e.g. config/datasets/gnss-imu-drive.toml), applied on top of the "
                   "shipped config/default.toml (default: the shipped file alone)");
-  sub->add_flag("!--no-plots", opt.plots, "do not draw allan.png");
+  sub->add_flag("!--no-plots", noise_opt.plots, "do not draw allan.png");
 }
 
 int run_noise() {
-  tools::require_distinct({opt.out}, {opt.log, opt.scenario.file, opt.filter_config});
-  const sim::Scenario sc = opt.scenario.load();
-  const cfg::FlightConfig configured = cfg::flight_config(opt.filter_config);
-  const tools::NoiseInput in = tools::read_noise_input(opt.log);
-  opt.rest.use_gnss = !opt.no_gnss;
-  const tools::RestDetection rest = tools::detect_rest(in, opt.rest);
+  tools::require_distinct({noise_opt.out}, {noise_opt.log, noise_opt.scenario.file, noise_opt.filter_config});
+  const sim::Scenario sc = noise_opt.scenario.load();
+  const cfg::FlightConfig configured = cfg::flight_config(noise_opt.filter_config);
+  const tools::NoiseInput in = tools::read_noise_input(noise_opt.log);
+  noise_opt.rest.use_gnss = !noise_opt.no_gnss;
+  const tools::RestDetection rest = tools::detect_rest(in, noise_opt.rest);
   std::printf("noise: %s, %zu IMU samples (%llu rejected by the reader, %llu counter gaps), GNSS speed: %s (%zu "
               "solutions)\n",
-              opt.log.c_str(), in.imu.size(), static_cast<unsigned long long>(in.imu_rejected),
+              noise_opt.log.c_str(), in.imu.size(), static_cast<unsigned long long>(in.imu_rejected),
               static_cast<unsigned long long>(in.imu_counter_gaps), in.speed_source.empty() ? "none" : in.speed_source.c_str(),
               in.speed.size());
   if (rest.segments.empty()) {
     std::fputs(tools::noise_summary_text(rest, tools::NoiseAnalysis{}).c_str(), stdout);
     char len[32];
-    std::snprintf(len, sizeof len, "%g", opt.rest.min_rest_s);
-    throw std::runtime_error(opt.log + ": no rest segment of at least " + len +
+    std::snprintf(len, sizeof len, "%g", noise_opt.rest.min_rest_s);
+    throw std::runtime_error(noise_opt.log + ": no rest segment of at least " + len +
                              " s (see the detector line above; --min-rest, --threshold-factor, --max-speed)");
   }
   std::vector<tools::RestSegment> used = rest.segments;
-  if (opt.segment >= 0) {
-    if (static_cast<std::size_t>(opt.segment) >= rest.segments.size())
-      throw std::runtime_error("--segment " + std::to_string(opt.segment) + ": the log has " +
+  if (noise_opt.segment >= 0) {
+    if (static_cast<std::size_t>(noise_opt.segment) >= rest.segments.size())
+      throw std::runtime_error("--segment " + std::to_string(noise_opt.segment) + ": the log has " +
                                std::to_string(rest.segments.size()) + " rest segments (0-based)");
-    used = {rest.segments[static_cast<std::size_t>(opt.segment)]};
+    used = {rest.segments[static_cast<std::size_t>(noise_opt.segment)]};
   }
   const tools::NoiseAnalysis data = tools::analyse_noise(in.imu, used);
   std::fputs(tools::noise_summary_text(rest, data).c_str(), stdout);
@@ -128,7 +128,7 @@ int run_noise() {
   const sim::ImuErrors fitted = tools::imu_errors_from_analysis(data);
   const tools::NoiseAnalysis sim_fitted = tools::analyse_simulated_rest(fitted, data.segment_s, data.tau0_s, lat, sc.seed);
   const std::string grade_name = "the simulator's IMU model for scenario '" + sc.name + "'";
-  std::printf("simulator, scenario '%s' (%s): %s\n", sc.name.c_str(), opt.scenario.file.empty() ? "built in" : opt.scenario.file.c_str(),
+  std::printf("simulator, scenario '%s' (%s): %s\n", sc.name.c_str(), noise_opt.scenario.file.empty() ? "built in" : noise_opt.scenario.file.c_str(),
               tools::imu_errors_text(grade).c_str());
   std::printf("simulator set to the terms read (sim_imu.toml): %s\n", tools::imu_errors_text(fitted).c_str());
   std::fputs(tools::compare_text(data, sim_grade, grade_name).c_str(), stdout);
@@ -138,16 +138,16 @@ int run_noise() {
   const nlohmann::json cfg = configured_json(configured);
   print_configured(values, cfg);
 
-  tools::RunDirectory dir(opt.out);
-  const std::string source = opt.log;
+  tools::RunDirectory dir(noise_opt.out);
+  const std::string source = noise_opt.log;
   tools::write_text_file(dir.path("filter.toml"), tools::filter_config_toml(data, in, source));
   tools::write_text_file(dir.path("sim_imu.toml"), tools::scenario_imu_toml(fitted));
   nlohmann::json j;
-  j["log"] = opt.log;
+  j["log"] = noise_opt.log;
   j["imu_samples"] = in.imu.size();
   j["speed_source"] = in.speed_source;
   j["rest"] = tools::to_json(rest);
-  j["segment_analysed"] = opt.segment;  // -1: all pooled
+  j["segment_analysed"] = noise_opt.segment;  // -1: all pooled
   j["per_segment"] = per_segment;
   j["data"] = tools::to_json(data);
   j["filter_values"] = values;
@@ -156,14 +156,14 @@ int run_noise() {
                     {"compare", tools::compare_json(data, sim_grade)}};
   j["sim_fitted"] = {{"analysis", tools::to_json(sim_fitted)}, {"compare", tools::compare_json(data, sim_fitted)}};
   int rc = 0;
-  if (opt.plots) {
+  if (noise_opt.plots) {
     // The plot reads the complete results; summary.json (the marker) is written after it.
     tools::write_json_file(dir.path("noise.json"), j);
     rc = run_plot_script("plot_noise.py", shell_quote(dir.path("noise.json")) + " " + shell_quote(dir.path("allan.png")));
     if (rc != 0) std::fprintf(stderr, "sdins noise: the plot failed (results are complete without it)\n");
   }
   dir.finish(j);
-  std::printf("written: %s (summary.json, filter.toml, sim_imu.toml%s)\n", opt.out.c_str(), opt.plots ? ", noise.json, allan.png" : "");
+  std::printf("written: %s (summary.json, filter.toml, sim_imu.toml%s)\n", noise_opt.out.c_str(), noise_opt.plots ? ", noise.json, allan.png" : "");
   return rc;
 }
 

@@ -39,7 +39,7 @@ int figures_failed(const char* script, const std::filesystem::path& out) {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-struct Options {
+struct PaperOptions {
   ScenarioOptions scenario;
   int runs = 100;
   std::vector<double> levels{5.0, 15.0};
@@ -52,14 +52,14 @@ struct Options {
   bool tune15t = false;
   int tune_first = 0, tune_step = 1;
   std::string flight_config;
-} opt;
+} paper_opt;
 
 /// A case's Monte Carlo configuration: --runs, --threads, --filter-config (read once per process).
 tools::MonteCarloConfig case_config() {
-  static const std::optional<cfg::FlightConfig> flight = tools::monte_carlo_flight_config(opt.flight_config);
+  static const std::optional<cfg::FlightConfig> flight = tools::monte_carlo_flight_config(paper_opt.flight_config);
   tools::MonteCarloConfig mc;
-  mc.runs = opt.runs;
-  mc.threads = opt.threads;
+  mc.runs = paper_opt.runs;
+  mc.threads = paper_opt.threads;
   mc.flight = flight;
   return mc;
 }
@@ -234,44 +234,44 @@ void register_paper(CLI::App& app) {
       "15 arcsec, figures in the style of the paper's figures 16-19, the section-II analysis, summary.json with the "
       "acceptance checks and the claims table, and report.md (docs/paper-verdict.md). --patterns: the turn-pattern "
       "study instead (patterns.json, patterns.md, patterns.png); --tune-15t: the search that set the 15t tuning.");
-  add_scenario_options(sub, opt.scenario);
-  sub->add_option("--runs", opt.runs, "runs per case")->check(CLI::Range(2, 100000))->capture_default_str();
-  sub->add_option("--levels", opt.levels, "gyro misalignment 1-sigma levels [arcsec]")->delimiter(',')->capture_default_str();
-  sub->add_option("--threads", opt.threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
-  sub->add_option("--out", opt.out, "output directory")->capture_default_str();
-  add_mc_flight_config_option(sub, opt.flight_config);
-  sub->add_flag("!--no-plots", opt.plots, "skip the PNG figures (matplotlib)");
-  sub->add_flag("!--no-analysis", opt.analysis, "skip the section-II analysis");
-  auto* pat = sub->add_flag("--patterns", opt.patterns,
+  add_scenario_options(sub, paper_opt.scenario);
+  sub->add_option("--runs", paper_opt.runs, "runs per case")->check(CLI::Range(2, 100000))->capture_default_str();
+  sub->add_option("--levels", paper_opt.levels, "gyro misalignment 1-sigma levels [arcsec]")->delimiter(',')->capture_default_str();
+  sub->add_option("--threads", paper_opt.threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
+  sub->add_option("--out", paper_opt.out, "output directory")->capture_default_str();
+  add_mc_flight_config_option(sub, paper_opt.flight_config);
+  sub->add_flag("!--no-plots", paper_opt.plots, "skip the PNG figures (matplotlib)");
+  sub->add_flag("!--no-analysis", paper_opt.analysis, "skip the section-II analysis");
+  auto* pat = sub->add_flag("--patterns", paper_opt.patterns,
                             "fly the turn-pattern study (alternating 180/90/360-degree turns, racetrack; 15- and "
                             "24-state) instead of the paper's cases");
-  sub->add_option("--pattern-level", opt.pattern_level, "gyro misalignment 1-sigma of the pattern study [arcsec]")
+  sub->add_option("--pattern-level", paper_opt.pattern_level, "gyro misalignment 1-sigma of the pattern study [arcsec]")
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
-  sub->add_flag("--tune-15t", opt.tune15t,
+  sub->add_flag("--tune-15t", paper_opt.tune15t,
                 "search the 15t filter's gyro angle random walk: the smallest value on a grid (paper's x 2^(k/2)) whose "
                 "mean NEES is inside its 95% bounds, for each --levels level (writes tune_15t.json)")
       ->excludes(pat);
-  sub->add_option("--tune-grid", opt.tune_first, "--tune-15t: first grid index k (arw = paper's x 2^(k/2))")
+  sub->add_option("--tune-grid", paper_opt.tune_first, "--tune-15t: first grid index k (arw = paper's x 2^(k/2))")
       ->check(CLI::Range(0, 40))
       ->capture_default_str();
-  sub->add_option("--tune-step", opt.tune_step, "--tune-15t: grid index step")->check(CLI::Range(1, 10))->capture_default_str();
+  sub->add_option("--tune-step", paper_opt.tune_step, "--tune-15t: grid index step")->check(CLI::Range(1, 10))->capture_default_str();
 }
 
 int run_paper() {
-  if (opt.patterns) return run_guarded(run_patterns_body);
-  if (opt.tune15t) return run_guarded(run_tune_body);
+  if (paper_opt.patterns) return run_guarded(run_patterns_body);
+  if (paper_opt.tune15t) return run_guarded(run_tune_body);
   return run_guarded(run_paper_body);
 }
 
 namespace {
 int run_paper_body() {
-  const sim::Scenario base = opt.scenario.load();
-  const fs::path out(opt.out);
+  const sim::Scenario base = paper_opt.scenario.load();
+  const fs::path out(paper_opt.out);
   const bool root_rank = mpi_world().rank == 0;
-  tools::require_distinct({opt.out}, {opt.scenario.file, opt.flight_config});
+  tools::require_distinct({paper_opt.out}, {paper_opt.scenario.file, paper_opt.flight_config});
   std::optional<tools::RunDirectory> run_dir;  // docs/faults.md: summary.json removed now, written last
-  if (root_rank) run_dir.emplace(opt.out);
+  if (root_rank) run_dir.emplace(paper_opt.out);
   const tools::InterruptPolling polling;
   json cases = json::array();
   bool root = true;
@@ -284,14 +284,14 @@ int run_paper_body() {
   const sim::TruthTrack truth = sim::TruthTrack::generate(base);
   const std::vector<tools::paper::TurnKick> kicks =
       root_rank ? tools::paper::turn_kicks(truth) : std::vector<tools::paper::TurnKick>{};
-  for (double level : opt.levels) {
+  for (double level : paper_opt.levels) {
     const sim::Scenario sc = at_level(base, level);
     tools::MonteCarloConfig mc = case_config();
     mc.models = {fsw::FilterModel::k15, fsw::FilterModel::k15c, fsw::FilterModel::k15t, fsw::FilterModel::k24};
     mc.tuned15t_arw_rad_per_rts = tools::paper::tuned15t_arw_rad_per_rts(level);
     const std::string dir = level_dir(level);
     if (root_rank) fs::create_directories(out / dir);
-    std::printf("gyro misalignment 1-sigma %.0f arcsec: %d runs, filters 15, 15c, 15t, 24\n", level, opt.runs);
+    std::printf("gyro misalignment 1-sigma %.0f arcsec: %d runs, filters 15, 15c, 15t, 24\n", level, paper_opt.runs);
     std::fflush(stdout);
     const CaseResult r = run_case(sc, truth, mc, (out / dir).string(), "");
     if (!r.written) {
@@ -313,23 +313,23 @@ int run_paper_body() {
     }
   }
   if (!root) return 0;
-  if (opt.analysis) {
+  if (paper_opt.analysis) {
     std::printf("section-II analysis -> %s\n", (out / "analysis").string().c_str());
     std::fflush(stdout);
-    if (run_analysis(base, (out / "analysis").string(), 20.0, opt.plots) != 0) return 1;
+    if (run_analysis(base, (out / "analysis").string(), 20.0, paper_opt.plots) != 0) return 1;
   }
   const tools::paper::AnalysisSummary an =
-      opt.analysis ? read_analysis(out / "analysis" / "analysis.json") : tools::paper::AnalysisSummary{};
+      paper_opt.analysis ? read_analysis(out / "analysis" / "analysis.json") : tools::paper::AnalysisSummary{};
   json summary;
   summary["scenario"] = base.name;
   summary["duration_s"] = base.duration_s;
-  summary["runs"] = opt.runs;
-  summary["filter_config"] = opt.flight_config.empty() ? std::string("shipped") : opt.flight_config;
+  summary["runs"] = paper_opt.runs;
+  summary["filter_config"] = paper_opt.flight_config.empty() ? std::string("shipped") : paper_opt.flight_config;
   summary["seed"] = base.seed;
   summary["cases"] = cases;
   {
     json per = json::array();
-    for (double level : opt.levels)
+    for (double level : paper_opt.levels)
       per.push_back({{"misalignment_arcsec", level}, {"arw_rad_per_rts", tools::paper::tuned15t_arw_rad_per_rts(level)}});
     summary["tuned15t"] = {{"arw_rad_per_rts", per},
                            {"gyro_bias_rw_radps_per_rts", defaults.tuned15t_gyro_bias_rw_radps_per_rts},
@@ -363,8 +363,8 @@ int run_paper_body() {
   write_report(out, summary);
   tools::throw_if_interrupted("paper stopped before its summary; no summary.json written");
   run_dir->finish(summary);  // the completion marker; the figures below are drawn from it
-  const bool plots_failed = opt.plots && run_plot_script("plot_paper.py", "\"" + out.string() + "\"") != 0;
-  if (opt.plots) {
+  const bool plots_failed = paper_opt.plots && run_plot_script("plot_paper.py", "\"" + out.string() + "\"") != 0;
+  if (paper_opt.plots) {
     write_report(out, summary);  // its figure list: this run's figures (a previous run's were removed)
     run_dir->finish(summary);    // the summary names the figures too (docs/faults.md)
   }
@@ -382,20 +382,20 @@ int run_paper_body() {
 // ---- the turn-pattern study
 
 int run_patterns_body() {
-  const sim::Scenario base = opt.scenario.load();
-  const fs::path out(opt.out);
+  const sim::Scenario base = paper_opt.scenario.load();
+  const fs::path out(paper_opt.out);
   const bool root_rank = mpi_world().rank == 0;
   if (root_rank) fs::create_directories(out);
   json patterns = json::array();
   std::vector<tools::paper::PatternResult> results;
   bool root = true;
   for (const auto& p : tools::paper::turn_patterns(base)) {
-    const sim::Scenario sc = at_level(p.scenario, opt.pattern_level);
+    const sim::Scenario sc = at_level(p.scenario, paper_opt.pattern_level);
     tools::MonteCarloConfig mc = case_config();
     mc.models = {fsw::FilterModel::k15, fsw::FilterModel::k24};
     if (root_rank) fs::create_directories(out / p.name);
     std::printf("pattern %s (%s): %d runs at %.0f arcsec, filters 15, 24\n", p.name.c_str(), p.description.c_str(),
-                opt.runs, opt.pattern_level);
+                paper_opt.runs, paper_opt.pattern_level);
     std::fflush(stdout);
     const CaseResult r = run_case(sc, mc, (out / p.name).string(), "");
     if (!r.written) {
@@ -404,10 +404,10 @@ int run_patterns_body() {
     }
     print_case(r);
     tools::paper::LevelSummary ls;
-    ls.misalignment_arcsec = opt.pattern_level;
+    ls.misalignment_arcsec = paper_opt.pattern_level;
     for (const auto& s : r.stats) ls.models.push_back(tools::paper::summarize(s));
     const auto kicks = kicks_of(sc);
-    ls.predicted_east_excess_deg = tools::paper::predicted_east_excess_deg(kicks, opt.pattern_level);
+    ls.predicted_east_excess_deg = tools::paper::predicted_east_excess_deg(kicks, paper_opt.pattern_level);
     const tools::paper::PatternResult pr = tools::paper::pattern_result(p.name, ls, kicks);
     results.push_back(pr);
     json models = json::object();
@@ -420,7 +420,7 @@ int run_patterns_body() {
     patterns.push_back({{"name", p.name},
                         {"description", p.description},
                         {"runs", pr.runs},
-                        {"misalignment_arcsec", opt.pattern_level},
+                        {"misalignment_arcsec", paper_opt.pattern_level},
                         {"turns", pr.turns},
                         {"models", models},
                         {"ratio_24_15", {{"E", pr.ratio24_15[0]}, {"N", pr.ratio24_15[1]}, {"U", pr.ratio24_15[2]}}},
@@ -431,16 +431,16 @@ int run_patterns_body() {
                         {"tilt_kick_abs_sum_deg", pr.tilt_kick_abs_sum_deg}});
   }
   if (!root) return 0;
-  const std::string paragraph = tools::paper::pattern_paragraph(results, opt.pattern_level);
+  const std::string paragraph = tools::paper::pattern_paragraph(results, paper_opt.pattern_level);
   tools::write_json_file((out / "patterns.json").string(),
-                         json{{"scenario", base.name}, {"duration_s", base.duration_s}, {"runs", opt.runs},
-                              {"misalignment_arcsec", opt.pattern_level}, {"patterns", patterns},
+                         json{{"scenario", base.name}, {"duration_s", base.duration_s}, {"runs", paper_opt.runs},
+                              {"misalignment_arcsec", paper_opt.pattern_level}, {"patterns", patterns},
                               {"conclusion", paragraph}});
   {
     tools::TextOutput md((out / "patterns.md").string());
     std::ostream& f = md.os();
     f << "# Turn-pattern study: which flights make the 24-state filter worth it\n\n"
-      << "Gyro misalignment 1-sigma " << opt.pattern_level << " arcsec, " << opt.runs << " runs per pattern, "
+      << "Gyro misalignment 1-sigma " << paper_opt.pattern_level << " arcsec, " << paper_opt.runs << " runs per pattern, "
       << base.duration_s << " s; consistent 15-state (15) against 24-state (24) filter.\n\n"
       << "| pattern | runs | 15: E / N / U [deg] | 24: E / N / U [deg] | ratio 24/15 E / N / U | observable "
          "combinations (24) |\n|---|---|---|---|---|---|\n";
@@ -456,7 +456,7 @@ int run_patterns_body() {
     f << "\n" << paragraph << "\n\n![U and E ratio per pattern](patterns.png)\n";
     md.commit();
   }
-  const bool plots_failed = opt.plots && run_plot_script("plot_patterns.py", "\"" + out.string() + "\"") != 0;
+  const bool plots_failed = paper_opt.plots && run_plot_script("plot_patterns.py", "\"" + out.string() + "\"") != 0;
   std::printf("\n%s\nwrote %s/{patterns.json,patterns.md,patterns.png,<pattern>/stats_*.csv}\n", paragraph.c_str(),
               out.string().c_str());
   return plots_failed ? figures_failed("plot_patterns.py", out) : 0;
@@ -465,8 +465,8 @@ int run_patterns_body() {
 // ---- the 15t tuning search
 
 int run_tune_body() {
-  const sim::Scenario base = opt.scenario.load();
-  const fs::path out(opt.out);
+  const sim::Scenario base = paper_opt.scenario.load();
+  const fs::path out(paper_opt.out);
   if (mpi_world().size > 1) throw std::runtime_error("--tune-15t runs on threads only (not under MPI)");
   fs::create_directories(out);
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(base.gps));
@@ -478,11 +478,11 @@ int run_tune_body() {
   // Per misalignment level (the IMU's specification), grid: the paper's ARW times 2^(k/2) for
   // k = first, first + step, ... NEES falls as the noise rises; the first value inside the bounds
   // is the tuning (the smallest noise on this grid that makes the filter consistent).
-  for (double level : opt.levels) {
+  for (double level : paper_opt.levels) {
     const sim::Scenario sc = at_level(base, level);
     json trials = json::array();
     double chosen = 0.0;
-    for (int k = opt.tune_first; k <= 40 && chosen == 0.0; k += opt.tune_step) {
+    for (int k = paper_opt.tune_first; k <= 40 && chosen == 0.0; k += paper_opt.tune_step) {
       const double arw = paper_arw * std::pow(std::sqrt(2.0), k);
       tools::MonteCarloConfig mc = case_config();
       mc.models = {fsw::FilterModel::k15t};
@@ -510,7 +510,7 @@ int run_tune_body() {
     levels.push_back({{"misalignment_arcsec", level}, {"trials", trials}, {"chosen_arw_rad_per_rts", chosen}});
   }
   tools::write_json_file((out / "tune_15t.json").string(),
-                         json{{"runs", opt.runs}, {"duration_s", base.duration_s},
+                         json{{"runs", paper_opt.runs}, {"duration_s", base.duration_s},
                               {"paper_arw_rad_per_rts", paper_arw}, {"levels", levels}});
   std::printf("wrote %s\n", (out / "tune_15t.json").string().c_str());
   return all_found ? 0 : 1;

@@ -23,7 +23,7 @@
 
 namespace sdins {
 namespace {
-struct Options {
+struct ReplayOptions {
   std::string in;
   FswRunOptions run;
   std::vector<double> outages;  ///< length, period, first (s after initialisation)
@@ -31,19 +31,19 @@ struct Options {
   std::string score_json, score_csv, score_plot;
   double score_from_s = 0.0;
   double score_max_gap_s = 1.0;
-} opt;
+} replay_opt;
 }  // namespace
 
 void register_replay(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "replay", "Re-run the flight software on a log's IMU, GNSS_RAW and GPS_ALMANAC channels; prints the summary and "
                 "the navigation digest, optionally writes a new log (inputs and outputs).");
-  sub->add_option("LOG", opt.in, "LCM log with the input channels (with --candump: a candump -L log)")->required();
-  sub->add_flag("--candump", opt.candump,
+  sub->add_option("LOG", replay_opt.in, "LCM log with the input channels (with --candump: a candump -L log)")->required();
+  sub->add_flag("--candump", replay_opt.candump,
                 "LOG is a candump -L log of the CAN bus (hal/can/sdins.dbc frames, e.g. `candump -L vcan0` beside "
                 "`sdins fsw`): the frames go through the receive path of `sdins fsw`, rejections counted as there, "
                 "receive times from the log's timestamps");
-  add_fsw_run_options(sub, opt.run, "none");
+  add_fsw_run_options(sub, replay_opt.run, "none");
   sub->add_option_function<std::vector<double>>(
          "--outages",
          [](const std::vector<double>& v) {
@@ -57,24 +57,24 @@ void register_replay(CLI::App& app) {
            if (!(v[1] > 0.0)) bad("PERIOD must be > 0 s");
            if (v[0] > v[1]) bad("LENGTH must not exceed PERIOD (LENGTH = PERIOD withholds every epoch after FIRST)");
            if (!(v[2] >= 0.0)) bad("FIRST must be >= 0 s (it counts from the initialisation)");
-           opt.outages = v;
+           replay_opt.outages = v;
          },
                   "withhold GNSS (raw epochs and solutions) for LENGTH s every PERIOD s from FIRST s after the "
                   "initialisation, to score the coasting solution against a reference (LENGTH PERIOD FIRST [s]; default: "
                   "none)")
       ->expected(3);
-  sub->add_option("--score-json", opt.score_json,
+  sub->add_option("--score-json", replay_opt.score_json,
                   "write the score against the log's reference (TRUTH) as JSON: errors, NEES, outages with their drift "
                   "curves (docs/running.md)");
-  sub->add_option("--score-csv", opt.score_csv,
+  sub->add_option("--score-csv", replay_opt.score_csv,
                   "write the errors against the reference as CSV (20 rows/s; outage rows carry the time since it began)");
-  sub->add_option("--score-plot", opt.score_plot,
+  sub->add_option("--score-plot", replay_opt.score_plot,
                   "with --outages and --score-json: a PNG of the outages' errors vs the time since each began "
                   "(plot_outages.py, python3-matplotlib)");
-  sub->add_option("--score-from", opt.score_from_s, "score the frames from this long after initialisation [s]")
+  sub->add_option("--score-from", replay_opt.score_from_s, "score the frames from this long after initialisation [s]")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1e7));
-  sub->add_option("--score-max-gap", opt.score_max_gap_s,
+  sub->add_option("--score-max-gap", replay_opt.score_max_gap_s,
                   "the reference samples around a frame may be at most this far apart [s]")
       ->capture_default_str()
       ->check(CLI::Range(1e-3, 1e3));
@@ -83,16 +83,16 @@ void register_replay(CLI::App& app) {
 namespace {
 /// --candump: the bus recording's frames into hal::CanFswInput as `sdins fsw` receives them.
 int replay_candump(const cfg::FlightConfig& filter) {
-  if (!opt.outages.empty()) throw std::runtime_error("--outages: not with --candump (it withholds LCM-log inputs)");
-  if (!opt.score_json.empty() || !opt.score_csv.empty() || !opt.score_plot.empty())
+  if (!replay_opt.outages.empty()) throw std::runtime_error("--outages: not with --candump (it withholds LCM-log inputs)");
+  if (!replay_opt.score_json.empty() || !replay_opt.score_csv.empty() || !replay_opt.score_plot.empty())
     throw std::runtime_error("--score-json/--score-csv/--score-plot: not with --candump (a bus recording carries no "
                              "reference trajectory to score against)");
   cfg::require_raw_gnss(filter, "--filter-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
   hal::CandumpReader reader;
-  if (!reader.open(opt.in)) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
+  if (!reader.open(replay_opt.in)) throw std::runtime_error("cannot read " + replay_opt.in + ": " + reader.error());
   hal::FswNode node;
   std::string err;
-  if (!node.open(opt.run.node_config(filter), err)) throw std::runtime_error(err);
+  if (!node.open(replay_opt.run.node_config(filter), err)) throw std::runtime_error(err);
   hal::CanFswInput in(node.summary());
   const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
   hal::CanFrame f;
@@ -101,9 +101,9 @@ int replay_candump(const cfg::FlightConfig& filter) {
     in.push(f, f.timestamp_s);
     fsw::drive(in, node);
   }
-  if (!reader.error().empty()) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
+  if (!reader.error().empty()) throw std::runtime_error("cannot read " + replay_opt.in + ": " + reader.error());
   if (reader.frames() == 0)  // docs/faults.md: nothing valid in the input is an error, not an empty success
-    throw std::runtime_error(opt.in + ": no valid candump frame in " + std::to_string(reader.lines()) + " lines");
+    throw std::runtime_error(replay_opt.in + ": no valid candump frame in " + std::to_string(reader.lines()) + " lines");
   const bool stopped = tools::interrupted();
   if (stopped) {
     node.abort();
@@ -114,7 +114,7 @@ int replay_candump(const cfg::FlightConfig& filter) {
   }
   std::printf("replay: %s (candump), %d lines, %d frames, %d malformed lines; %llu data frames (%u rejected), %llu "
               "SIM_CONTROL (%llu rejected), %llu FSW_ACK\n",
-              opt.in.c_str(), reader.lines(), reader.frames(), reader.bad_lines(),
+              replay_opt.in.c_str(), reader.lines(), reader.frames(), reader.bad_lines(),
               static_cast<unsigned long long>(in.data_frames()), in.health().rejections(),
               static_cast<unsigned long long>(in.control_frames()), static_cast<unsigned long long>(in.control_rejected()),
               static_cast<unsigned long long>(in.foreign_acks()));
@@ -123,13 +123,13 @@ int replay_candump(const cfg::FlightConfig& filter) {
   if (stopped)
     throw tools::Interrupted("replay stopped after " + std::to_string(reader.frames()) + " frames (the summary so far "
                              "is above); no log or JSON written");
-  if (!opt.run.json.empty()) {
+  if (!replay_opt.run.json.empty()) {
     nlohmann::json j = tools::fsw_summary_json(node);
     j["mode"] = "replay";
-    j["model"] = opt.run.model;
-    j["input_log"] = opt.in;
+    j["model"] = replay_opt.run.model;
+    j["input_log"] = replay_opt.in;
     j["input_format"] = "candump";
-    j["filter_config"] = opt.run.flight_config;
+    j["filter_config"] = replay_opt.run.flight_config;
     j["candump"] = {{"lines", reader.lines()}, {"frames", reader.frames()}, {"malformed_lines", reader.bad_lines()}};
     j["frames"] = {{"data", in.data_frames()},
                    {"imu", in.imu_frames()},
@@ -138,49 +138,49 @@ int replay_candump(const cfg::FlightConfig& filter) {
                    {"control_rejected", in.control_rejected()},
                    {"foreign_acks", in.foreign_acks()}};
     j["assembler"] = tools::can_rx_json(in.health());
-    tools::write_json_file(opt.run.json, j);
+    tools::write_json_file(replay_opt.run.json, j);
   }
   return node.summary().initialised ? 0 : 2;
 }
 }  // namespace
 
 int run_replay() {
-  tools::require_distinct({opt.run.log, opt.run.json, opt.score_json, opt.score_csv, opt.score_plot},
-                          {opt.in, opt.run.flight_config});
-  if (!opt.score_plot.empty() && (opt.score_json.empty() || opt.outages.size() != 3))
+  tools::require_distinct({replay_opt.run.log, replay_opt.run.json, replay_opt.score_json, replay_opt.score_csv, replay_opt.score_plot},
+                          {replay_opt.in, replay_opt.run.flight_config});
+  if (!replay_opt.score_plot.empty() && (replay_opt.score_json.empty() || replay_opt.outages.size() != 3))
     throw std::runtime_error("--score-plot needs --outages and --score-json (the plot reads the score JSON)");
-  const cfg::FlightConfig filter = opt.run.flight();
-  if (opt.candump) return replay_candump(filter);
+  const cfg::FlightConfig filter = replay_opt.run.flight();
+  if (replay_opt.candump) return replay_candump(filter);
   const bool pvt = filter.gnss_source == cfg::GnssSource::kPvt;
   hal::LcmReplayConfig rc;
   if (pvt) rc.gnss_pvt_channel = hal::kLcmChannelGnssPvt;
   hal::LcmReplayReader reader;
-  const hal::LcmLogStatus os = reader.open(opt.in, rc);
-  if (os != hal::LcmLogStatus::kOk) throw std::runtime_error("cannot read " + opt.in + ": " + reader.error());
-  const hal::FswNodeConfig cfg = opt.run.node_config(filter);
+  const hal::LcmLogStatus os = reader.open(replay_opt.in, rc);
+  if (os != hal::LcmLogStatus::kOk) throw std::runtime_error("cannot read " + replay_opt.in + ": " + reader.error());
+  const hal::FswNodeConfig cfg = replay_opt.run.node_config(filter);
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
   // Scoring (docs/running.md): against TRUTH when the log has it.
   tools::ScoreOptions so;
-  so.from_s = opt.score_from_s;
-  so.max_reference_gap_s = opt.score_max_gap_s;
-  if (opt.outages.size() == 3) {
-    so.outage_length_s = opt.outages[0];
-    so.outage_period_s = opt.outages[1];
-    so.outage_first_s = opt.outages[2];
+  so.from_s = replay_opt.score_from_s;
+  so.max_reference_gap_s = replay_opt.score_max_gap_s;
+  if (replay_opt.outages.size() == 3) {
+    so.outage_length_s = replay_opt.outages[0];
+    so.outage_period_s = replay_opt.outages[1];
+    so.outage_first_s = replay_opt.outages[2];
   }
-  tools::ReplayScorer scorer(tools::load_reference(opt.in), so);
+  tools::ReplayScorer scorer(tools::load_reference(replay_opt.in), so);
   const bool scoring = !scorer.reference().samples.empty();
-  if (!scoring && (!opt.score_json.empty() || !opt.score_csv.empty()))
-    throw std::runtime_error(opt.in + " has no usable reference on TRUTH: nothing to score (--score-json/--score-csv)");
+  if (!scoring && (!replay_opt.score_json.empty() || !replay_opt.score_csv.empty()))
+    throw std::runtime_error(replay_opt.in + " has no usable reference on TRUTH: nothing to score (--score-json/--score-csv)");
   std::uint64_t raw_not_used = 0, withheld = 0;
   // GNSS outages: inputs at times within [t0 + k period, t0 + k period + length) are withheld.
   const auto in_outage = [&](double t) {
-    if (opt.outages.size() != 3 || !node.summary().initialised) return false;
-    const double t0 = node.summary().init_t_s + opt.outages[2];
+    if (replay_opt.outages.size() != 3 || !node.summary().initialised) return false;
+    const double t0 = node.summary().init_t_s + replay_opt.outages[2];
     if (t < t0) return false;
-    return std::fmod(t - t0, opt.outages[1]) < opt.outages[0];
+    return std::fmod(t - t0, replay_opt.outages[1]) < replay_opt.outages[0];
   };
   const auto keep = [&](const fsw::InputEvent& in) {
     const bool gnss = in.kind == fsw::InputEvent::Kind::kGnssRaw || in.kind == fsw::InputEvent::Kind::kGnssPvt;
@@ -214,7 +214,7 @@ int run_replay() {
   std::printf("replay: %s, %llu inputs (%llu IMU, %llu GNSS, %llu GNSS solutions, %llu almanac accepted; %llu raw "
               "epochs not used: the filter takes solutions), %llu rejected, %llu other events; "
               "log: %llu events, %llu rejections\n",
-              opt.in.c_str(), static_cast<unsigned long long>(st.delivered),
+              replay_opt.in.c_str(), static_cast<unsigned long long>(st.delivered),
               static_cast<unsigned long long>(st.imu.accepted()), static_cast<unsigned long long>(st.gnss.accepted()),
               static_cast<unsigned long long>(st.gnss_pvt.accepted()), static_cast<unsigned long long>(st.almanac.accepted()),
               static_cast<unsigned long long>(raw_not_used), static_cast<unsigned long long>(st.rejected()),
@@ -232,21 +232,21 @@ int run_replay() {
     std::printf("GNSS: %llu measurements with non-finite values (pseudorange, rate or C/N0) dropped from accepted "
                 "epochs\n",
                 static_cast<unsigned long long>(st.gnss.measurements_dropped));
-  if (opt.outages.size() == 3)
+  if (replay_opt.outages.size() == 3)
     std::printf("GNSS outages: %.1f s every %.1f s from %.1f s after initialisation, %llu inputs withheld\n",
-                opt.outages[0], opt.outages[1], opt.outages[2], static_cast<unsigned long long>(withheld));
+                replay_opt.outages[0], replay_opt.outages[1], replay_opt.outages[2], static_cast<unsigned long long>(withheld));
   tools::print_fsw_summary(node);
   const nlohmann::json score = scoring ? scorer.result() : nlohmann::json(nullptr);
   if (scoring) std::fputs(tools::ReplayScorer::text(score).c_str(), stdout);
   if (stopped)
     throw tools::Interrupted("replay stopped after " + std::to_string(st.delivered) + " inputs (the summary so far is "
                              "above); no log or JSON written");
-  if (!opt.run.json.empty()) {
+  if (!replay_opt.run.json.empty()) {
     nlohmann::json j = tools::fsw_summary_json(node);
     j["mode"] = "replay";
-    j["model"] = opt.run.model;
-    j["input_log"] = opt.in;
-    j["filter_config"] = opt.run.flight_config;
+    j["model"] = replay_opt.run.model;
+    j["input_log"] = replay_opt.in;
+    j["filter_config"] = replay_opt.run.flight_config;
     j["gnss_source"] = cfg::to_string(filter.gnss_source);
     j["inputs"] = {{"delivered", st.delivered},
                    {"imu_accepted", st.imu.accepted()},
@@ -265,13 +265,13 @@ int run_replay() {
                    {"log_events", ls.events},
                    {"log_rejections", ls.total_rejections()}};
     j["score"] = score;
-    tools::write_json_file(opt.run.json, j);
+    tools::write_json_file(replay_opt.run.json, j);
   }
-  if (!opt.score_json.empty()) tools::write_json_file(opt.score_json, score);
-  if (!opt.score_csv.empty()) tools::write_text_file(opt.score_csv, scorer.csv());
-  if (!opt.score_plot.empty() &&
-      run_plot_script("plot_outages.py", shell_quote(opt.score_json) + " " + shell_quote(opt.score_plot)) != 0)
-    throw std::runtime_error("plot_outages.py failed: " + opt.score_plot + " not written (the score JSON and CSV are)");
+  if (!replay_opt.score_json.empty()) tools::write_json_file(replay_opt.score_json, score);
+  if (!replay_opt.score_csv.empty()) tools::write_text_file(replay_opt.score_csv, scorer.csv());
+  if (!replay_opt.score_plot.empty() &&
+      run_plot_script("plot_outages.py", shell_quote(replay_opt.score_json) + " " + shell_quote(replay_opt.score_plot)) != 0)
+    throw std::runtime_error("plot_outages.py failed: " + replay_opt.score_plot + " not written (the score JSON and CSV are)");
   return node.summary().initialised ? 0 : 2;
 }
 

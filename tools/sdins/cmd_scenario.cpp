@@ -7,20 +7,20 @@
 
 namespace sdins {
 namespace {
-struct Options {
+struct ScenarioCheckOptions {
   std::string file;
-} opt;
+} scenario_opt;
 }  // namespace
 
 void register_scenario(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "scenario", "Check a scenario TOML file (unknown keys and bad values are reported with their line) and print "
                   "the flight timeline it produces. Without FILE: the built-in bank-to-turn scenario.");
-  sub->add_option("file", opt.file, "scenario TOML file (default: the built-in bank-to-turn scenario)");
+  sub->add_option("file", scenario_opt.file, "scenario TOML file (default: the built-in bank-to-turn scenario)");
 }
 
 int run_scenario_check() {
-  const sim::Scenario sc = ScenarioOptions{opt.file}.load();
+  const sim::Scenario sc = ScenarioOptions{scenario_opt.file}.load();
   std::string err;
   auto motion = sim::FlightMotion::create(sc, err);
   if (!motion) throw std::runtime_error(err);

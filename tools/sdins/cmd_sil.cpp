@@ -18,24 +18,24 @@
 
 namespace sdins {
 namespace {
-struct Options {
+struct SilOptions {
   ScenarioOptions scenario;
   FswRunOptions run;
-} opt;
+} sil_opt;
 }  // namespace
 
 void register_sil(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "sil", "Software in the loop: simulator -> CAN frames (in-process) -> flight software (in-motion init, 1 Hz "
              "EKF, 200 Hz mechanization) -> LCM telemetry and log. Same frames and outputs as a lockstep HIL run.");
-  add_scenario_options(sub, opt.scenario);
-  add_fsw_run_options(sub, opt.run, "");
+  add_scenario_options(sub, sil_opt.scenario);
+  add_fsw_run_options(sub, sil_opt.run, "");
 }
 
 int run_sil() {
-  tools::require_distinct({opt.run.log, opt.run.json}, {opt.scenario.file, opt.run.flight_config});
-  const sim::Scenario sc = opt.scenario.load();
-  const hal::FswNodeConfig cfg = opt.run.node_config();  // validated at load, before the flight is simulated
+  tools::require_distinct({sil_opt.run.log, sil_opt.run.json}, {sil_opt.scenario.file, sil_opt.run.flight_config});
+  const sim::Scenario sc = sil_opt.scenario.load();
+  const hal::FswNodeConfig cfg = sil_opt.run.node_config();  // validated at load, before the flight is simulated
   sim::SensorStream stream(sc);
   hal::FswNode node;
   std::string err;
@@ -70,7 +70,7 @@ int run_sil() {
   if (!node.close(err)) throw std::runtime_error(err);
 
   std::printf("sil: %s, %.0f s, seed %llu, %s-state model; %llu CAN frames (%d not encodable), %u rejected on receive\n",
-              sc.name.c_str(), sc.duration_s, static_cast<unsigned long long>(sc.seed), opt.run.model.c_str(),
+              sc.name.c_str(), sc.duration_s, static_cast<unsigned long long>(sc.seed), sil_opt.run.model.c_str(),
               static_cast<unsigned long long>(n_frames), encode_rejected, input.health().rejections());
   tools::print_fsw_summary(node);
   nlohmann::json j = tools::fsw_summary_json(node);
@@ -88,15 +88,15 @@ int run_sil() {
                          {e.att_phi_enu_rad.x() * fsw::kRadToDeg, e.att_phi_enu_rad.y() * fsw::kRadToDeg,
                           e.att_phi_enu_rad.z() * fsw::kRadToDeg}}};
   }
-  if (!opt.run.json.empty()) {
+  if (!sil_opt.run.json.empty()) {
     j["mode"] = "sil";
-    j["model"] = opt.run.model;
+    j["model"] = sil_opt.run.model;
     j["scenario"] = sc.name;
     j["duration_s"] = sc.duration_s;
     j["seed"] = sc.seed;
     j["can_frames"] = n_frames;
     j["can_rx"] = tools::can_rx_json(input.health());
-    tools::write_json_file(opt.run.json, j);
+    tools::write_json_file(sil_opt.run.json, j);
   }
   return node.summary().initialised ? 0 : 2;
 }

@@ -25,13 +25,13 @@
 namespace sdins {
 namespace {
 
-struct Options {
+struct SimOptions {
   ScenarioOptions scenario;
   std::string truth_errors;  ///< "": keep the scenario's set (the built-in scenario: paper)
   std::string log;
   std::vector<std::string> effects;
   double truth_rate_hz = 10.0;
-} opt;
+} sim_opt;
 
 const char* error_set_name(sim::ImuErrorSet s) {
   switch (s) {
@@ -116,7 +116,7 @@ const hal::LcmLogSink* g_sink = nullptr;  ///< for check()'s message (the writer
 void check(hal::LcmLogStatus st, const std::string& what) {
   if (st == hal::LcmLogStatus::kOk) return;
   const std::string why = g_sink != nullptr ? g_sink->telemetry().log().error() : std::string();
-  throw std::runtime_error("writing " + what + " to " + opt.log + ": " + (why.empty() ? hal::to_string(st) : why) +
+  throw std::runtime_error("writing " + what + " to " + sim_opt.log + ": " + (why.empty() ? hal::to_string(st) : why) +
                            "; nothing written");
 }
 
@@ -127,31 +127,31 @@ void register_sim(CLI::App& app) {
       "sim", "Measured data without flight software: flies a scenario through the truth simulator and writes an LCM "
              "log of IMU (every sample), GNSS_RAW (every epoch), GPS_ALMANAC and TRUTH, plus a JSON sidecar "
              "LOG.json of what was simulated (seed, error set, effects, drawn IMU errors). Replay with `sdins replay`.");
-  add_scenario_options(sub, opt.scenario);
+  add_scenario_options(sub, sim_opt.scenario);
   sub->get_option("--seed")->required();
-  sub->add_option("--truth-errors", opt.truth_errors,
+  sub->add_option("--truth-errors", sim_opt.truth_errors,
                   "IMU error set drawn on the truth side: paper (Table 1) or baseline (biases and noise only); "
                   "default: the scenario's own (built-in scenario: paper)")
       ->check(CLI::IsMember({"paper", "baseline"}));
-  sub->add_option("--log", opt.log, "the LCM log to write (the sidecar is LOG.json)")->required();
-  sub->add_option("--effect", opt.effects,
+  sub->add_option("--log", sim_opt.log, "the LCM log to write (the sidecar is LOG.json)")->required();
+  sub->add_option("--effect", sim_opt.effects,
                   "switch a truth-side effect on, NAME[.COMPONENT]=VALUE in catalogue units (repeatable; on top of "
                   "the scenario's effects, replacing the scenario's value of the same component)")
       ->allow_extra_args(false);
-  sub->add_option("--truth-rate", opt.truth_rate_hz, "TRUTH samples per second [Hz]; must divide the IMU rate")
+  sub->add_option("--truth-rate", sim_opt.truth_rate_hz, "TRUTH samples per second [Hz]; must divide the IMU rate")
       ->check(CLI::Range(1.0, 1000.0))
       ->capture_default_str();
 }
 
 int run_sim() {
   // Everything that can be wrong with the request is checked before the log is created.
-  tools::require_distinct({opt.log, opt.log + ".json"}, {opt.scenario.file});
-  sim::Scenario sc = opt.scenario.load();
-  if (opt.truth_errors == "paper") sc.imu.errors = sim::ImuErrorSet::kPaper;
-  if (opt.truth_errors == "baseline") sc.imu.errors = sim::ImuErrorSet::kBaseline;
+  tools::require_distinct({sim_opt.log, sim_opt.log + ".json"}, {sim_opt.scenario.file});
+  sim::Scenario sc = sim_opt.scenario.load();
+  if (sim_opt.truth_errors == "paper") sc.imu.errors = sim::ImuErrorSet::kPaper;
+  if (sim_opt.truth_errors == "baseline") sc.imu.errors = sim::ImuErrorSet::kBaseline;
   const sim::EffectSet scenario_effects = sc.effects;
   std::vector<std::pair<fsw::Effect, std::size_t>> cli_effects;
-  for (const std::string& a : opt.effects) {
+  for (const std::string& a : sim_opt.effects) {
     const std::string err = sim::apply_effect_assignment(sc.effects, a);
     if (!err.empty()) throw std::runtime_error("--effect " + a + ": " + err);
     // The assignment is valid: name and component (for the sidecar's "source").
@@ -163,13 +163,13 @@ int run_sim() {
     const std::size_t k = *sim::component_from_name(e, dot == std::string::npos ? "" : lhs.substr(dot + 1));
     cli_effects.emplace_back(e, k);
   }
-  const double spt = sc.imu.rate_hz / opt.truth_rate_hz;
+  const double spt = sc.imu.rate_hz / sim_opt.truth_rate_hz;
   if (spt < 1.0 || std::abs(spt - std::round(spt)) > 1e-9) {
     char msg[160];
     std::snprintf(msg, sizeof(msg),
                   "--truth-rate %g Hz does not divide the IMU rate (%d Hz): TRUTH samples must fall on IMU sample "
                   "times (e.g. 1, 10, 100, 1000 Hz)",
-                  opt.truth_rate_hz, sc.imu.rate_hz);
+                  sim_opt.truth_rate_hz, sc.imu.rate_hz);
     throw std::runtime_error(msg);
   }
   const long long samples_per_truth = std::llround(spt);
@@ -179,7 +179,7 @@ int run_sim() {
   hal::LcmLogSink sink;
   hal::LcmTelemetryConfig tcfg;
   tcfg.lcm_url = "none";
-  tcfg.log_path = opt.log;
+  tcfg.log_path = sim_opt.log;
   g_sink = &sink;
   check(sink.open(tcfg), "the log");
 
@@ -226,15 +226,15 @@ int run_sim() {
   nlohmann::ordered_json j;
   j["format"] = "sdins-sim-sidecar";
   j["version"] = 1;
-  j["log"] = std::filesystem::path(opt.log).filename().string();
+  j["log"] = std::filesystem::path(sim_opt.log).filename().string();
   j["scenario"] = sc.name;
-  j["scenario_file"] = opt.scenario.file;  // "": the built-in scenario
+  j["scenario_file"] = sim_opt.scenario.file;  // "": the built-in scenario
   j["seed"] = sc.seed;
   j["duration_s"] = sc.duration_s;
   j["truth_errors"] = error_set_name(sc.imu.errors);
   j["imu_rate_hz"] = sc.imu.rate_hz;
   j["gps_rate_hz"] = sc.gps.rate_hz;
-  j["truth_rate_hz"] = opt.truth_rate_hz;
+  j["truth_rate_hz"] = sim_opt.truth_rate_hz;
   nlohmann::ordered_json ej = nlohmann::ordered_json::array();
   for (const EffectEntry& e : on) {
     const fsw::EffectInfo& info = fsw::effect_info(e.effect);
@@ -257,13 +257,13 @@ int run_sim() {
       "TRUTH t_s: true time";
   // docs/faults.md: the log and its sidecar, both or neither. The sidecar is complete in its
   // temporary file before the log is put in place; a failure up to here leaves neither.
-  const std::string sidecar = opt.log + ".json";
+  const std::string sidecar = sim_opt.log + ".json";
   tools::TextOutput sidecar_out(sidecar);
   sidecar_out.os() << j.dump(2) << "\n";
   check(sink.close(), "the log (final flush)");
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   std::error_code ec;
-  const auto bytes = std::filesystem::file_size(opt.log, ec);
+  const auto bytes = std::filesystem::file_size(sim_opt.log, ec);
   sidecar_out.commit();
 
   std::string fx;
@@ -279,13 +279,13 @@ int run_sim() {
       "gyro bias %.4f %.4f %.4f deg/h, accel bias %.1f %.1f %.1f ug, gyro SF %.1f %.1f %.1f ppm. Sidecar %s. No "
       "flight software ran; replay with `sdins replay %s`.\n",
       sc.name.c_str(), sc.duration_s, static_cast<unsigned long long>(sc.seed), error_set_name(sc.imu.errors),
-      opt.log.c_str(), static_cast<unsigned long long>(ec ? 0 : bytes), elapsed_s, n_imu, sc.imu.rate_hz, t_imu_first,
-      t_imu_last, n_gnss, n_almanac, n_truth, opt.truth_rate_hz, fx.empty() ? "none" : fx.c_str(),
+      sim_opt.log.c_str(), static_cast<unsigned long long>(ec ? 0 : bytes), elapsed_s, n_imu, sc.imu.rate_hz, t_imu_first,
+      t_imu_last, n_gnss, n_almanac, n_truth, sim_opt.truth_rate_hz, fx.empty() ? "none" : fx.c_str(),
       ap.gyro_bias_radps.x() / fsw::kDegPerHourToRadps, ap.gyro_bias_radps.y() / fsw::kDegPerHourToRadps,
       ap.gyro_bias_radps.z() / fsw::kDegPerHourToRadps, ap.accel_bias_mps2.x() / fsw::kMicroG_mps2,
       ap.accel_bias_mps2.y() / fsw::kMicroG_mps2, ap.accel_bias_mps2.z() / fsw::kMicroG_mps2,
       ap.gyro_scale_factor.x() * 1e6, ap.gyro_scale_factor.y() * 1e6, ap.gyro_scale_factor.z() * 1e6, sidecar.c_str(),
-      opt.log.c_str());
+      sim_opt.log.c_str());
   return 0;
 }
 
