@@ -10,6 +10,7 @@
 
 #include "sim/almanac.hpp"
 #include "sim/scenario.hpp"
+#include "test_util.hpp"
 
 using namespace sim;
 using fsw::kDegToRad;
@@ -18,15 +19,11 @@ using fsw::Vec3;
 
 namespace {
 
-const std::string kAlmanacPath = sim::default_almanac_path();  // the product's copy (data/almanac)
+using test_util::shipped_almanac;
+
 constexpr int kFullWeek = 1455;
 constexpr double kToa = 589824.0;
 
-std::vector<AlmanacEntry> shipped() {
-  const AlmanacParseResult r = parse_yuma_file(kAlmanacPath);
-  EXPECT_TRUE(r.ok()) << r.error;
-  return r.ok() ? *r.almanac : std::vector<AlmanacEntry>{};
-}
 
 /// A valid record (lines 1..14) for PRN `prn`, ending with a blank line.
 std::string record(int prn) {
@@ -68,7 +65,7 @@ Vec3 omega_e() { return Vec3(0.0, 0.0, kGpsOmegaE_radps); }
 }  // namespace
 
 TEST(AlmanacParse, ShippedFile) {
-  const std::vector<AlmanacEntry> alm = shipped();
+  const std::vector<AlmanacEntry> alm = shipped_almanac();
   ASSERT_EQ(alm.size(), 31u);
   for (const AlmanacEntry& s : alm) {
     EXPECT_NE(s.prn, 29);
@@ -152,7 +149,7 @@ TEST(AlmanacWeek, RolloverNearestReference) {
 }
 
 TEST(AlmanacOrbit, RadiusSpeedAndInvariantsForAllSatellites) {
-  const std::vector<AlmanacEntry> alm = shipped();
+  const std::vector<AlmanacEntry> alm = shipped_almanac();
   ASSERT_FALSE(alm.empty());
   for (const AlmanacEntry& s : alm) {
     const double a = s.sqrt_a_sqrtm * s.sqrt_a_sqrtm;
@@ -186,7 +183,7 @@ TEST(AlmanacOrbit, RadiusSpeedAndInvariantsForAllSatellites) {
 }
 
 TEST(AlmanacOrbit, VelocityEqualsCentralFiniteDifference) {
-  const std::vector<AlmanacEntry> alm = shipped();
+  const std::vector<AlmanacEntry> alm = shipped_almanac();
   ASSERT_FALSE(alm.empty());
   const double h = 0.5;
   double worst = 0.0;
@@ -206,7 +203,7 @@ TEST(AlmanacOrbit, VelocityEqualsCentralFiniteDifference) {
 }
 
 TEST(AlmanacOrbit, MeanAnomalyAtToaIsM0) {
-  const std::vector<AlmanacEntry> alm = shipped();
+  const std::vector<AlmanacEntry> alm = shipped_almanac();
   ASSERT_FALSE(alm.empty());
   const AlmanacEntry& s = alm.front();  // PRN 1
   // Independent Kepler solution by fixed-point iteration E = M + e sin E.
@@ -253,7 +250,7 @@ TEST(AlmanacOrbit, CircularEquatorialOrbitMatchesClosedForm) {
 }
 
 TEST(AlmanacOrbit, WeekCrossoverIsContinuous) {
-  const std::vector<AlmanacEntry> alm = shipped();
+  const std::vector<AlmanacEntry> alm = shipped_almanac();
   ASSERT_FALSE(alm.empty());
   const AlmanacEntry& s = alm[3];
   // 30000 s after toa lies in week 1456: both week/tow spellings give the same state.
@@ -287,7 +284,7 @@ TEST(AlmanacLook, OverheadNorthAndEast) {
 }
 
 TEST(AlmanacVisible, SeoulAtToa) {
-  const std::vector<AlmanacEntry> alm = shipped();
+  const std::vector<AlmanacEntry> alm = shipped_almanac();
   ASSERT_FALSE(alm.empty());
   const Vec3 rx(35.0 * kDegToRad, 127.0 * kDegToRad, 0.0);
   std::vector<Visible> vis;

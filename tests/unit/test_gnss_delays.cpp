@@ -44,6 +44,7 @@
 #include "fsw/frames.hpp"
 #include "fsw/gnss.hpp"
 #include "fsw/gnss_delays.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -57,8 +58,8 @@ using fsw::saastamoinen_zenith_delay;
 using fsw::tropo_mapping;
 using fsw::TropoMapping;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test_util::kInf;
+using test_util::kNaN;
 
 // ---------------------------------------------------------------------------------------------
 // Saastamoinen

@@ -12,17 +12,15 @@
 #include "sim/gps_model.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
+#include "test_util.hpp"
 
 namespace {
+
+using test_util::shipped_almanac;
 
 using fsw::kDegToRad;
 using fsw::Vec3;
 
-std::vector<sim::AlmanacEntry> shipped() {
-  const sim::AlmanacParseResult r = sim::parse_yuma_file(sim::default_almanac_path());
-  EXPECT_TRUE(r.ok()) << r.error;
-  return r.ok() ? *r.almanac : std::vector<sim::AlmanacEntry>{};
-}
 
 fsw::GpsAlmanacTable table_of(const std::vector<sim::AlmanacEntry>& alm) {
   fsw::GpsAlmanacTable t;
@@ -40,7 +38,7 @@ sim::TruthSample at_site(double t_s) {
 }
 
 TEST(GnssRaw, RoundTripThroughTheReceiverConversionGivesTheSimulatorsEpoch) {
-  const auto alm = shipped();
+  const auto alm = shipped_almanac();
   ASSERT_FALSE(alm.empty());
   // Make the satellite clocks large enough to matter (1 ms, 1e-9 s/s) so the test sees them.
   std::vector<sim::AlmanacEntry> alm_clk = alm;
@@ -92,7 +90,7 @@ TEST(GnssRaw, RoundTripThroughTheReceiverConversionGivesTheSimulatorsEpoch) {
 }
 
 TEST(GnssRaw, EveryUnusableMeasurementIsCountedAndTheRestKept) {
-  const auto alm = shipped();
+  const auto alm = shipped_almanac();
   fsw::GpsAlmanacTable table = table_of(alm);
   sim::GpsModel model(sim::GpsConfig{}, alm, sim::EffectSet{}, 3);
   fsw::GnssEpoch e;
@@ -137,7 +135,7 @@ TEST(GnssRaw, EveryUnusableMeasurementIsCountedAndTheRestKept) {
 }
 
 TEST(GnssRaw, TransmitTimeBeforeTheWeekStartUsesThePreviousWeek) {
-  const auto alm = shipped();
+  const auto alm = shipped_almanac();
   const fsw::GpsAlmanacTable table = table_of(alm);
   fsw::GnssRawEpoch raw;
   raw.gps_week = 2000;
@@ -214,7 +212,7 @@ TEST(GpsTime, RoundingAtTheBoundaryStaysInsideTheWeek) {
 }
 
 TEST(GnssRaw, AlmanacTableRejectsCorruptElements) {
-  const auto alm = shipped();
+  const auto alm = shipped_almanac();
   fsw::GpsAlmanacTable t;
   sim::AlmanacEntry a = alm.front();
   EXPECT_EQ(t.set(a), fsw::Status::kOk);

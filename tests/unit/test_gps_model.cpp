@@ -21,8 +21,11 @@
 #include "sim/imu_model.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
+#include "test_util.hpp"
 
 namespace {
+
+using test_util::shipped_almanac;
 
 using fsw::Effect;
 using fsw::kDegToRad;
@@ -34,11 +37,6 @@ using sim::GpsModel;
 
 const Vec3 kSite(35.0 * kDegToRad, 127.0 * kDegToRad, 5000.0);
 
-std::vector<sim::AlmanacEntry> shipped() {
-  const sim::AlmanacParseResult r = sim::parse_yuma_file(sim::default_almanac_path());
-  EXPECT_TRUE(r.ok()) << r.error;
-  return r.ok() ? *r.almanac : std::vector<sim::AlmanacEntry>{};
-}
 
 const sim::AlmanacEntry& entry(const std::vector<sim::AlmanacEntry>& alm, int prn) {
   const auto it = std::find_if(alm.begin(), alm.end(), [&](const sim::AlmanacEntry& e) { return e.prn == prn; });
@@ -114,7 +112,7 @@ std::unique_ptr<sim::FlightMotion> default_flight() {
 }  // namespace
 
 TEST(GpsMeasure, ErrorFreeEqualsIndependentGeometry) {
-  GpsModel model(error_free(), shipped(), sim::EffectSet{}, 1);
+  GpsModel model(error_free(), shipped_almanac(), sim::EffectSet{}, 1);
   const fsw::GnssEpoch e = measure(model, static_truth(0.0));
   EXPECT_EQ(e.t_s, 0.0);
   EXPECT_EQ(e.gps_week, 1455);
@@ -159,7 +157,7 @@ TEST(GpsLightTime, SatelliteStateIsAtTheTransmitTime) {
   sim::EffectSet fx;
   fx.set(Effect::kAntennaLeverArm, 0, 2.0);
   fx.set(Effect::kAntennaLeverArm, 2, -1.0);
-  const std::vector<sim::AlmanacEntry> alm = shipped();
+  const std::vector<sim::AlmanacEntry> alm = shipped_almanac();
   GpsModel model(error_free(), alm, fx, 3);
   const fsw::GnssEpoch e = measure(model, truth);
   ASSERT_GE(e.n_obs, 5);
@@ -192,7 +190,7 @@ TEST(GpsLightTime, WeekRolloverKeepsTheGeometry) {
   // Receive at 0.05 s into week 1456: the signals left in week 1455.
   GpsConfig cfg = error_free();
   cfg.start_tow_s = sim::kSecondsPerWeek - 0.95;
-  const std::vector<sim::AlmanacEntry> alm = shipped();
+  const std::vector<sim::AlmanacEntry> alm = shipped_almanac();
   GpsModel model(cfg, alm, sim::EffectSet{}, 1);
   const fsw::GnssEpoch e0 = measure(model, static_truth(0.0));
   EXPECT_EQ(e0.gps_week, 1455);
@@ -225,7 +223,7 @@ TEST(GpsRangeRate, MatchesNumericalDerivativeOfRange) {
   }
   std::vector<sim::TruthSample> still = {static_truth(0.0), static_truth(1.0), static_truth(2.0)};
   for (const std::vector<sim::TruthSample>* run : {&still, &moving}) {
-    GpsModel model(error_free(), shipped(), sim::EffectSet{}, 1);
+    GpsModel model(error_free(), shipped_almanac(), sim::EffectSet{}, 1);
     std::vector<fsw::GnssEpoch> e;
     for (const sim::TruthSample& s : *run) e.push_back(measure(model, s));
     const double h = e[2].t_s - e[0].t_s;
@@ -254,7 +252,7 @@ TEST(GpsRangeRate, MatchesNumericalDerivativeOfRange) {
 }
 
 TEST(GpsVisibility, ElevationMaskIsRespected) {
-  const std::vector<sim::AlmanacEntry> alm = shipped();
+  const std::vector<sim::AlmanacEntry> alm = shipped_almanac();
   GpsConfig cfg = every_satellite_in_view();
   GpsModel all(cfg, alm, sim::EffectSet{}, 1);
   const fsw::GnssEpoch e = measure(all, static_truth(0.0));
@@ -296,7 +294,7 @@ TEST(GpsVisibility, ElevationMaskIsRespected) {
 }
 
 TEST(GpsVisibility, ChannelLimitKeepsTheHighestInPrnOrder) {
-  const std::vector<sim::AlmanacEntry> alm = shipped();
+  const std::vector<sim::AlmanacEntry> alm = shipped_almanac();
   GpsConfig cfg = every_satellite_in_view();
   GpsModel all(cfg, alm, sim::EffectSet{}, 1);
   const fsw::GnssEpoch e = measure(all, static_truth(0.0));
@@ -320,7 +318,7 @@ TEST(GpsVisibility, DefaultFlightSeesEnoughSatellites) {
   std::unique_ptr<sim::FlightMotion> flight = default_flight();
   ASSERT_TRUE(flight);
   sim::TruthGenerator gen(*flight, 10.0);
-  GpsModel model(sc.gps, shipped(), sc.effects, sc.seed);
+  GpsModel model(sc.gps, shipped_almanac(), sc.effects, sc.seed);
   int min_obs = 99, max_obs = 0, epochs = 0;
   for (long long k = 0;; ++k) {
     const sim::TruthSample& s = (k == 0) ? gen.current() : gen.next();
@@ -342,7 +340,7 @@ TEST(GpsVisibility, DefaultFlightSeesEnoughSatellites) {
 
 TEST(GpsErrors, MeasurementsCarryTheModelErrors) {
   // Default errors without white noise: pseudorange - range = clock bias + GM error of the PRN.
-  GpsModel model(GpsConfig{}, shipped(), sim::EffectSet{}, 7);
+  GpsModel model(GpsConfig{}, shipped_almanac(), sim::EffectSet{}, 7);
   const Vec3 r_rx = fsw::ecef_from_llh(kSite);
   for (double t : {0.0, 1.0, 2.0, 30.0}) {
     const fsw::GnssEpoch e = measure(model, static_truth(t));
@@ -364,8 +362,8 @@ TEST(GpsErrors, WhiteNoiseStatistics) {
   GpsConfig cfg = error_free();
   cfg.pseudorange_white_sigma_m = 3.0;
   cfg.pseudorange_rate_white_sigma_mps = 0.05;
-  GpsModel noisy(cfg, shipped(), sim::EffectSet{}, 5);
-  GpsModel clean(error_free(), shipped(), sim::EffectSet{}, 5);
+  GpsModel noisy(cfg, shipped_almanac(), sim::EffectSet{}, 5);
+  GpsModel clean(error_free(), shipped_almanac(), sim::EffectSet{}, 5);
   double s_pr = 0.0, s_prr = 0.0, lag_pr = 0.0;
   std::map<int, double> last;
   int n = 0, n_lag = 0;
@@ -399,7 +397,7 @@ TEST(GpsErrors, GaussMarkovSigmaAndCorrelation) {
   cfg.pseudorange_gm_tau_s = 60.0;
   cfg.pseudorange_rate_gm_sigma_mps = 0.2;
   cfg.pseudorange_rate_gm_tau_s = 10.0;
-  GpsModel model(cfg, shipped(), sim::EffectSet{}, 11);
+  GpsModel model(cfg, shipped_almanac(), sim::EffectSet{}, 11);
   constexpr int kEpochs = 20000;
   std::vector<double> prev_pr(33, 0.0), prev_prr(33, 0.0);
   double s_pr = 0.0, s_prr = 0.0, c_pr = 0.0, c_prr = 0.0, p_pr = 0.0, p_prr = 0.0, mean_pr = 0.0;
@@ -448,7 +446,7 @@ TEST(GpsClock, VarianceGrowthMatchesTwoStateModel) {
   cfg.clock_h_minus2_per_s = 2e-20;
   const double c2 = kSpeedOfLight_mps * kSpeedOfLight_mps;
   const double sb = cfg.clock_h0_s / 2.0 * c2, sd = 2.0 * fsw::kPi * fsw::kPi * cfg.clock_h_minus2_per_s * c2;
-  const std::vector<sim::AlmanacEntry> one = {entry(shipped(), 1)};  // cheap epochs
+  const std::vector<sim::AlmanacEntry> one = {entry(shipped_almanac(), 1)};  // cheap epochs
   constexpr int kRuns = 4000;
   const std::vector<double> times = {0.0, 0.5, 3.0, 20.0};
   std::vector<double> vb(times.size(), 0.0), vd(times.size(), 0.0), cbd(times.size(), 0.0);
@@ -487,7 +485,7 @@ TEST(GpsClock, InitialClockFromSigmas) {
   GpsConfig cfg = error_free();
   cfg.clock_bias_sigma_m = 30.0;
   cfg.clock_drift_sigma_mps = 1.0;
-  const std::vector<sim::AlmanacEntry> one = {entry(shipped(), 1)};
+  const std::vector<sim::AlmanacEntry> one = {entry(shipped_almanac(), 1)};
   double vb = 0.0, vd = 0.0;
   for (int run = 0; run < 4000; ++run) {
     GpsModel model(cfg, one, sim::EffectSet{}, static_cast<std::uint64_t>(run));
@@ -515,8 +513,8 @@ TEST(GpsEffects, LeverArmMovesThePseudorangeAlongTheLineOfSight) {
   const Vec3 lever_b(1.5, -0.8, -2.0);
   sim::EffectSet fx;
   for (std::size_t k = 0; k < 3; ++k) fx.set(Effect::kAntennaLeverArm, k, lever_b(static_cast<int>(k)));
-  GpsModel plain(error_free(), shipped(), sim::EffectSet{}, 1);
-  GpsModel arm(error_free(), shipped(), fx, 1);
+  GpsModel plain(error_free(), shipped_almanac(), sim::EffectSet{}, 1);
+  GpsModel arm(error_free(), shipped_almanac(), fx, 1);
   const fsw::GnssEpoch a = measure(plain, truth);
   const fsw::GnssEpoch b = measure(arm, truth);
   ASSERT_EQ(a.n_obs, b.n_obs);
@@ -537,7 +535,7 @@ TEST(GpsEffects, LeverArmMovesThePseudorangeAlongTheLineOfSight) {
 }
 
 TEST(GpsEffects, TroposphereAndIonosphereAddPositiveDelays) {
-  const std::vector<sim::AlmanacEntry> alm = shipped();
+  const std::vector<sim::AlmanacEntry> alm = shipped_almanac();
   GpsConfig cfg = every_satellite_in_view();
   GpsModel plain(cfg, alm, sim::EffectSet{}, 1);
   const fsw::GnssEpoch a = measure(plain, static_truth(0.0));
@@ -591,7 +589,7 @@ TEST(GpsEffects, DelayRateIsTheDerivativeOfTheDelay) {
   fx.set(Effect::kIonosphericDelay, 0, 1.0);
   GpsConfig cfg = error_free();
   cfg.elevation_mask_deg = 0.0;
-  GpsModel with(cfg, shipped(), fx, 1), without(cfg, shipped(), sim::EffectSet{}, 1);
+  GpsModel with(cfg, shipped_almanac(), fx, 1), without(cfg, shipped_almanac(), sim::EffectSet{}, 1);
   std::vector<fsw::GnssEpoch> w, wo;
   for (int k = 0; k < 3; ++k) {
     w.push_back(measure(with, static_truth(k)));
@@ -623,7 +621,7 @@ TEST(GpsDeterminism, SameSeedSameEpochsOtherSeedDiffers) {
   fx.set(Effect::kTroposphericDelay, 0, 1.0);
   std::unique_ptr<sim::FlightMotion> flight = default_flight();
   ASSERT_TRUE(flight);
-  GpsModel a(cfg, shipped(), fx, 42), b(cfg, shipped(), fx, 42), c(cfg, shipped(), fx, 43);
+  GpsModel a(cfg, shipped_almanac(), fx, 42), b(cfg, shipped_almanac(), fx, 42), c(cfg, shipped_almanac(), fx, 43);
   sim::TruthGenerator gen(*flight, 10.0);
   int differ = 0;
   for (int k = 0; k <= 1000; ++k) {
@@ -656,7 +654,7 @@ TEST(GpsDeterminism, SameSeedSameEpochsOtherSeedDiffers) {
 }
 
 TEST(GpsConfigCheck, RejectsInvalidConfigurations) {
-  const std::vector<sim::AlmanacEntry> alm = shipped();
+  const std::vector<sim::AlmanacEntry> alm = shipped_almanac();
   const auto rejects = [&](GpsConfig c) {
     EXPECT_THROW(GpsModel(c, alm, sim::EffectSet{}, 1), std::invalid_argument);
   };
@@ -714,7 +712,7 @@ TEST(GpsAlmanacReference, SatellitePositionsMatchRtklib) {
       {18, -17040657.542, 15706123.938, -12484466.639}, {22, -11316676.635, 24002612.132, -97646.214},
       {30, -16968739.895, 11010609.959, 16828837.428}, {31, 3359618.866, 21584719.811, 15255676.253},
   };
-  const std::vector<sim::AlmanacEntry> alm = shipped();
+  const std::vector<sim::AlmanacEntry> alm = shipped_almanac();
   ASSERT_FALSE(alm.empty());
   for (const Ref& ref : refs) {
     Vec3 r, v;

@@ -14,12 +14,13 @@
 #include "hal/lcm_channels.hpp"
 #include "hal/lcm_types.hpp"
 #include "lcm_test_util.hpp"
+#include "test_util.hpp"
 
 namespace {
 
 using fsw::Vec3;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test_util::kInf;
+using test_util::kNaN;
 
 using lcm_test::bits_equal;
 using lcm_test::encode;

@@ -13,6 +13,7 @@
 #include "hal/lcm_log_sink.hpp"
 #include "hal/lcm_types.hpp"
 #include "lcm_test_util.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -20,8 +21,8 @@ using fsw::Vec3;
 using lcm_test::bits_equal;
 using lcm_test::encode;
 using Kind = fsw::InputEvent::Kind;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test_util::kInf;
+using test_util::kNaN;
 
 bool same_pvt(const hal::GnssPvtSample& a, const hal::GnssPvtSample& b) {
   bool eq = bits_equal(a.t_s, b.t_s) && a.gps_week == b.gps_week && bits_equal(a.gps_tow_s, b.gps_tow_s) &&

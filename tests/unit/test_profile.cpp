@@ -15,6 +15,7 @@
 #include "recordings.hpp"
 #include "sim/profile.hpp"
 #include "tools/free_inertial.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -22,7 +23,7 @@ using fsw::kDegToRad;
 using fsw::kRadToArcsec;
 using fsw::Vec3;
 
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+using test_util::contains;
 
 /// A small profile file in the test temp directory, removed again at scope exit.
 class TempFile {

@@ -9,6 +9,7 @@
 #include "sim/effects.hpp"
 #include "cfg/data_dir.hpp"
 #include "sim/scenario.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -87,7 +88,7 @@ std::string expect_rejected(const std::string& text, int line, const std::string
   return r.error;
 }
 
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+using test_util::contains;
 
 TEST(ScenarioDefaults, DefaultSegmentsAreTheBankToTurnPattern) {
   const std::vector<sim::Segment> segs = Scenario::default_segments();

@@ -17,6 +17,7 @@
 
 #include "fsw/frames.hpp"
 #include "fsw/strapdown.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -31,9 +32,9 @@ using fsw::Strapdown;
 using fsw::Vec3;
 
 using fsw::kPi;
-constexpr double kDeg = kPi / 180.0;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test_util::kDeg;
+using test_util::kInf;
+using test_util::kNaN;
 
 Quat qx(double a) { return Quat(Eigen::AngleAxisd(a, Vec3::UnitX())); }
 Quat qz(double a) { return Quat(Eigen::AngleAxisd(a, Vec3::UnitZ())); }

@@ -23,6 +23,7 @@
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
 #include "tools/free_inertial.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -31,7 +32,7 @@ using fsw::Vec3;
 using sim::FlightPhase;
 
 using fsw::kPi;
-constexpr double kDeg = kPi / 180.0;
+using test_util::kDeg;
 constexpr double kOmegaEarth = 7.292115e-5;
 // Normal gravity at 35 deg, 5000 m (the default start), from the closed-form WGS-84 expression
 // evaluated independently (also pinned in test_frames.cpp).

@@ -18,10 +18,13 @@
 #include "tools/diagnosis_evidence.hpp"
 #include "tools/diagnosis_intervals.hpp"
 #include "tools/diagnosis_separation.hpp"
+#include "tools/number_text.hpp"
 #include <chrono>
 
 namespace sdins {
 namespace {
+using tools::fmt;
+
 struct DiagnoseOptions {
   std::string log;
   std::string json;
@@ -84,11 +87,6 @@ void write_traces(const std::string& path, const tools::DiagnosisRun& r) {
   out.commit();
 }
 
-std::string fmt(double v, const char* f = "%.4g") {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 nlohmann::json segment_json(const sim::Segment& s) {
   const char* dir = s.direction == sim::TurnDirection::kLeft ? "left" : "right";
@@ -221,7 +219,7 @@ std::string finding_label(const tools::Finding& f) {
 std::string applied_text(const std::vector<tools::AppliedCorrection>& applied) {
   if (applied.empty()) return "nothing (the recording as given)";
   std::string t;
-  for (const tools::AppliedCorrection& a : applied) t += (t.empty() ? "" : ", ") + a.name + " " + fmt(a.value, "%+.5g") + " " + a.unit;
+  for (const tools::AppliedCorrection& a : applied) t += (t.empty() ? "" : ", ") + a.name + " " + fmt("%+.5g", a.value) + " " + a.unit;
   return t;
 }
 
@@ -280,7 +278,7 @@ void print_chain(const tools::DiagnosisChain& ch) {
   const tools::MountingEstimate& m = ch.mounting;
   if (m.searched)
     std::printf("mounting yaw (track initialisation): %s (%d runs; deviance at the configured heading offset %.1f)\n",
-                m.found ? ("found " + fmt(m.yaw_deg, "%.2f") + " deg, 95% [" + fmt(m.lo_deg, "%.2f") + ", " + fmt(m.hi_deg, "%.2f") +
+                m.found ? ("found " + fmt("%.2f", m.yaw_deg) + " deg, 95% [" + fmt("%.2f", m.lo_deg) + ", " + fmt("%.2f", m.hi_deg) +
                            "] deg, applied to init.heading_offset_deg before every search")
                               .c_str()
                         : "none (no rotated start fits better than the configured one)",
@@ -289,7 +287,7 @@ void print_chain(const tools::DiagnosisChain& ch) {
   for (const tools::ChainStage& st : ch.stages) {
     std::string found;
     for (const tools::Finding& f : st.findings)
-      found += (found.empty() ? "" : ", ") + finding_label(f) + (f.separable() ? " " + fmt(f.estimate, "%.4g") + " " + f.unit : "");
+      found += (found.empty() ? "" : ", ") + finding_label(f) + (f.separable() ? " " + fmt("%.4g", f.estimate) + " " + f.unit : "");
     std::printf("chain stage %d, after %s: %s; baseline log-likelihood %.1f over %d measurements common to every stage "
                 "(extended %+.1f)%s\n",
                 st.stage, applied_text(st.applied_before).c_str(), found.empty() ? "no finding" : found.c_str(),
@@ -309,8 +307,8 @@ void chain_md(std::ostream& md, const tools::DiagnosisChain& ch) {
   if (ch.mounting.searched)
     md << "Mounting yaw (the track initialisation's heading offset, profile likelihood of the ungated baseline over "
        << ch.mounting.runs << " runs): "
-       << (ch.mounting.found ? "**" + fmt(ch.mounting.yaw_deg, "%.2f") + " deg**, 95% [" + fmt(ch.mounting.lo_deg, "%.2f") +
-                                   ", " + fmt(ch.mounting.hi_deg, "%.2f") + "] deg, applied to `init.heading_offset_deg` before every search"
+       << (ch.mounting.found ? "**" + fmt("%.2f", ch.mounting.yaw_deg) + " deg**, 95% [" + fmt("%.2f", ch.mounting.lo_deg) +
+                                   ", " + fmt("%.2f", ch.mounting.hi_deg) + "] deg, applied to `init.heading_offset_deg` before every search"
                              : std::string("none (no rotated start fits better than the configured one)"))
        << ".\n\n";
   md << ""
@@ -324,10 +322,10 @@ void chain_md(std::ostream& md, const tools::DiagnosisChain& ch) {
     std::string found;
     for (const tools::Finding& f : st.findings)
       found += (found.empty() ? "" : "; ") + finding_label(f) +
-               (f.separable() ? " " + fmt(f.estimate) + " " + f.unit + " " + interval_cell(f.interval) : "");
+               (f.separable() ? " " + fmt("%.4g", f.estimate) + " " + f.unit + " " + interval_cell(f.interval) : "");
     md << "| " << st.stage << " | " << applied_text(st.applied_before) << " | " << (found.empty() ? "nothing" : found)
-       << " | " << fmt(st.base_log_likelihood, "%.1f") << " (" << st.common_measurements << ") | "
-       << fmt(st.extended_gain, "%+.1f") << " | " << (st.applied_after.empty() ? "(end)" : st.applied_after) << " |\n";
+       << " | " << fmt("%.1f", st.base_log_likelihood) << " (" << st.common_measurements << ") | "
+       << fmt("%+.1f", st.extended_gain) << " | " << (st.applied_after.empty() ? "(end)" : st.applied_after) << " |\n";
   }
   md << "\n";
   if (!ch.vanished.empty()) {
@@ -404,20 +402,20 @@ void evidence_md(std::ostream& md, const tools::RecordingEvidence& ev) {
   }
   if (ev.counter_samples > 0)
     md << "- The IMU's own sample counter against its time tags: the tags are stretched by "
-       << fmt(ev.counter_stretch_ppm, "%+.1f") << " ppm against a nominal " << fmt(ev.counter_rate_hz, "%.0f") << " Hz ("
+       << fmt("%+.1f", ev.counter_stretch_ppm) << " ppm against a nominal " << fmt("%.0f", ev.counter_rate_hz) << " Hz ("
        << ev.counter_samples << " samples).\n";
   if (!ev.counter_note.empty()) md << "- " << ev.counter_note << ".\n";
   if (ev.has_tick_ratio)
-    md << "- The import mapped the IMU's own tick onto GPS time stretched by " << fmt(ev.tick_stretch_ppm, "%+.1f")
+    md << "- The import mapped the IMU's own tick onto GPS time stretched by " << fmt("%+.1f", ev.tick_stretch_ppm)
        << " ppm (`imu.seconds_per_imu_second` of `" << ev.summary_path << "`).\n";
   if (ev.has_clock_fit)
     md << "- The import's clock pair (`" << ev.summary_path << "`): the local clock drifts "
-       << fmt(ev.clock_fit_drift_ppm, "%+.2f") << " ppm against GPS time.\n";
+       << fmt("%+.2f", ev.clock_fit_drift_ppm) << " ppm against GPS time.\n";
   else if (!ev.summary_path.empty())
     md << "- `" << ev.summary_path << "`: " << ev.summary_note << ".\n";
   if (ev.has_reference_lag)
     md << "- The reference's " << ev.reference_kind << " rate against the IMU's gyro rate: the IMU tags lag "
-       << fmt(ev.reference_lag_s, "%+.4f") << " s (correlation " << fmt(ev.reference_correlation, "%.3f") << ")"
+       << fmt("%+.4f", ev.reference_lag_s) << " s (correlation " << fmt("%.3f", ev.reference_correlation) << ")"
        << (ev.reference_note.empty() ? "" : "; " + ev.reference_note) << ".\n";
   md << "\n";
   if (ev.checks.empty()) {
@@ -426,9 +424,9 @@ void evidence_md(std::ostream& md, const tools::RecordingEvidence& ev) {
   }
   md << "| finding | estimate | 95% interval | evidence | what it says | tolerance | verdict |\n|---|---|---|---|---|---|---|\n";
   for (const tools::EvidenceCheck& c : ev.checks)
-    md << "| " << c.finding << " | " << fmt(c.finding_estimate) << " " << c.unit << " | [" << fmt(c.finding_lo) << ", "
-       << fmt(c.finding_hi) << "] | " << c.source << " | " << fmt(c.evidence, "%+.4g") << " " << c.unit << " | "
-       << fmt(c.tolerance, "%.3g") << " | " << (c.contradicts ? "**contradicted**" : "consistent") << " |\n";
+    md << "| " << c.finding << " | " << fmt("%.4g", c.finding_estimate) << " " << c.unit << " | [" << fmt("%.4g", c.finding_lo) << ", "
+       << fmt("%.4g", c.finding_hi) << "] | " << c.source << " | " << fmt("%+.4g", c.evidence) << " " << c.unit << " | "
+       << fmt("%.3g", c.tolerance) << " | " << (c.contradicts ? "**contradicted**" : "consistent") << " |\n";
   md << "\nNothing is overridden: the finding stays as the likelihood gives it; a contradicted one says that the data "
         "and the recording's own clocks or reference disagree, and one of them (or the model) is wrong.\n\n";
 }
@@ -865,15 +863,15 @@ void findings_md(std::ostream& md, const Diagnosis& d) {
         "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const tools::Finding& f : r.findings) {
     std::string cw;
-    for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt(c.second, "%.2f") + ")";
+    for (const auto& c : f.confounded_with) cw += (cw.empty() ? "" : ", ") + c.first + " (rho " + fmt("%.2f", c.second) + ")";
     md << "| " << fsw::effect_info(f.effect).name << " | " << f.component << " | "
-       << (f.separable() ? fmt(f.estimate) + (f.estimate_method == "profile_maximum" ? " (profile maximum)" : "")
+       << (f.separable() ? fmt("%.4g", f.estimate) + (f.estimate_method == "profile_maximum" ? " (profile maximum)" : "")
                          : "group, below")
-       << " | " << (f.separable() ? fmt(f.sigma, "%.3g") : "") << " | " << f.unit << " | " << interval_cell(f.interval)
-       << " | " << (f.separable() ? fmt(f.filter_estimate) + " +- " + fmt(f.filter_sigma, "%.3g") : "") << " | "
-       << fmt(f.z2, "%.1f")
+       << " | " << (f.separable() ? fmt("%.3g", f.sigma) : "") << " | " << f.unit << " | " << interval_cell(f.interval)
+       << " | " << (f.separable() ? fmt("%.4g", f.filter_estimate) + " +- " + fmt("%.3g", f.filter_sigma) : "") << " | "
+       << fmt("%.1f", f.z2)
        << (f.dof > 1 ? " (" + std::to_string(f.dof) + " dof)" : "")
-       << " | " << fmt(f.p_value, "%.2g") << " | " << cw << " |\n";
+       << " | " << fmt("%.2g", f.p_value) << " | " << cw << " |\n";
   }
   md << "\n";
   bool disagree = false;
@@ -884,7 +882,7 @@ void findings_md(std::ostream& md, const Diagnosis& d) {
   if (disagree)
     md << "**Not calibrated** (marked above): the filter's estimate lies where the profile likelihood's deviance "
           "is above "
-       << fmt(tools::kModelAgreementDeviance, "%.2f")
+       << fmt("%.2f", tools::kModelAgreementDeviance)
        << " (p < 0.001). The filter and the profile then disagree about the component, so the model does not "
           "describe its effect on these data (an unmodelled effect, a wrong noise model), and the interval, which "
           "assumes it does, is not a calibrated 95% statement (docs/diagnosis-intervals.md).\n\n";
@@ -897,25 +895,25 @@ void findings_md(std::ostream& md, const Diagnosis& d) {
           "|---|---|---|---|---|---|---|---|\n";
     for (const tools::GroupMember& m : f.group)
       md << "| " << m.name << " | "
-         << (m.alone_interval.is_profile() ? fmt(m.alone_interval.estimate) + " (profile maximum)" : fmt(m.alone_estimate))
-         << " | " << fmt(m.alone_estimate) << " +- " << fmt(m.alone_sigma, "%.3g") << " | " << m.unit
-         << " | " << interval_cell(m.alone_interval) << " | " << fmt(m.prior_z, "%+.1f") << " | " << fmt(m.plausibility, "%.2f") << " | "
-         << fmt(m.correlation, "%+.4f") << " |\n";
+         << (m.alone_interval.is_profile() ? fmt("%.4g", m.alone_interval.estimate) + " (profile maximum)" : fmt("%.4g", m.alone_estimate))
+         << " | " << fmt("%.4g", m.alone_estimate) << " +- " << fmt("%.3g", m.alone_sigma) << " | " << m.unit
+         << " | " << interval_cell(m.alone_interval) << " | " << fmt("%+.1f", m.prior_z) << " | " << fmt("%.2f", m.plausibility) << " | "
+         << fmt("%+.4f", m.correlation) << " |\n";
     md << "\n";
     const std::size_t fi = static_cast<std::size_t>(&f - r.findings.data());
     const tools::Separation& sp = seps[fi];
     md << "**The manoeuvre that separates them.** ";
     if (sp.predicted) {
       const std::string file = "separation-" + std::to_string(fi + 1) + ".toml";
-      md << "Fly on with *" << sp.label << "* (" << fmt(sp.added_s, "%.0f") << " s more): the members' "
-         << "correlation goes from " << fmt(sp.flown_correlation, "%.4f") << " to " << fmt(sp.predicted_correlation, "%.3f")
-         << " predicted, " << (sp.separates ? "below" : "**not** below") << " the " << fmt(sp.max_correlation, "%.2f")
+      md << "Fly on with *" << sp.label << "* (" << fmt("%.0f", sp.added_s) << " s more): the members' "
+         << "correlation goes from " << fmt("%.4f", sp.flown_correlation) << " to " << fmt("%.3f", sp.predicted_correlation)
+         << " predicted, " << (sp.separates ? "below" : "**not** below") << " the " << fmt("%.2f", sp.max_correlation)
          << " at which members are not told apart. " << sp.note << ".";
       if (!sp.scenario_toml.empty()) md << " The whole scenario: [" << file << "](" << file << ").";
       md << "\n\n| appended | more flight [s] | predicted correlation |\n|---|---|---|\n";
       for (const tools::SeparationTrial& t : trials)
-        md << "| " << t.label << " | " << fmt(t.added_s, "%.0f") << " | "
-           << (t.evaluated && fi < t.correlation.size() ? fmt(t.correlation[fi], "%.3f") : "(" + t.error + ")")
+        md << "| " << t.label << " | " << fmt("%.0f", t.added_s) << " | "
+           << (t.evaluated && fi < t.correlation.size() ? fmt("%.3f", t.correlation[fi]) : "(" + t.error + ")")
            << " |\n";
       md << "\n";
     } else {
@@ -931,37 +929,37 @@ void gain_md(std::ostream& md, const Diagnosis& d) {
   const tools::DiagnosisResult& r = d.r;
   const bool pvt = cfg.gnss_source == cfg::GnssSource::kPvt;
   md << "## Gain (extended model " << d.ext_name << ")\n\n| | baseline | extended |\n|---|---|---|\n";
-  md << "| NIS per measurement | " << fmt(r.base.innovations.nis_mean, "%.3f") << " | "
-     << fmt(r.extended.innovations.nis_mean, "%.3f") << " |\n";
+  md << "| NIS per measurement | " << fmt("%.3f", r.base.innovations.nis_mean) << " | "
+     << fmt("%.3f", r.extended.innovations.nis_mean) << " |\n";
   md << "| " << (pvt ? "position" : "pseudorange") << " innovation RMS [m] | "
-     << fmt(rms(r.base.innovations, pvt), "%.3f") << " | " << fmt(rms(r.extended.innovations, pvt), "%.3f") << " |\n";
+     << fmt("%.3f", rms(r.base.innovations, pvt)) << " | " << fmt("%.3f", rms(r.extended.innovations, pvt)) << " |\n";
   md << "| " << (pvt ? "velocity" : "pseudorange-rate") << " innovation RMS [m/s] | "
-     << fmt(rms_rate(r.base.innovations, pvt), "%.4f") << " | " << fmt(rms_rate(r.extended.innovations, pvt), "%.4f") << " |\n";
-  md << "| log-likelihood (common measurements) | " << fmt(r.base.innovations.log_likelihood, "%.1f") << " | "
-     << fmt(r.extended.innovations.log_likelihood, "%.1f") << " |\n";
+     << fmt("%.4f", rms_rate(r.base.innovations, pvt)) << " | " << fmt("%.4f", rms_rate(r.extended.innovations, pvt)) << " |\n";
+  md << "| log-likelihood (common measurements) | " << fmt("%.1f", r.base.innovations.log_likelihood) << " | "
+     << fmt("%.1f", r.extended.innovations.log_likelihood) << " |\n";
   if (r.base.nav.available) {
-    md << "| position RMS [m] | " << fmt(r.base.nav.pos_rms_m, "%.2f") << " | " << fmt(r.extended.nav.pos_rms_m, "%.2f") << " |\n";
-    md << "| velocity RMS [m/s] | " << fmt(r.base.nav.vel_rms_mps, "%.3f") << " | " << fmt(r.extended.nav.vel_rms_mps, "%.3f") << " |\n";
+    md << "| position RMS [m] | " << fmt("%.2f", r.base.nav.pos_rms_m) << " | " << fmt("%.2f", r.extended.nav.pos_rms_m) << " |\n";
+    md << "| velocity RMS [m/s] | " << fmt("%.3f", r.base.nav.vel_rms_mps) << " | " << fmt("%.3f", r.extended.nav.vel_rms_mps) << " |\n";
     if (r.base.nav.attitude_samples > 0) {  // a reference without attitude scores position and velocity only
-      md << "| tilt RMS [deg] | " << fmt(r.base.nav.tilt_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.tilt_rms_deg, "%.4f") << " |\n";
-      md << "| heading RMS [deg] | " << fmt(r.base.nav.heading_rms_deg, "%.4f") << " | " << fmt(r.extended.nav.heading_rms_deg, "%.4f") << " |\n";
+      md << "| tilt RMS [deg] | " << fmt("%.4f", r.base.nav.tilt_rms_deg) << " | " << fmt("%.4f", r.extended.nav.tilt_rms_deg) << " |\n";
+      md << "| heading RMS [deg] | " << fmt("%.4f", r.base.nav.heading_rms_deg) << " | " << fmt("%.4f", r.extended.nav.heading_rms_deg) << " |\n";
     }
   }
   if (r.base.outages.windows > 0) {
-    md << "| horizontal error after " << fmt(cfg.outage_length_s, "%.0f") << " s GNSS outages, RMS of "
-       << r.base.outages.windows << " [m] | " << fmt(r.base.outages.horizontal_rms_m, "%.2f") << " | "
-       << fmt(r.extended.outages.horizontal_rms_m, "%.2f") << " |\n";
-    md << "| ... max [m] | " << fmt(r.base.outages.horizontal_max_m, "%.2f") << " | "
-       << fmt(r.extended.outages.horizontal_max_m, "%.2f") << " |\n";
-    md << "| ... the filter's own 1-sigma there, RMS [m] | " << fmt(r.base.outages.predicted_horizontal_rms_m, "%.2f")
-       << " | " << fmt(r.extended.outages.predicted_horizontal_rms_m, "%.2f") << " |\n";
-    md << "| ... horizontal NEES, mean (2 if consistent) | " << fmt(r.base.outages.horizontal_nees_mean, "%.1f")
-       << " | " << fmt(r.extended.outages.horizontal_nees_mean, "%.1f") << " |\n";
+    md << "| horizontal error after " << fmt("%.0f", cfg.outage_length_s) << " s GNSS outages, RMS of "
+       << r.base.outages.windows << " [m] | " << fmt("%.2f", r.base.outages.horizontal_rms_m) << " | "
+       << fmt("%.2f", r.extended.outages.horizontal_rms_m) << " |\n";
+    md << "| ... max [m] | " << fmt("%.2f", r.base.outages.horizontal_max_m) << " | "
+       << fmt("%.2f", r.extended.outages.horizontal_max_m) << " |\n";
+    md << "| ... the filter's own 1-sigma there, RMS [m] | " << fmt("%.2f", r.base.outages.predicted_horizontal_rms_m)
+       << " | " << fmt("%.2f", r.extended.outages.predicted_horizontal_rms_m) << " |\n";
+    md << "| ... horizontal NEES, mean (2 if consistent) | " << fmt("%.1f", r.base.outages.horizontal_nees_mean)
+       << " | " << fmt("%.1f", r.extended.outages.horizontal_nees_mean) << " |\n";
   }
   if (r.base.outages.reacquisitions > 0)
     md << "| NIS per scalar of the first update after each of " << r.base.outages.reacquisitions
-       << " outages (1 if consistent; no reference needed) | " << fmt(r.base.outages.reacquisition_nis_mean, "%.1f")
-       << " | " << fmt(r.extended.outages.reacquisition_nis_mean, "%.1f") << " |\n";
+       << " outages (1 if consistent; no reference needed) | " << fmt("%.1f", r.base.outages.reacquisition_nis_mean)
+       << " | " << fmt("%.1f", r.extended.outages.reacquisition_nis_mean) << " |\n";
   md << "\n";
 }
 
@@ -992,7 +990,7 @@ bool write_report(const Diagnosis& d, const nlohmann::json& j) {
      << cands.size() << " catalogue components was tried as one extra state; " << r.tested
      << " are observable with this data (posterior variance <= " << cfg.max_variance_ratio
      << " x prior); the test is Wald chi-square(1) at a family-wise false-alarm rate of " << cfg.alpha
-     << " (threshold z^2 = " << fmt(r.threshold_z2, "%.2f") << ").\n\n";
+     << " (threshold z^2 = " << fmt("%.2f", r.threshold_z2) << ").\n\n";
   if (d.chained) chain_md(md, d.chain);
   findings_md(md, d);
   evidence_md(md, d.evidence);

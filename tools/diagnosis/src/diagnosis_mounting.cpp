@@ -10,6 +10,7 @@
 #include "fsw/driver.hpp"
 #include "fsw/frames.hpp"
 #include "tools/diagnosis_intervals.hpp"
+#include "tools/number_text.hpp"
 
 namespace tools {
 namespace {
@@ -73,16 +74,11 @@ MountingAngle angle_from(const std::vector<double>& x, const std::vector<double>
   return a;
 }
 
-std::string fmt(double v, const char* f) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 std::string angle_text(const MountingAngle& a) {
-  return fmt(a.estimate_deg, "%.2f") + " deg, 95% [" + fmt(a.lo_deg, "%.2f") + ", " + fmt(a.hi_deg, "%.2f") +
-         "] (scatter " + fmt(a.scatter_se_deg, "%.2f") + ", attitude " + fmt(a.attitude_sigma_deg, "%.2f") +
-         " deg 1-sigma; halves " + fmt(a.first_half_deg, "%.2f") + " / " + fmt(a.second_half_deg, "%.2f") + ")";
+  return fmt("%.2f", a.estimate_deg) + " deg, 95% [" + fmt("%.2f", a.lo_deg) + ", " + fmt("%.2f", a.hi_deg) +
+         "] (scatter " + fmt("%.2f", a.scatter_se_deg) + ", attitude " + fmt("%.2f", a.attitude_sigma_deg) +
+         " deg 1-sigma; halves " + fmt("%.2f", a.first_half_deg) + " / " + fmt("%.2f", a.second_half_deg) + ")";
 }
 
 }  // namespace
@@ -210,14 +206,14 @@ std::vector<std::string> mounting_terminal_lines(const MountingFromTravel& m) {
   if (!m.determined) return {"mounting (direction of travel): not determined: " + m.why};
   const auto line = [&](const char* name, const MountingAngle& a) {
     return std::string("mounting ") + name + " (direction of travel, " + std::to_string(m.epochs) + " epochs at >= " +
-           fmt(m.min_speed_mps, "%.2f") + " m/s): " + (a.named ? "found " : "not named (interval at p = 0.001 holds 0): ") +
+           fmt("%.2f", m.min_speed_mps) + " m/s): " + (a.named ? "found " : "not named (interval at p = 0.001 holds 0): ") +
            angle_text(a);
   };
   std::vector<std::string> v = {line("yaw", m.yaw), line("pitch", m.pitch)};
   if (m.yaw.named)
     v.push_back(m.track_init ? "mounting: the yaw is the track initialisation's init.heading_offset_deg (applied before every search)"
                              : "mounting: not applied (this initialisation does not use the track; with init.mode = \"track\" "
-                               "set init.heading_offset_deg = " + fmt(m.yaw.estimate_deg, "%.1f") + ")");
+                               "set init.heading_offset_deg = " + fmt("%.1f", m.yaw.estimate_deg) + ")");
   if (m.pitch.named) v.push_back("mounting: the pitch enters no part of the model (the levelling carries it): reported only");
   return v;
 }
@@ -226,16 +222,16 @@ std::string mounting_report_md(const MountingFromTravel& m) {
   std::string s = "## The mounting\n\n";
   if (!m.determined) return s + "Not determined from the direction of travel: " + m.why + ".\n\n";
   s += "The direction of travel in the IMU's axes (the navigation solution's velocity turned into them), over " +
-       std::to_string(m.epochs) + " GNSS-updated epochs at >= " + fmt(m.min_speed_mps, "%.2f") +
+       std::to_string(m.epochs) + " GNSS-updated epochs at >= " + fmt("%.2f", m.min_speed_mps) +
        " m/s; the interval adds the scatter of " + std::to_string(m.blocks) +
        " block means (Student t) and the filter's own attitude sigma, taken as fully correlated. It assumes the vehicle "
        "moves along its own x axis on average (an aircraft's angle of attack adds to the pitch, a crab angle to the "
        "yaw).\n\n| angle | estimate | 95% interval | scatter s.e. | attitude sigma | first / second half | named |\n"
        "|---|---|---|---|---|---|---|\n";
   const auto row = [&](const char* name, const MountingAngle& a) {
-    s += std::string("| ") + name + " | " + fmt(a.estimate_deg, "%.2f") + " deg | [" + fmt(a.lo_deg, "%.2f") + ", " +
-         fmt(a.hi_deg, "%.2f") + "] | " + fmt(a.scatter_se_deg, "%.2f") + " | " + fmt(a.attitude_sigma_deg, "%.2f") + " | " +
-         fmt(a.first_half_deg, "%.2f") + " / " + fmt(a.second_half_deg, "%.2f") + " | " + (a.named ? "**yes**" : "no") + " |\n";
+    s += std::string("| ") + name + " | " + fmt("%.2f", a.estimate_deg) + " deg | [" + fmt("%.2f", a.lo_deg) + ", " +
+         fmt("%.2f", a.hi_deg) + "] | " + fmt("%.2f", a.scatter_se_deg) + " | " + fmt("%.2f", a.attitude_sigma_deg) + " | " +
+         fmt("%.2f", a.first_half_deg) + " / " + fmt("%.2f", a.second_half_deg) + " | " + (a.named ? "**yes**" : "no") + " |\n";
   };
   row("yaw (IMU heading minus track)", m.yaw);
   row("pitch (IMU pitch above the flight path)", m.pitch);
@@ -243,7 +239,7 @@ std::string mounting_report_md(const MountingFromTravel& m) {
   if (m.yaw.named)
     s += m.track_init ? "\nThe yaw is applied to `init.heading_offset_deg` (the track initialisation) before every search.\n"
                       : "\nNot applied: this initialisation does not use the track (with `init.mode = \"track\"`, "
-                        "`init.heading_offset_deg = " + fmt(m.yaw.estimate_deg, "%.1f") + "`).\n";
+                        "`init.heading_offset_deg = " + fmt("%.1f", m.yaw.estimate_deg) + "`).\n";
   return s + "\n";
 }
 

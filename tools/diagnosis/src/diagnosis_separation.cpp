@@ -11,6 +11,7 @@
 #include "sim/effects.hpp"
 #include "sim/trajectory.hpp"
 #include "tools/diagnosis_parallel.hpp"
+#include "tools/number_text.hpp"
 
 namespace tools {
 namespace {
@@ -140,11 +141,6 @@ std::vector<int> positions(const DiagnosisRun& run, const std::vector<int>& memb
   return pos;
 }
 
-std::string fmt(double v, const char* f) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 }  // namespace
 
@@ -246,7 +242,7 @@ FlownScenario scenario_from_sidecar(const std::string& log_path) {
     out.known = true;
     out.scenario = sc;
     out.source = "sidecar " + sidecar + ": " + scenario_text + ", seed " + std::to_string(sc.seed) + ", " +
-                 fmt(sc.duration_s, "%g") + " s";
+                 fmt("%g", sc.duration_s) + " s";
   } catch (const std::exception& e) {
     out.known = false;
     out.note = "the sidecar " + sidecar + " cannot be read (" + e.what() + "): segments without a prediction";
@@ -431,9 +427,9 @@ void set_separation(const SeparationContext& ctx, const std::vector<Trial>& all,
     ext.name = flown.scenario.name + " + " + t.label;
     const sim::ScenarioWriteResult w = sim::write_scenario_toml(
         ext, "The flown scenario (" + flown.source + ")\nwith the segments that separate " + group +
-                 " appended\n(" + t.label + ", from t = " + fmt(flown.scenario.duration_s, "%g") + " s; written by "
+                 " appended\n(" + t.label + ", from t = " + fmt("%g", flown.scenario.duration_s) + " s; written by "
                  "sdins diagnose, docs/diagnosis-separation.md).\nPredicted correlation of the members " +
-                 fmt(s.predicted_correlation, "%.3f") + " (flown: " + fmt(s.flown_correlation, "%.4f") + ").");
+                 fmt("%.3f", s.predicted_correlation) + " (flown: " + fmt("%.4f", s.flown_correlation) + ").");
     if (w.ok()) s.scenario_toml = w.text;
     else s.note += "; the scenario file cannot be written: " + w.error;
   } else {

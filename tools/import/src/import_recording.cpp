@@ -22,6 +22,7 @@
 #include "import_common.hpp"
 #include "tools/import_describe.hpp"
 #include "tools/importers.hpp"
+#include "tools/number_text.hpp"
 
 extern char** environ;
 
@@ -419,11 +420,6 @@ using namespace import_detail;
 // ---------------------------------------------------------------------------------------------
 // Text
 
-std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof(b), f, v);
-  return b;
-}
 
 std::string span_text(const nlohmann::json& s) {
   if (s.is_null() || s.value("count", 0) == 0) return "none";

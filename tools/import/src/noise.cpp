@@ -12,19 +12,16 @@
 #include "fsw/gps_orbit.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "sim/rng.hpp"
+#include "tools/number_text.hpp"
+#include "import_common.hpp"  // median
 
 namespace tools {
 namespace {
 
+using import_detail::median;
+
 constexpr const char* kAxisNames[6] = {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"};
 constexpr double kRadpsToDegph = 1.0 / fsw::kDegPerHourToRadps;
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const std::size_t k = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
 
 /// The median of the k smallest values: the reference of a window statistic.
 double quiet_reference(std::vector<double> v, std::size_t k) {
@@ -34,11 +31,6 @@ double quiet_reference(std::vector<double> v, std::size_t k) {
   return v[(k - 1) / 2];
 }
 
-std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 }  // namespace
 

@@ -18,6 +18,7 @@
 #include "tools/gps_utc.hpp"
 #include "tools/importers.hpp"
 #include "import_common.hpp"
+#include "tools/number_text.hpp"
 
 namespace tools {
 namespace {
@@ -830,11 +831,6 @@ UlogImportResult import_ulog(const UlogImportOptions& opt) {
 }
 
 namespace {
-std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof(b), f, v);
-  return b;
-}
 std::string stream_text(const nlohmann::json& s) {
   if (s["samples"].get<std::uint64_t>() == 0) return "none";
   return std::to_string(s["samples"].get<std::uint64_t>()) + ", t_s " + fmt("%.3f", s["t_first_s"].get<double>()) + " .. " +

@@ -7,15 +7,11 @@
 
 #include "fsw/effect_catalogue.hpp"
 #include "fsw/frames.hpp"
+#include "tools/number_text.hpp"
 
 namespace tools::paper {
 namespace {
 
-std::string fmt(const char* f, double a) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, a);
-  return buf;
-}
 
 double ratio_max_min(double a, double b) { return std::max(a, b) / std::max(1e-300, std::min(a, b)); }
 

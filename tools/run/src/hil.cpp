@@ -15,6 +15,7 @@
 #include "fsw/driver.hpp"
 #include "hal/can_fsw_input.hpp"
 #include "hal/rt_clock.hpp"
+#include "tools/number_text.hpp"
 
 namespace tools {
 namespace {
@@ -110,11 +111,6 @@ std::uint32_t draw_run_id() {
   return id;
 }
 
-std::string fmt(const char* f, double a) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, a);
-  return b;
-}
 
 }  // namespace
 
