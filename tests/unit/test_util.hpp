@@ -16,7 +16,7 @@ namespace test_util {
 
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
-inline constexpr double kDeg = fsw::kPi / 180.0;
+inline constexpr double kDeg = fsw::kDegToRad;
 
 inline bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 

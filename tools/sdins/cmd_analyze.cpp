@@ -82,20 +82,17 @@ void register_analyze(CLI::App& app) {
 
 int run_analyze() { return run_analysis(analyze_opt.scenario.load(), analyze_opt.out, analyze_opt.gamma_arcsec, analyze_opt.plots); }
 
-int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gamma_arcsec, bool plots) {
-  namespace fs = std::filesystem;
-  const fs::path out(out_dir);
-  tools::require_distinct({out_dir}, {});
-  tools::RunDirectory run_dir(out_dir);  // docs/faults.md: summary.json removed now, written last
-  const double lat = sc.start.lat_deg * kDegToRad;
-  json j;
-  j["scenario"] = {{"name", sc.name}, {"duration_s", sc.duration_s}, {"lat_deg", sc.start.lat_deg},
-                   {"speed_mps", sc.start.speed_mps}};
+namespace {
 
+namespace fs = std::filesystem;
+
+/// Self-alignment: four stationary 120 s cases against the closed-form levelling and
+/// gyrocompassing errors (alignment.csv, j["alignment"]).
+std::vector<tools::AlignmentCase> analyze_alignment(const sim::Scenario& sc, double lat, const fs::path& out, json& j) {
   // ---- Self-alignment ----
   std::printf("self-alignment (stationary, 120 s, latitude %.1f deg):\n", sc.start.lat_deg);
   const double ug = fsw::kMicroG_mps2, dph = fsw::kDegPerHourToRadps;
-  const tools::AlignmentCase acases[] = {
+  std::vector<tools::AlignmentCase> acases = {
       tools::run_alignment_case("accel_east_100ug", fsw::Vec3(0, 100 * ug, 0), fsw::Vec3::Zero(), lat, 0.0, 120.0),
       tools::run_alignment_case("accel_north_100ug", fsw::Vec3(100 * ug, 0, 0), fsw::Vec3::Zero(), lat, 0.0, 120.0),
       tools::run_alignment_case("gyro_east_0.01dph", fsw::Vec3::Zero(), fsw::Vec3(0, 0.01 * dph, 0), lat, 0.0, 120.0),
@@ -116,6 +113,12 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
     }
   });
 
+  return acases;
+}
+
+/// Single-axis rotation: each excited misalignment at 5 and 10 arcsec against the closed form
+/// (rotation_*.csv, j["single_axis_rotation"]).
+void analyze_rotation(double lat, const fs::path& out, json& j) {
   // ---- Single-axis rotation ----
   std::printf("single-axis rotation (10 deg/s, 72 s, one gyro misalignment):\n");
   for (const tools::RotationPair p : tools::kExcitedRotationPairs) {
@@ -144,7 +147,12 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
                                            {"deviation_pct_of_peak", pct}});
     }
   }
+}
 
+/// Bank-to-turn: each gyro misalignment alone over the scenario's turns (bank_turn_*.csv,
+/// turns.csv, j["bank_turn"]).
+std::vector<tools::BankTurnCase> analyze_bank_turn(const sim::Scenario& sc, double gamma_arcsec, const fs::path& out,
+                                                   json& j) {
   // ---- Bank-to-turn ----
   std::printf("bank-to-turn (%s, %.0f s, each gyro misalignment alone at %.1f arcsec):\n", sc.name.c_str(),
               sc.duration_s, gamma_arcsec);
@@ -178,12 +186,13 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
     f << "turn,t_end_s\n";
     for (std::size_t i = 0; i < bcases[0].turn_end_t_s.size(); ++i) f << i << "," << bcases[0].turn_end_t_s[i] << "\n";
   });
-  j["bank_turn_criterion"] =
-      "accumulates: every completed turn changes phi_U with the same sign, the mean change per turn exceeds 10% of "
-      "the misalignment angle, and the turns' own eq. (7) forcing explains it within 25% (rather than tilt errors "
-      "leaking into phi_U through the Earth rate)";
-  tools::write_json_file((out / "analysis.json").string(), j);
+  return bcases;
+}
 
+/// summary.md from the three analyses (j holds the rotation cases and the bank-to-turn criterion).
+std::string analysis_summary_md(const sim::Scenario& sc, double gamma_arcsec, const json& j,
+                                const std::vector<tools::AlignmentCase>& acases,
+                                const std::vector<tools::BankTurnCase>& bcases) {
   // ---- Markdown summary ----
   std::ostringstream md;
   md << "# Gyro misalignment analysis (paper section II)\n\n"
@@ -228,7 +237,30 @@ int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gam
                   s.z(), p.x(), p.y(), p.z());
     md << buf;
   }
-  tools::write_text_file((out / "summary.md").string(), md.str());
+  return md.str();
+}
+
+}  // namespace
+
+int run_analysis(const sim::Scenario& sc, const std::string& out_dir, double gamma_arcsec, bool plots) {
+  const fs::path out(out_dir);
+  tools::require_distinct({out_dir}, {});
+  tools::RunDirectory run_dir(out_dir);  // docs/faults.md: summary.json removed now, written last
+  const double lat = sc.start.lat_deg * kDegToRad;
+  json j;
+  j["scenario"] = {{"name", sc.name}, {"duration_s", sc.duration_s}, {"lat_deg", sc.start.lat_deg},
+                   {"speed_mps", sc.start.speed_mps}};
+
+  const std::vector<tools::AlignmentCase> acases = analyze_alignment(sc, lat, out, j);
+  analyze_rotation(lat, out, j);
+  const std::vector<tools::BankTurnCase> bcases = analyze_bank_turn(sc, gamma_arcsec, out, j);
+  j["bank_turn_criterion"] =
+      "accumulates: every completed turn changes phi_U with the same sign, the mean change per turn exceeds 10% of "
+      "the misalignment angle, and the turns' own eq. (7) forcing explains it within 25% (rather than tilt errors "
+      "leaking into phi_U through the Earth rate)";
+  tools::write_json_file((out / "analysis.json").string(), j);
+
+  tools::write_text_file((out / "summary.md").string(), analysis_summary_md(sc, gamma_arcsec, j, acases, bcases));
 
   int rc = 0;
   if (plots) {

@@ -63,6 +63,38 @@ class ExpectedCsv {
   void row(long line, const char* msg, const char* sig, double value, double tol) {
     if (f_) f_->os() << line << ',' << msg << ',' << sig << ',' << value << ',' << tol << '\n';
   }
+  /// An IMU_SAMPLE frame's values. Residual carry: each transmitted increment is within one LSB of
+  /// the true one.
+  void imu_rows(long line, const fsw::ImuSample& s) {
+    const char* m = "IMU_SAMPLE";
+    row(line, m, "ImuTimeTag", s.t_s, 0.5e-9 + 1e-12 * std::abs(s.t_s));
+    row(line, m, "ImuDt", s.dt_s, 0.5e-9);
+    const char* th[3] = {"DeltaThetaX", "DeltaThetaY", "DeltaThetaZ"};
+    const char* dv[3] = {"DeltaVX", "DeltaVY", "DeltaVZ"};
+    for (int i = 0; i < 3; ++i) {
+      row(line, m, th[i], s.dtheta_rad(i), 1.0001 * lsb_dtheta());
+      row(line, m, dv[i], s.dv_mps(i), 1.0001 * lsb_dv());
+    }
+  }
+  /// A GPS_ALMANAC frame's values, each within half its LSB.
+  void almanac_rows(long line, const fsw::GpsAlmanac& x) {
+    const char* m = "GPS_ALMANAC";
+    const double pi = hal::can::kSemicircle_rad;
+    const double angle_tol = 0.5001 * hal::can::kAlmAngleLsb_sc * pi + 1e-15;
+    row(line, m, "AlmPrn", x.prn, 0.0);
+    row(line, m, "AlmHealth", x.health, 0.0);
+    row(line, m, "AlmWeek", x.week_mod_1024, 0.0);
+    row(line, m, "AlmToa", x.toa_s, 0.5 * hal::can::kAlmToaLsb_s);
+    row(line, m, "AlmEccentricity", x.eccentricity, 0.5001 * hal::can::kAlmEccLsb);
+    row(line, m, "AlmInclination", x.inclination_rad, angle_tol);
+    row(line, m, "AlmOmegaDot", x.omega_dot_radps, 0.5001 * hal::can::kAlmOmegaDotLsb_scps * pi);
+    row(line, m, "AlmSqrtA", x.sqrt_a_sqrtm, 0.5001 * hal::can::kAlmSqrtALsb);
+    row(line, m, "AlmOmega0", x.omega0_rad, angle_tol);
+    row(line, m, "AlmArgPerigee", x.arg_perigee_rad, angle_tol);
+    row(line, m, "AlmMeanAnomaly", x.mean_anomaly_rad, angle_tol);
+    row(line, m, "AlmAf0", x.af0_s, 0.5001 * hal::can::kAlmAf0Lsb_s);
+    row(line, m, "AlmAf1", x.af1_sps, 0.5001 * hal::can::kAlmAf1Lsb_sps);
+  }
   bool is_open() const { return f_.has_value(); }
   void commit() {
     if (f_) f_->commit();
@@ -96,8 +128,6 @@ int run_encode() {
     if (!w.write(f, can_opt.iface)) throw std::runtime_error(w.error());
     ++line;
   };
-  const double pi = hal::can::kSemicircle_rad;
-  const double angle_tol = 0.5001 * hal::can::kAlmAngleLsb_sc * pi + 1e-15;
   while (stream.next(step)) {
     double t_end = 0.0;
     for (const fsw::ImuSample& s : step.imu) {
@@ -111,16 +141,7 @@ int run_encode() {
       put(f, s.t_s);
       t_end = s.t_s;
       ++n_imu;
-      const char* m = "IMU_SAMPLE";
-      csv.row(line, m, "ImuTimeTag", s.t_s, 0.5e-9 + 1e-12 * std::abs(s.t_s));
-      csv.row(line, m, "ImuDt", s.dt_s, 0.5e-9);
-      const char* th[3] = {"DeltaThetaX", "DeltaThetaY", "DeltaThetaZ"};
-      const char* dv[3] = {"DeltaVX", "DeltaVY", "DeltaVZ"};
-      for (int i = 0; i < 3; ++i) {
-        // Residual carry: each transmitted increment is within one LSB of the true one.
-        csv.row(line, m, th[i], s.dtheta_rad(i), 1.0001 * lsb_dtheta());
-        csv.row(line, m, dv[i], s.dv_mps(i), 1.0001 * lsb_dv());
-      }
+      csv.imu_rows(line, s);
     }
     if (step.has_epoch) {
       const fsw::GnssRawEpoch& e = step.epoch;
@@ -169,20 +190,7 @@ int run_encode() {
       }
       put(f, t_end);
       ++n_alm;
-      const char* m = "GPS_ALMANAC";
-      csv.row(line, m, "AlmPrn", x.prn, 0.0);
-      csv.row(line, m, "AlmHealth", x.health, 0.0);
-      csv.row(line, m, "AlmWeek", x.week_mod_1024, 0.0);
-      csv.row(line, m, "AlmToa", x.toa_s, 0.5 * hal::can::kAlmToaLsb_s);
-      csv.row(line, m, "AlmEccentricity", x.eccentricity, 0.5001 * hal::can::kAlmEccLsb);
-      csv.row(line, m, "AlmInclination", x.inclination_rad, angle_tol);
-      csv.row(line, m, "AlmOmegaDot", x.omega_dot_radps, 0.5001 * hal::can::kAlmOmegaDotLsb_scps * pi);
-      csv.row(line, m, "AlmSqrtA", x.sqrt_a_sqrtm, 0.5001 * hal::can::kAlmSqrtALsb);
-      csv.row(line, m, "AlmOmega0", x.omega0_rad, angle_tol);
-      csv.row(line, m, "AlmArgPerigee", x.arg_perigee_rad, angle_tol);
-      csv.row(line, m, "AlmMeanAnomaly", x.mean_anomaly_rad, angle_tol);
-      csv.row(line, m, "AlmAf0", x.af0_s, 0.5001 * hal::can::kAlmAf0Lsb_s);
-      csv.row(line, m, "AlmAf1", x.af1_sps, 0.5001 * hal::can::kAlmAf1Lsb_sps);
+      csv.almanac_rows(line, x);
     }
   }
   if (!w.close()) throw std::runtime_error("cannot write " + w.error());

@@ -144,6 +144,73 @@ int replay_candump(const cfg::FlightConfig& filter) {
 }
 }  // namespace
 
+namespace {
+
+/// The score's options from --score-from, --score-max-gap and --outages.
+tools::ScoreOptions replay_score_options() {
+  tools::ScoreOptions so;
+  so.from_s = replay_opt.score_from_s;
+  so.max_reference_gap_s = replay_opt.score_max_gap_s;
+  if (replay_opt.outages.size() == 3) {
+    so.outage_length_s = replay_opt.outages[0];
+    so.outage_period_s = replay_opt.outages[1];
+    so.outage_first_s = replay_opt.outages[2];
+  }
+  return so;
+}
+
+/// The replay's input counts on the terminal: what was delivered, rejected, not used, withheld.
+void print_replay_inputs(const hal::LcmReplayStats& st, const hal::LcmLogReadStats& ls, std::uint64_t raw_not_used,
+                         std::uint64_t withheld) {
+  std::printf("replay: %s, %llu inputs (%llu IMU, %llu GNSS, %llu GNSS solutions, %llu almanac accepted; %llu raw "
+              "epochs not used: the filter takes solutions), %llu rejected, %llu other events; "
+              "log: %llu events, %llu rejections\n",
+              replay_opt.in.c_str(), static_cast<unsigned long long>(st.delivered),
+              static_cast<unsigned long long>(st.imu.accepted()), static_cast<unsigned long long>(st.gnss.accepted()),
+              static_cast<unsigned long long>(st.gnss_pvt.accepted()), static_cast<unsigned long long>(st.almanac.accepted()),
+              static_cast<unsigned long long>(raw_not_used), static_cast<unsigned long long>(st.rejected()),
+              static_cast<unsigned long long>(st.other_events), static_cast<unsigned long long>(ls.events),
+              static_cast<unsigned long long>(ls.total_rejections()));
+  if (st.time_tag_rejected > 0 || st.time_base_changes > 0)
+  {
+    std::printf("time tags: %llu rejected as outliers, %llu new time bases", static_cast<unsigned long long>(st.time_tag_rejected),
+                static_cast<unsigned long long>(st.time_base_changes));
+    if (st.time_base_changes > 0)
+      std::printf(" (last: a jump of %.6f s at t = %.6f s)", st.last_time_base_jump_s, st.last_time_base_at_s);
+    std::printf("\n");
+  }
+  if (st.gnss.measurements_dropped > 0)
+    std::printf("GNSS: %llu measurements with non-finite values (pseudorange, rate or C/N0) dropped from accepted "
+                "epochs\n",
+                static_cast<unsigned long long>(st.gnss.measurements_dropped));
+  if (replay_opt.outages.size() == 3)
+    std::printf("GNSS outages: %.1f s every %.1f s from %.1f s after initialisation, %llu inputs withheld\n",
+                replay_opt.outages[0], replay_opt.outages[1], replay_opt.outages[2], static_cast<unsigned long long>(withheld));
+}
+
+/// The same counts for the --json summary.
+nlohmann::json replay_inputs_json(const hal::LcmReplayStats& st, const hal::LcmLogReadStats& ls,
+                                  std::uint64_t raw_not_used, std::uint64_t withheld) {
+  return {{"delivered", st.delivered},
+          {"imu_accepted", st.imu.accepted()},
+          {"gnss_accepted", st.gnss.accepted()},
+          {"gnss_measurements_dropped", st.gnss.measurements_dropped},
+          {"gnss_pvt_accepted", st.gnss_pvt.accepted()},
+          {"gnss_raw_not_used", raw_not_used},
+          {"gnss_withheld", withheld},
+          {"almanac_accepted", st.almanac.accepted()},
+          {"rejected", st.rejected()},
+          {"out_of_order", st.out_of_order},
+          {"time_tag_rejected", st.time_tag_rejected},
+          {"time_base_changes", st.time_base_changes},
+          {"imu_counter_gaps", st.imu_counter_gaps},
+          {"other_events", st.other_events},
+          {"log_events", ls.events},
+          {"log_rejections", ls.total_rejections()}};
+}
+
+}  // namespace
+
 int run_replay() {
   tools::require_distinct({replay_opt.run.log, replay_opt.run.json, replay_opt.score_json, replay_opt.score_csv, replay_opt.score_plot},
                           {replay_opt.in, replay_opt.run.flight_config});
@@ -162,14 +229,7 @@ int run_replay() {
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
   // Scoring (docs/running.md): against TRUTH when the log has it.
-  tools::ScoreOptions so;
-  so.from_s = replay_opt.score_from_s;
-  so.max_reference_gap_s = replay_opt.score_max_gap_s;
-  if (replay_opt.outages.size() == 3) {
-    so.outage_length_s = replay_opt.outages[0];
-    so.outage_period_s = replay_opt.outages[1];
-    so.outage_first_s = replay_opt.outages[2];
-  }
+  const tools::ScoreOptions so = replay_score_options();
   tools::ReplayScorer scorer(tools::load_reference(replay_opt.in), so);
   const bool scoring = !scorer.reference().samples.empty();
   if (!scoring && (!replay_opt.score_json.empty() || !replay_opt.score_csv.empty()))
@@ -211,30 +271,7 @@ int run_replay() {
     throw std::runtime_error(err);
   const hal::LcmReplayStats& st = reader.stats();
   const hal::LcmLogReadStats& ls = reader.log_stats();
-  std::printf("replay: %s, %llu inputs (%llu IMU, %llu GNSS, %llu GNSS solutions, %llu almanac accepted; %llu raw "
-              "epochs not used: the filter takes solutions), %llu rejected, %llu other events; "
-              "log: %llu events, %llu rejections\n",
-              replay_opt.in.c_str(), static_cast<unsigned long long>(st.delivered),
-              static_cast<unsigned long long>(st.imu.accepted()), static_cast<unsigned long long>(st.gnss.accepted()),
-              static_cast<unsigned long long>(st.gnss_pvt.accepted()), static_cast<unsigned long long>(st.almanac.accepted()),
-              static_cast<unsigned long long>(raw_not_used), static_cast<unsigned long long>(st.rejected()),
-              static_cast<unsigned long long>(st.other_events), static_cast<unsigned long long>(ls.events),
-              static_cast<unsigned long long>(ls.total_rejections()));
-  if (st.time_tag_rejected > 0 || st.time_base_changes > 0)
-  {
-    std::printf("time tags: %llu rejected as outliers, %llu new time bases", static_cast<unsigned long long>(st.time_tag_rejected),
-                static_cast<unsigned long long>(st.time_base_changes));
-    if (st.time_base_changes > 0)
-      std::printf(" (last: a jump of %.6f s at t = %.6f s)", st.last_time_base_jump_s, st.last_time_base_at_s);
-    std::printf("\n");
-  }
-  if (st.gnss.measurements_dropped > 0)
-    std::printf("GNSS: %llu measurements with non-finite values (pseudorange, rate or C/N0) dropped from accepted "
-                "epochs\n",
-                static_cast<unsigned long long>(st.gnss.measurements_dropped));
-  if (replay_opt.outages.size() == 3)
-    std::printf("GNSS outages: %.1f s every %.1f s from %.1f s after initialisation, %llu inputs withheld\n",
-                replay_opt.outages[0], replay_opt.outages[1], replay_opt.outages[2], static_cast<unsigned long long>(withheld));
+  print_replay_inputs(st, ls, raw_not_used, withheld);
   tools::print_fsw_summary(node);
   const nlohmann::json score = scoring ? scorer.result() : nlohmann::json(nullptr);
   if (scoring) std::fputs(tools::ReplayScorer::text(score).c_str(), stdout);
@@ -248,22 +285,7 @@ int run_replay() {
     j["input_log"] = replay_opt.in;
     j["filter_config"] = replay_opt.run.flight_config;
     j["gnss_source"] = cfg::to_string(filter.gnss_source);
-    j["inputs"] = {{"delivered", st.delivered},
-                   {"imu_accepted", st.imu.accepted()},
-                   {"gnss_accepted", st.gnss.accepted()},
-                   {"gnss_measurements_dropped", st.gnss.measurements_dropped},
-                   {"gnss_pvt_accepted", st.gnss_pvt.accepted()},
-                   {"gnss_raw_not_used", raw_not_used},
-                   {"gnss_withheld", withheld},
-                   {"almanac_accepted", st.almanac.accepted()},
-                   {"rejected", st.rejected()},
-                   {"out_of_order", st.out_of_order},
-                   {"time_tag_rejected", st.time_tag_rejected},
-                   {"time_base_changes", st.time_base_changes},
-                   {"imu_counter_gaps", st.imu_counter_gaps},
-                   {"other_events", st.other_events},
-                   {"log_events", ls.events},
-                   {"log_rejections", ls.total_rejections()}};
+    j["inputs"] = replay_inputs_json(st, ls, raw_not_used, withheld);
     j["score"] = score;
     tools::write_json_file(replay_opt.run.json, j);
   }

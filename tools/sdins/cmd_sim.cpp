@@ -143,16 +143,15 @@ void register_sim(CLI::App& app) {
       ->capture_default_str();
 }
 
-int run_sim() {
-  // Everything that can be wrong with the request is checked before the log is created.
-  tools::require_distinct({sim_opt.log, sim_opt.log + ".json"}, {sim_opt.scenario.file});
-  sim::Scenario sc = sim_opt.scenario.load();
-  if (sim_opt.truth_errors == "paper") sc.imu.errors = sim::ImuErrorSet::kPaper;
-  if (sim_opt.truth_errors == "baseline") sc.imu.errors = sim::ImuErrorSet::kBaseline;
-  const sim::EffectSet scenario_effects = sc.effects;
+namespace {
+
+/// --effect NAME.COMPONENT=VALUE assignments applied to the scenario's effects; returns the
+/// (effect, component) each named, for the sidecar's "source".
+std::vector<std::pair<fsw::Effect, std::size_t>> apply_cli_effects(sim::EffectSet& effects,
+                                                                    const std::vector<std::string>& assignments) {
   std::vector<std::pair<fsw::Effect, std::size_t>> cli_effects;
-  for (const std::string& a : sim_opt.effects) {
-    const std::string err = sim::apply_effect_assignment(sc.effects, a);
+  for (const std::string& a : assignments) {
+    const std::string err = sim::apply_effect_assignment(effects, a);
     if (!err.empty()) throw std::runtime_error("--effect " + a + ": " + err);
     // The assignment is valid: name and component (for the sidecar's "source").
     std::string lhs = a.substr(0, a.find('='));
@@ -163,26 +162,33 @@ int run_sim() {
     const std::size_t k = *sim::component_from_name(e, dot == std::string::npos ? "" : lhs.substr(dot + 1));
     cli_effects.emplace_back(e, k);
   }
-  const double spt = sc.imu.rate_hz / sim_opt.truth_rate_hz;
+  return cli_effects;
+}
+
+/// IMU samples per TRUTH sample; --truth-rate must divide the IMU rate.
+long long imu_samples_per_truth(const sim::Scenario& sc, double truth_rate_hz) {
+  const double spt = sc.imu.rate_hz / truth_rate_hz;
   if (spt < 1.0 || std::abs(spt - std::round(spt)) > 1e-9) {
     char msg[160];
     std::snprintf(msg, sizeof(msg),
                   "--truth-rate %g Hz does not divide the IMU rate (%d Hz): TRUTH samples must fall on IMU sample "
                   "times (e.g. 1, 10, 100, 1000 Hz)",
-                  sim_opt.truth_rate_hz, sc.imu.rate_hz);
+                  truth_rate_hz, sc.imu.rate_hz);
     throw std::runtime_error(msg);
   }
-  const long long samples_per_truth = std::llround(spt);
+  return std::llround(spt);
+}
 
-  const auto t_start = std::chrono::steady_clock::now();
-  sim::SensorStream stream(sc);
-  hal::LcmLogSink sink;
-  hal::LcmTelemetryConfig tcfg;
-  tcfg.lcm_url = "none";
-  tcfg.log_path = sim_opt.log;
-  g_sink = &sink;
-  check(sink.open(tcfg), "the log");
+/// What the log holds.
+struct SimLogCounts {
+  long long imu = 0, gnss = 0, truth = 0;
+  std::size_t almanac = 0;
+  double t_imu_first = 0.0, t_imu_last = 0.0;
+};
 
+/// The sensor stream into the log: the almanac with the first IMU sample, every IMU sample, every
+/// raw epoch, and TRUTH at every samples_per_truth-th IMU sample.
+SimLogCounts write_sim_log(sim::SensorStream& stream, hal::LcmLogSink& sink, long long samples_per_truth) {
   long long n_imu = 0, n_gnss = 0, n_truth = 0;
   std::size_t n_almanac = 0;
   fsw::InputEvent ev;
@@ -218,10 +224,12 @@ int run_sim() {
         break;  // the simulated receiver gives raw epochs only
     }
   }
-  if (sink.encode_failures() != 0) throw std::runtime_error("messages that did not encode: " + std::to_string(sink.encode_failures()));
+  return SimLogCounts{n_imu, n_gnss, n_truth, n_almanac, t_imu_first, t_imu_last};
+}
 
-  // Sidecar: what was simulated. No wall-clock data, so the same command gives the same file.
-  const std::vector<EffectEntry> on = effects_on(sc.effects, scenario_effects, cli_effects);
+/// The sidecar: what was simulated (no wall-clock data: the same command gives the same file).
+nlohmann::ordered_json sim_sidecar(const sim::Scenario& sc, const std::vector<EffectEntry>& on,
+                                   const sim::SensorStream& stream, const SimLogCounts& n) {
   const sim::ImuErrors drawn = sim::draw_imu_errors(sc.imu, sim::EffectSet{}, sc.seed);
   nlohmann::ordered_json j;
   j["format"] = "sdins-sim-sidecar";
@@ -248,13 +256,43 @@ int run_sim() {
   }
   j["effects"] = ej;
   j["imu_errors"] = {{"drawn", imu_errors_json(drawn)}, {"applied", imu_errors_json(stream.imu_errors())}};
-  j["channels"] = {{hal::kLcmChannelImu, n_imu},
-                   {hal::kLcmChannelGnssRaw, n_gnss},
-                   {hal::kLcmChannelGpsAlmanac, n_almanac},
-                   {hal::kLcmChannelTruth, n_truth}};
+  j["channels"] = {{hal::kLcmChannelImu, n.imu},
+                   {hal::kLcmChannelGnssRaw, n.gnss},
+                   {hal::kLcmChannelGpsAlmanac, n.almanac},
+                   {hal::kLcmChannelTruth, n.truth}};
   j["time_scales"] =
       "IMU, GNSS_RAW and GPS_ALMANAC t_s: navigation time (IMU time tags = true time + imu_gnss_time_offset); "
       "TRUTH t_s: true time";
+  return j;
+}
+
+}  // namespace
+
+int run_sim() {
+  // Everything that can be wrong with the request is checked before the log is created.
+  tools::require_distinct({sim_opt.log, sim_opt.log + ".json"}, {sim_opt.scenario.file});
+  sim::Scenario sc = sim_opt.scenario.load();
+  if (sim_opt.truth_errors == "paper") sc.imu.errors = sim::ImuErrorSet::kPaper;
+  if (sim_opt.truth_errors == "baseline") sc.imu.errors = sim::ImuErrorSet::kBaseline;
+  const sim::EffectSet scenario_effects = sc.effects;
+  const std::vector<std::pair<fsw::Effect, std::size_t>> cli_effects = apply_cli_effects(sc.effects, sim_opt.effects);
+  const long long samples_per_truth = imu_samples_per_truth(sc, sim_opt.truth_rate_hz);
+
+  const auto t_start = std::chrono::steady_clock::now();
+  sim::SensorStream stream(sc);
+  hal::LcmLogSink sink;
+  hal::LcmTelemetryConfig tcfg;
+  tcfg.lcm_url = "none";
+  tcfg.log_path = sim_opt.log;
+  g_sink = &sink;
+  check(sink.open(tcfg), "the log");
+
+  const SimLogCounts n = write_sim_log(stream, sink, samples_per_truth);
+  if (sink.encode_failures() != 0) throw std::runtime_error("messages that did not encode: " + std::to_string(sink.encode_failures()));
+
+  // Sidecar: what was simulated. No wall-clock data, so the same command gives the same file.
+  const std::vector<EffectEntry> on = effects_on(sc.effects, scenario_effects, cli_effects);
+  const nlohmann::ordered_json j = sim_sidecar(sc, on, stream, n);
   // docs/faults.md: the log and its sidecar, both or neither. The sidecar is complete in its
   // temporary file before the log is put in place; a failure up to here leaves neither.
   const std::string sidecar = sim_opt.log + ".json";
@@ -279,8 +317,8 @@ int run_sim() {
       "gyro bias %.4f %.4f %.4f deg/h, accel bias %.1f %.1f %.1f ug, gyro SF %.1f %.1f %.1f ppm. Sidecar %s. No "
       "flight software ran; replay with `sdins replay %s`.\n",
       sc.name.c_str(), sc.duration_s, static_cast<unsigned long long>(sc.seed), error_set_name(sc.imu.errors),
-      sim_opt.log.c_str(), static_cast<unsigned long long>(ec ? 0 : bytes), elapsed_s, n_imu, sc.imu.rate_hz, t_imu_first,
-      t_imu_last, n_gnss, n_almanac, n_truth, sim_opt.truth_rate_hz, fx.empty() ? "none" : fx.c_str(),
+      sim_opt.log.c_str(), static_cast<unsigned long long>(ec ? 0 : bytes), elapsed_s, n.imu, sc.imu.rate_hz, n.t_imu_first,
+      n.t_imu_last, n.gnss, n.almanac, n.truth, sim_opt.truth_rate_hz, fx.empty() ? "none" : fx.c_str(),
       ap.gyro_bias_radps.x() / fsw::kDegPerHourToRadps, ap.gyro_bias_radps.y() / fsw::kDegPerHourToRadps,
       ap.gyro_bias_radps.z() / fsw::kDegPerHourToRadps, ap.accel_bias_mps2.x() / fsw::kMicroG_mps2,
       ap.accel_bias_mps2.y() / fsw::kMicroG_mps2, ap.accel_bias_mps2.z() / fsw::kMicroG_mps2,
