@@ -2,6 +2,7 @@
 // with only what the baseline models must give no finding.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -10,11 +11,15 @@
 #include <random>
 
 #include "diagnosis_test_util.hpp"
+#include "hal/lcm_channels.hpp"
+#include "hal/lcm_convert.hpp"
+#include "hal/lcm_log.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "lcm_test_util.hpp"
 #include "sim/effects.hpp"
 #include "tools/diagnosis.hpp"
 #include "tools/diagnosis_intervals.hpp"
+#include "tools/reference.hpp"
 #include "cfg/flight_config.hpp"
 
 namespace {
@@ -438,6 +443,62 @@ TEST(Diagnosis, LoadsAReferenceWithoutAttitudeAndCountsBrokenTruth) {
   EXPECT_FALSE(data.truth[0].has_attitude);
   EXPECT_TRUE(data.truth[1].has_attitude);
   EXPECT_NE(report.find("1 truth samples"), std::string::npos) << report;
+  std::remove(path.c_str());
+}
+
+// One TRUTH reader, two rules (tools/reference.hpp): every message is either kept or counted by
+// the reader; the replay's score keeps each part that is valid, the diagnosis rejects on top a
+// sample without position and velocity or with a finite attitude that is not a unit quaternion.
+TEST(Diagnosis, OneTruthReaderTheDiagnosisRuleOnTop) {
+  const std::string path = lcm_test::scratch("one_truth_reader.lcmlog");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  hal::LcmLogWriter w;
+  ASSERT_EQ(w.open(path), hal::LcmLogStatus::kOk);
+  const auto put = [&](double t, fsw::Vec3 llh, fsw::Vec3 v, std::array<double, 4> q, bool cut = false) {
+    sdins::truth_t m{};
+    m.t_s = t;
+    m.lat_rad = llh(0);
+    m.lon_rad = llh(1);
+    m.height_m = llh(2);
+    for (int i = 0; i < 3; ++i) m.vel_enu_mps[i] = v(i);
+    for (int i = 0; i < 4; ++i) m.q_b_n_wxyz[i] = q[static_cast<std::size_t>(i)];
+    std::vector<std::uint8_t> b = lcm_test::encode(m);
+    if (cut) b.resize(b.size() - 3);
+    ASSERT_EQ(w.write(hal::kLcmChannelTruth, b.data(), b.size(), 0), hal::LcmLogStatus::kOk);
+  };
+  const fsw::Vec3 llh(0.7, 0.2, 100.0), v(1.0, 2.0, 0.0), none = fsw::Vec3::Constant(nan);
+  const std::array<double, 4> unit{1.0, 0.0, 0.0, 0.0}, no_att{nan, nan, nan, nan}, not_unit{2.0, 0.0, 0.0, 0.0};
+  put(1.0, llh, v, unit);         // whole: both keep
+  put(2.0, llh, v, no_att);       // no attitude (an imported solution): both keep
+  put(3.0, llh, none, unit);      // no velocity: the replay keeps position and attitude, the diagnosis rejects
+  put(4.0, llh, v, not_unit);     // attitude not a unit quaternion: the replay keeps position and velocity
+  put(5.0, none, none, no_att);   // nothing finite: both reject
+  put(3.5, llh, v, unit);         // back in time: both reject
+  put(6.0, llh, v, unit, true);   // cut: does not decode
+  put(nan, llh, v, unit);         // no time: both reject
+  put(7.0, llh, v, unit);         // whole
+  ASSERT_EQ(w.close(), hal::LcmLogStatus::kOk);
+
+  const tools::Reference ref = tools::load_reference(path);
+  EXPECT_EQ(ref.messages, 9u);
+  ASSERT_EQ(ref.samples.size(), 5u);
+  EXPECT_EQ(ref.rejected, 4u);
+  EXPECT_EQ(ref.samples.size() + ref.rejected, ref.messages);
+  EXPECT_TRUE(ref.samples[2].has_position && !ref.samples[2].has_velocity && ref.samples[2].has_attitude);
+  EXPECT_TRUE(ref.samples[3].has_position && ref.samples[3].has_velocity && !ref.samples[3].has_attitude);
+  EXPECT_TRUE(ref.samples[3].attitude_not_unit);
+  EXPECT_FALSE(ref.samples[1].attitude_not_unit);
+
+  std::uint64_t rejected = 0;
+  const std::vector<tools::TruthPoint> truth = tools::diagnosis_truth(ref, rejected);
+  ASSERT_EQ(truth.size(), 3u);
+  EXPECT_EQ(rejected, 6u);
+  EXPECT_EQ(truth.size() + rejected, ref.messages);
+  EXPECT_EQ(truth[0].t_s, 1.0);
+  EXPECT_TRUE(truth[0].has_attitude);
+  EXPECT_EQ(truth[1].t_s, 2.0);
+  EXPECT_FALSE(truth[1].has_attitude);
+  EXPECT_EQ(truth[2].t_s, 7.0);
   std::remove(path.c_str());
 }
 

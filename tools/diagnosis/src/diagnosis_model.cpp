@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <memory>
 #include <sstream>
 
@@ -9,11 +10,11 @@
 #include "fsw/frames.hpp"
 #include "hal/fsw_node.hpp"
 #include "hal/lcm_channels.hpp"
-#include "hal/lcm_convert.hpp"
 #include "hal/lcm_log.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "cfg/flight_config.hpp"
 #include "sim/sensor_stream.hpp"
+#include "tools/reference.hpp"
 
 namespace tools {
 namespace {
@@ -206,6 +207,21 @@ void exclude_damaged_stretches(RecordedData& d) {
   d = std::move(kept);
 }
 
+std::vector<TruthPoint> diagnosis_truth(const Reference& ref, std::uint64_t& rejected) {
+  rejected = ref.rejected;
+  std::vector<TruthPoint> truth;
+  truth.reserve(ref.samples.size());
+  for (const ReferenceSample& s : ref.samples) {
+    if (!s.has_position || !s.has_velocity || s.attitude_not_unit) {
+      ++rejected;
+      continue;
+    }
+    truth.push_back(TruthPoint{s.t_s, s.llh, s.vel_enu_mps, s.has_attitude ? s.q_b_n : fsw::Quat::Identity(),
+                               s.has_attitude});
+  }
+  return truth;
+}
+
 bool load_recorded_data(const std::string& path, RecordedData& out, std::string& error, std::string& report) {
   out = RecordedData{};
   out.description = path;
@@ -225,42 +241,14 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
     error = "reading " + path + " failed: " + rd.error();
     return false;
   }
-  // Truth / reference: its own channel, never an input.
-  hal::LcmLogReader lr;
+  // Truth / reference: its own channel, never an input; the one reader (tools/reference.hpp) with
+  // the diagnosis' rule on top.
   std::uint64_t truth_rejected = 0;
-  if (lr.open(path) == hal::LcmLogStatus::kOk) {
-    hal::LcmLogEvent ev;
-    while (lr.next(ev) == hal::LcmLogStatus::kOk) {
-      if (ev.channel != hal::kLcmChannelTruth) continue;
-      sdins::truth_t m{};
-      if (hal::decode_exact(ev.data, ev.data_len, m) != hal::LcmInputStatus::kOk) {
-        ++truth_rejected;
-        continue;
-      }
-      TruthPoint p;
-      p.t_s = m.t_s;
-      p.llh = fsw::Vec3(m.lat_rad, m.lon_rad, m.height_m);
-      p.vel_enu_mps = fsw::Vec3(m.vel_enu_mps[0], m.vel_enu_mps[1], m.vel_enu_mps[2]);
-      p.q_b_n = fsw::Quat(m.q_b_n_wxyz[0], m.q_b_n_wxyz[1], m.q_b_n_wxyz[2], m.q_b_n_wxyz[3]);
-      if (!std::isfinite(p.t_s) || !p.llh.allFinite() || !p.vel_enu_mps.allFinite() ||
-          (!out.truth.empty() && !(p.t_s > out.truth.back().t_s))) {
-        ++truth_rejected;
-        continue;
-      }
-      // A reference without attitude (an imported GNSS solution: NaN) scores position and
-      // velocity only; an attitude that is there must be a unit quaternion.
-      const bool att_nan = !p.q_b_n.coeffs().allFinite();
-      if (!att_nan && !(std::abs(p.q_b_n.norm() - 1.0) < 1e-3)) {
-        ++truth_rejected;
-        continue;
-      }
-      p.has_attitude = !att_nan;
-      if (p.has_attitude)
-        p.q_b_n.normalize();
-      else
-        p.q_b_n = fsw::Quat::Identity();
-      out.truth.push_back(p);
-    }
+  try {
+    out.truth = diagnosis_truth(load_reference(path), truth_rejected);
+  } catch (const std::exception& ex) {
+    error = ex.what();
+    return false;
   }
   exclude_damaged_stretches(out);
   const hal::LcmReplayStats& s = rd.stats();

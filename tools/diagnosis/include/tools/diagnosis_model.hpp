@@ -21,6 +21,7 @@
 #include "cfg/flight_config.hpp"
 #include "sim/scenario.hpp"
 #include "sim/truth.hpp"
+#include "tools/reference.hpp"
 
 namespace tools {
 
@@ -80,7 +81,14 @@ inline constexpr double kDamagedImuGap_s = 0.1;
 /// inputs within it; almanacs all), counting the holes and the samples left out (docs/faults.md).
 void exclude_damaged_stretches(RecordedData& d);
 
-/// Reads an LCM log (IMU, GNSS_RAW, GNSS_PVT, GPS_ALMANAC through hal::LcmReplayReader; TRUTH).
+/// The diagnosis' reference from the one TRUTH reader (tools/reference.hpp), with its rule on top:
+/// a sample scores position and velocity together, so one without both is rejected, and so is
+/// one whose attitude is there but is not a unit quaternion; one without attitude (an imported
+/// GNSS solution) is kept with has_attitude false. `rejected`: the reader's rejections plus these.
+std::vector<TruthPoint> diagnosis_truth(const Reference& ref, std::uint64_t& rejected);
+
+/// Reads an LCM log (IMU, GNSS_RAW, GNSS_PVT, GPS_ALMANAC through hal::LcmReplayReader; TRUTH
+/// through diagnosis_truth).
 /// Returns false with a message when the log cannot be read or has no IMU or GNSS data; rejections
 /// are summarised in `report`.
 bool load_recorded_data(const std::string& path, RecordedData& out, std::string& error, std::string& report);

@@ -23,29 +23,9 @@
 #include <vector>
 
 #include "fsw/strapdown.hpp"
+#include "tools/reference.hpp"
 
 namespace tools {
-
-struct ReferenceSample {
-  double t_s = 0.0;
-  fsw::Vec3 llh = fsw::Vec3::Zero();
-  fsw::Vec3 vel_enu_mps = fsw::Vec3::Zero();
-  fsw::Quat q_b_n = fsw::Quat::Identity();
-  bool has_position = false, has_velocity = false, has_attitude = false;
-};
-
-struct Reference {
-  std::vector<ReferenceSample> samples;  ///< increasing t_s
-  std::uint64_t rejected = 0;            ///< TRUTH messages that did not decode, went back in time or had nothing finite
-  /// What the reference is: the import summary beside the log (LOG.json) "reference" object, or
-  /// {"kind": "simulator_truth"} for a simulator's sidecar; null when the log has no sidecar.
-  nlohmann::json label;
-  std::string label_source;  ///< the sidecar's path, or "" without one
-};
-
-/// The TRUTH channel of a log and the label from LOG.json when present. Throws std::runtime_error
-/// when the log cannot be read.
-Reference load_reference(const std::string& log_path);
 
 struct ScoreOptions {
   double from_s = 0.0;               ///< frames from initialisation + this are scored
