@@ -14,10 +14,11 @@ using Mat9 = Eigen::Matrix<double, 9, 9>;
 
 /// Navigation-block dynamics matrix (9 x 9) at the given solution and mean specific force.
 Mat9 navigation_dynamics(const NavState& nav, const Vec3& f_enu_mps2) {
-  const double lat = nav.llh.x(), h = nav.llh.z();
+  const LatitudeTerms lat(nav.llh.x());  // one sine and cosine for every term below
+  const double h = nav.llh.z();
   const double rm = meridian_radius_m(lat) + h;
   const double rn = normal_radius_m(lat) + h;
-  const double tl = std::tan(lat), cl = std::cos(lat), sl = std::sin(lat);
+  const double tl = std::tan(lat.lat_rad), cl = lat.cos_lat, sl = lat.sin_lat;
   const Vec3& v = nav.vel_enu_mps;
   const double we = wgs84::omega_ie_radps;
   const Vec3 w_ie = omega_ie_n(lat);

@@ -86,14 +86,15 @@ Status Strapdown::step(const FrameIncrement& inc) {
     llh_mid = 1.5 * k1.llh - 0.5 * prev_.llh;
     vel_mid = 1.5 * k1.vel_enu_mps - 0.5 * prev_.vel_enu_mps;
   }
-  const Vec3 w_ie = omega_ie_n(llh_mid.x());
-  const Vec3 w_en = omega_en_n(llh_mid.x(), llh_mid.z(), vel_mid);
+  const LatitudeTerms lat_k_mid(llh_mid.x());  // one sine and cosine for the radii, rates and gravity there
+  const Vec3 w_ie = omega_ie_n(lat_k_mid);
+  const Vec3 w_en = omega_en_n(lat_k_mid, llh_mid.z(), vel_mid);
   const Vec3 zeta = (w_ie + w_en) * T;
 
   // Velocity update.
   const Mat3 C_b_n_k1 = k1.C_b_n();
   const Vec3 dv_sf_enu_mps = (Mat3::Identity() - 0.5 * skew(zeta)) * (C_b_n_k1 * inc.dv_sf_b_mps);
-  const Vec3 g_enu_mps2 = gravity_enu_mps2(llh_mid.x(), llh_mid.z());
+  const Vec3 g_enu_mps2 = gravity_enu_mps2(lat_k_mid, llh_mid.z());
   const Vec3 dv_cor_g = (g_enu_mps2 - (2.0 * w_ie + w_en).cross(vel_mid)) * T;
   NavState k = k1;
   k.t_s = inc.t_s;
@@ -105,8 +106,8 @@ Status Strapdown::step(const FrameIncrement& inc) {
   const double h_mid = 0.5 * (k1.llh.z() + h_new);
   const double lat_mid = k1.llh.x() + 0.5 * v_avg.y() / (meridian_radius_m(k1.llh.x()) + h_mid) * T;
   const double lat_new = k1.llh.x() + v_avg.y() / (meridian_radius_m(lat_mid) + h_mid) * T;
-  const double lat_mid2 = 0.5 * (k1.llh.x() + lat_new);
-  const double lon_new = k1.llh.y() + v_avg.x() / ((normal_radius_m(lat_mid2) + h_mid) * std::cos(lat_mid2)) * T;
+  const LatitudeTerms lat_mid2(0.5 * (k1.llh.x() + lat_new));
+  const double lon_new = k1.llh.y() + v_avg.x() / ((normal_radius_m(lat_mid2) + h_mid) * lat_mid2.cos_lat) * T;
   k.llh = Vec3(lat_new, lon_new, h_new);
 
   // Attitude update: body rotation, then navigation-frame rotation over the frame (midpoint rate

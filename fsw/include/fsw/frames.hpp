@@ -146,48 +146,67 @@ inline Vec3 attitude_error_enu(const Mat3& C_b_n_hat, const Mat3& C_b_n_true) {
 // WGS-84 Earth model
 // ------------------------------------------------------------------------------------------------
 
-/// Meridian radius of curvature R_M (north-south) [m].
-inline double meridian_radius_m(double lat_rad) {
-  const double s = std::sin(lat_rad);
+/// The trigonometry of one geodetic latitude, computed once (one sin/cos pair): the Earth-model
+/// functions below take it, and their latitude overloads build it, so each formula is written
+/// once and a caller that needs several of them at one latitude (the strapdown step: radii, Earth
+/// rate, transport rate and gravity at the same midpoint) pays for the sine once, with the same
+/// bits as the overloads (the same operations in the same order).
+struct LatitudeTerms {
+  double lat_rad, sin_lat, cos_lat;
+  explicit LatitudeTerms(double lat) : lat_rad(lat), sin_lat(std::sin(lat)), cos_lat(std::cos(lat)) {}
+};
+
+/// Meridian radius of curvature R_M (north-south) [m], from the sine of the latitude.
+inline double meridian_radius_from_sin_m(double s) {
   const double d = 1.0 - wgs84::e2 * s * s;
   return wgs84::a_m * (1.0 - wgs84::e2) / (d * std::sqrt(d));
 }
+inline double meridian_radius_m(const LatitudeTerms& l) { return meridian_radius_from_sin_m(l.sin_lat); }
+/// Meridian radius of curvature R_M (north-south) [m].
+inline double meridian_radius_m(double lat_rad) { return meridian_radius_from_sin_m(std::sin(lat_rad)); }
 
+/// Normal (prime-vertical) radius of curvature R_N (east-west) [m], from the sine of the latitude.
+inline double normal_radius_from_sin_m(double s) { return wgs84::a_m / std::sqrt(1.0 - wgs84::e2 * s * s); }
+inline double normal_radius_m(const LatitudeTerms& l) { return normal_radius_from_sin_m(l.sin_lat); }
 /// Normal (prime-vertical) radius of curvature R_N (east-west) [m].
-inline double normal_radius_m(double lat_rad) {
-  const double s = std::sin(lat_rad);
-  return wgs84::a_m / std::sqrt(1.0 - wgs84::e2 * s * s);
-}
+inline double normal_radius_m(double lat_rad) { return normal_radius_from_sin_m(std::sin(lat_rad)); }
 
 /// Normal gravity magnitude: Somigliana on the ellipsoid with the second-order height term
 /// (NIMA TR8350.2 eq. 4-1 and 4-3). Points along the ellipsoid normal, downwards.
-inline double normal_gravity_mps2(double lat_rad, double h_m) {
-  const double s2 = std::sin(lat_rad) * std::sin(lat_rad);
+inline double normal_gravity_mps2(const LatitudeTerms& l, double h_m) {
+  const double s2 = l.sin_lat * l.sin_lat;
   const double g0 = wgs84::gamma_e_mps2 * (1.0 + wgs84::k_somigliana * s2) / std::sqrt(1.0 - wgs84::e2 * s2);
   const double a = wgs84::a_m;
   return g0 * (1.0 - 2.0 / a * (1.0 + wgs84::f + wgs84::m - 2.0 * wgs84::f * s2) * h_m + 3.0 * h_m * h_m / (a * a));
 }
+inline double normal_gravity_mps2(double lat_rad, double h_m) { return normal_gravity_mps2(LatitudeTerms(lat_rad), h_m); }
 
 /// Gravity vector in ENU (normal gravity, deflection of the vertical neglected).
-inline Vec3 gravity_enu_mps2(double lat_rad, double h_m) { return Vec3(0.0, 0.0, -normal_gravity_mps2(lat_rad, h_m)); }
+inline Vec3 gravity_enu_mps2(const LatitudeTerms& l, double h_m) { return Vec3(0.0, 0.0, -normal_gravity_mps2(l, h_m)); }
+inline Vec3 gravity_enu_mps2(double lat_rad, double h_m) { return gravity_enu_mps2(LatitudeTerms(lat_rad), h_m); }
 
 /// Earth rate in ENU.
-inline Vec3 omega_ie_n(double lat_rad) {
-  return Vec3(0.0, wgs84::omega_ie_radps * std::cos(lat_rad), wgs84::omega_ie_radps * std::sin(lat_rad));
+inline Vec3 omega_ie_n(const LatitudeTerms& l) {
+  return Vec3(0.0, wgs84::omega_ie_radps * l.cos_lat, wgs84::omega_ie_radps * l.sin_lat);
 }
+inline Vec3 omega_ie_n(double lat_rad) { return omega_ie_n(LatitudeTerms(lat_rad)); }
 
 /// Transport rate in ENU for position (lat, h) and ENU velocity.
+inline Vec3 omega_en_n(const LatitudeTerms& l, double h_m, const Vec3& vel_enu_mps) {
+  const double rm = meridian_radius_m(l) + h_m;
+  const double rn = normal_radius_m(l) + h_m;
+  return Vec3(-vel_enu_mps.y() / rm, vel_enu_mps.x() / rn, vel_enu_mps.x() * std::tan(l.lat_rad) / rn);
+}
 inline Vec3 omega_en_n(double lat_rad, double h_m, const Vec3& vel_enu_mps) {
-  const double rm = meridian_radius_m(lat_rad) + h_m;
-  const double rn = normal_radius_m(lat_rad) + h_m;
-  return Vec3(-vel_enu_mps.y() / rm, vel_enu_mps.x() / rn, vel_enu_mps.x() * std::tan(lat_rad) / rn);
+  return omega_en_n(LatitudeTerms(lat_rad), h_m, vel_enu_mps);
 }
 
 /// Rate of change of (lat, lon, h) for an ENU velocity.
 inline Vec3 llh_rate(const Vec3& llh, const Vec3& vel_enu_mps) {
-  const double lat = llh.x(), h = llh.z();
-  return Vec3(vel_enu_mps.y() / (meridian_radius_m(lat) + h),
-              vel_enu_mps.x() / ((normal_radius_m(lat) + h) * std::cos(lat)), vel_enu_mps.z());
+  const LatitudeTerms l(llh.x());
+  const double h = llh.z();
+  return Vec3(vel_enu_mps.y() / (meridian_radius_m(l) + h), vel_enu_mps.x() / ((normal_radius_m(l) + h) * l.cos_lat),
+              vel_enu_mps.z());
 }
 
 /// Small (lat, lon, h) change for an ENU displacement [m] at llh (the same map as llh_rate).
