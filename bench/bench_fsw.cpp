@@ -394,6 +394,68 @@ void BM_StrapdownStep(benchmark::State& state) {
       });
 }
 
+/// Strapdown::step of two independent solutions on the same increments, one after the other in
+/// each iteration (items: steps). The step is a chain of dependent operations (latitude -> radius
+/// -> latitude -> sine -> rate -> rotation); when the second chain overlaps the first in the
+/// core's out-of-order window, a step here costs less than mech/strapdown_step (docs/performance.md:
+/// "Where a frame's time goes").
+void BM_StrapdownStepTwoStates(benchmark::State& state) {
+  const FlightData& d = flight();
+  fsw::Strapdown a, b;
+  fsw::NavState other = d.init;
+  other.llh.x() += 1e-4;  // another solution: no shared values the compiler could reuse
+  const auto restart = [&] {
+    a.init(d.init);
+    b.init(other);
+  };
+  restart();
+  const int nf = d.frames();
+  int f = 0;
+  AllocScope allocs;
+  const auto t_loop = Clock::now();
+  for (auto _ : state) {
+    if (f == nf) {
+      f = 0;
+      restart();
+    }
+    const fsw::FrameIncrement& inc = d.inc[static_cast<std::size_t>(f++)];
+    Status st = a.step(inc);
+    benchmark::DoNotOptimize(st);
+    st = b.step(inc);
+    benchmark::DoNotOptimize(st);
+    benchmark::ClobberMemory();
+  }
+  finish(state, allocs, 2.0, seconds_since(t_loop));
+}
+
+/// The latency of one libm sine against its throughput (items: sines): each argument depends on
+/// the sine before it (sin_dependent) or none does (sin_independent). The strapdown step's sines
+/// are of the first kind.
+void BM_SinDependent(benchmark::State& state) {
+  double x = 0.7;
+  AllocScope allocs;
+  const auto t_loop = Clock::now();
+  for (auto _ : state) {
+    for (int k = 0; k < 64; ++k) x = 0.7 + 1e-3 * std::sin(x);
+    benchmark::DoNotOptimize(x);
+  }
+  finish(state, allocs, 64.0, seconds_since(t_loop));
+}
+
+void BM_SinIndependent(benchmark::State& state) {
+  std::array<double, 64> x{};
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = 0.7 + 1e-3 * static_cast<double>(k);
+  AllocScope allocs;
+  const auto t_loop = Clock::now();
+  for (auto _ : state) {
+    double sum = 0.0;
+    for (double v : x) sum += std::sin(v);
+    benchmark::DoNotOptimize(sum);
+    benchmark::ClobberMemory();
+  }
+  finish(state, allocs, 64.0, seconds_since(t_loop));
+}
+
 // ------------------------------------------------------------------------------------------------
 // 2./3. EKF
 // ------------------------------------------------------------------------------------------------
@@ -733,6 +795,9 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("mech/frame_builder_add_x5", BM_FrameBuilderAdd5)->UseRealTime();
   benchmark::RegisterBenchmark("mech/strapdown_step", BM_StrapdownStep)->UseRealTime();
   benchmark::RegisterBenchmark("mech/frame", BM_MechFrame)->UseRealTime();
+  benchmark::RegisterBenchmark("mech/strapdown_step_two_states", BM_StrapdownStepTwoStates)->UseRealTime();
+  benchmark::RegisterBenchmark("libm/sin_dependent_x64", BM_SinDependent)->UseRealTime();
+  benchmark::RegisterBenchmark("libm/sin_independent_x64", BM_SinIndependent)->UseRealTime();
   register_layout<fsw::Layout15>();
   register_layout<fsw::Layout24>();
   register_layout<fsw::Layout15Full>();
