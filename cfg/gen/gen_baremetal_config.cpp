@@ -11,7 +11,7 @@
 #include <string>
 
 #include "cfg/flight_config.hpp"
-#include "cfg/flight_config_fields.hpp"
+#include "fsw/flight_app_config_fields.hpp"
 
 namespace {
 

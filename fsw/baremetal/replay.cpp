@@ -8,6 +8,7 @@
 
 #include "fsw/driver.hpp"
 #include "fsw/flight_app.hpp"
+#include "fsw/flight_app_config_wire.hpp"
 
 namespace sdins_target {
 namespace {
@@ -195,6 +196,7 @@ struct Model {
 Model<fsw::Layout24Full> g_m24("24");
 Model<fsw::Layout15Full> g_m15("15");
 fsw::FlightAppConfig g_cfg;
+std::uint8_t g_cfg_wire[2048];  ///< the recorded configuration's values (fsw/flight_app_config_wire.hpp)
 
 template <class T>
 ReplayResult read_payload(const Board& b, std::uint32_t size, T& obj) {
@@ -259,19 +261,11 @@ bool read_all(const Board& b, void* dst, std::size_t n) { return b.read(dst, n) 
 }  // namespace
 
 void layout_fingerprint(std::uint32_t (&out)[kFingerprintWords]) {
-  static const fsw::FlightAppConfig c{};
   static const fsw::GnssRawEpoch e{};
   static const fsw::ImuSample s{};
   static const fsw::GpsAlmanac a{};
   int k = 0;
-  out[k++] = sizeof(fsw::FlightAppConfig);
-  out[k++] = offset_of(&c, &c.exec.ekf);
-  out[k++] = offset_of(&c, &c.exec.ekf.frozen_states);
-  out[k++] = offset_of(&c, &c.exec.ekf.lever_arm_b_m);
-  out[k++] = offset_of(&c, &c.exec.ekf.runaway_epochs);
-  out[k++] = offset_of(&c, &c.init_att_sigma_rad);
-  out[k++] = offset_of(&c, &c.init_mode);
-  out[k++] = offset_of(&c, &c.vm_rest_min_s);
+  out[k++] = static_cast<std::uint32_t>(fsw::flight_config_wire_bytes());  // the field list (not a layout)
   out[k++] = sizeof(fsw::GnssRawEpoch);
   out[k++] = offset_of(&e, &e.meas[1]);
   out[k++] = offset_of(&e, &e.meas[0].cn0_dbhz);
@@ -279,7 +273,7 @@ void layout_fingerprint(std::uint32_t (&out)[kFingerprintWords]) {
   out[k++] = offset_of(&s, &s.dv_mps);
   out[k++] = sizeof(fsw::GpsAlmanac);
   out[k++] = offset_of(&a, &a.week_mod_1024);
-  out[k++] = sizeof(fsw::Vec3) | static_cast<std::uint32_t>(alignof(fsw::FlightAppConfig)) << 16;
+  out[k++] = sizeof(fsw::Vec3) | static_cast<std::uint32_t>(alignof(fsw::GnssRawEpoch)) << 16;
 }
 
 ReplayResult run_replay(const Board& b) {
@@ -291,7 +285,10 @@ ReplayResult run_replay(const Board& b) {
   std::uint32_t want[kFingerprintWords], got[kFingerprintWords];
   layout_fingerprint(want);
   if (!read_all(b, got, sizeof got) || std::memcmp(want, got, sizeof got) != 0) return ReplayResult::kBadHeader;
-  if (!read_all(b, &g_cfg, sizeof g_cfg)) return ReplayResult::kBadHeader;
+  std::uint32_t cfg_bytes = 0;
+  if (!read_all(b, &cfg_bytes, 4) || cfg_bytes > sizeof g_cfg_wire || !read_all(b, g_cfg_wire, cfg_bytes))
+    return ReplayResult::kBadHeader;
+  if (fsw::decode_flight_config(g_cfg_wire, cfg_bytes, g_cfg) != fsw::Status::kOk) return ReplayResult::kBadConfig;
   g_cfg.exec.ekf_group_inline = false;  // the two rate groups are run (and counted) apart: Model::after
   if (g_m24.driver.init(g_cfg) != fsw::Status::kOk || g_m15.driver.init(g_cfg) != fsw::Status::kOk)
     return ReplayResult::kBadConfig;

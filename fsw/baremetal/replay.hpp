@@ -5,11 +5,11 @@
 // as exact text (hex of the doubles), so the two builds compare bit for bit.
 //
 // INPUT (little-endian, written by `sdins_target record` from an LCM log of `sdins sil`):
-//   header   "SDTR", u32 version, u32 n_fingerprint, n_fingerprint x u32 (layout of the structs
-//            below, layout_fingerprint()), then sizeof(FlightAppConfig) bytes: the configuration
-//            (the shipped config/default.toml, the one HIL uses), the same object bytes on both ABIs
-//            (double, uint64 and Eigen's fixed-size vectors are 8-aligned on AAPCS and x86-64; the
-//            fingerprint proves the layouts equal before any byte is used).
+//   header   "SDTR", u32 version, u32 n_fingerprint, n_fingerprint x u32 (the size of the
+//            configuration's encoding and the layout of the event structs below,
+//            layout_fingerprint()), u32 n, then n bytes: the flight configuration's values
+//            (fsw/flight_app_config_wire.hpp: every field by name order, 8 bytes each, the same on
+//            every ABI; the shipped config/default.toml, the one HIL uses, or the one given).
 //   events   u32 tag ('A' almanac, 'G' raw GNSS epoch, 'I' IMU sample), u32 payload size, then the
 //            object bytes of fsw::GpsAlmanac / fsw::GnssRawEpoch / fsw::ImuSample, in log order.
 // OUTPUT (text lines; every double as 16 hex digits of its IEEE-754 bits):
@@ -27,11 +27,11 @@
 
 namespace sdins_target {
 
-inline constexpr std::uint32_t kFormatVersion = 1;
+inline constexpr std::uint32_t kFormatVersion = 2;  ///< 2: the configuration by value, not its object bytes
 inline constexpr std::uint32_t kTagAlmanac = 'A';
 inline constexpr std::uint32_t kTagGnss = 'G';
 inline constexpr std::uint32_t kTagImu = 'I';
-inline constexpr int kFingerprintWords = 16;
+inline constexpr int kFingerprintWords = 9;
 
 /// Sizes and member offsets of the recorded structs on this build's ABI.
 void layout_fingerprint(std::uint32_t (&out)[kFingerprintWords]);
@@ -50,7 +50,7 @@ struct Board {
 enum class ReplayResult : int {
   kOk = 0,
   kBadHeader = 2,     ///< magic, version or layout fingerprint differ
-  kBadConfig = 3,     ///< FlightApp::init rejected the recorded configuration
+  kBadConfig = 3,     ///< a configuration value its field cannot hold, or FlightApp::init rejected it
   kBadEvent = 4,      ///< unknown tag or wrong payload size
   kTruncated = 5,     ///< the input ended inside an event
 };

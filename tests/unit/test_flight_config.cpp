@@ -12,7 +12,7 @@
 #include "hal/fsw_node.hpp"
 #include "cfg/data_dir.hpp"
 #include "cfg/flight_config.hpp"
-#include "cfg/flight_config_fields.hpp"
+#include "fsw/flight_app_config_fields.hpp"
 #include "tools/diagnosis.hpp"
 #include "tools/montecarlo.hpp"
 
@@ -20,7 +20,7 @@ namespace {
 
 const std::filesystem::path kSourceFile = std::filesystem::path(SDINS_TEST_SOURCE_DIR) / "config/default.toml";
 
-// A new field must be listed in FLIGHT_CONFIG_FIELDS (cfg/flight_config_fields.hpp; and, if a file
+// A new field must be listed in FLIGHT_CONFIG_FIELDS (fsw/flight_app_config_fields.hpp; and, if a file
 // should set it, get a key in cfg/src/flight_config.cpp and config/default.toml): the sizes are
 // those of the structs the list describes (x86-64), so a field added without it stops this test
 // from compiling.

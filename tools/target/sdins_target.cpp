@@ -12,11 +12,13 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include "hal/fsw_node.hpp"
 #include "hal/lcm_log_sink.hpp"
 #include "replay.hpp"
 #include "cfg/flight_config.hpp"
+#include "fsw/flight_app_config_wire.hpp"
 
 namespace {
 
@@ -49,16 +51,21 @@ int record(const std::string& log, const std::string& path, const std::string& f
     std::fprintf(stderr, "sdins_target: cannot read %s: %s\n", log.c_str(), reader.error().c_str());
     return 1;
   }
-  std::FILE* f = std::fopen(path.c_str(), "wb");
+  // Written beside and renamed into place when complete: a failed record leaves no partial input.
+  const std::string part = path + ".part";
+  std::FILE* f = std::fopen(part.c_str(), "wb");
   if (f == nullptr) {
-    std::fprintf(stderr, "sdins_target: cannot write %s\n", path.c_str());
+    std::fprintf(stderr, "sdins_target: cannot write %s\n", part.c_str());
     return 1;
   }
   std::uint32_t fp[sdins_target::kFingerprintWords];
   sdins_target::layout_fingerprint(fp);
-  const fsw::FlightAppConfig& cfg = filter.app;
-  bool ok = std::fwrite("SDTR", 1, 4, f) == 4 && put(f, sdins_target::kFormatVersion) &&
-            put(f, static_cast<std::uint32_t>(sdins_target::kFingerprintWords)) && put(f, fp) && put(f, cfg);
+  std::vector<std::uint8_t> cfg_wire(fsw::flight_config_wire_bytes());
+  bool ok = fsw::encode_flight_config(filter.app, cfg_wire.data(), cfg_wire.size()) == cfg_wire.size();
+  ok = ok && std::fwrite("SDTR", 1, 4, f) == 4 && put(f, sdins_target::kFormatVersion) &&
+       put(f, static_cast<std::uint32_t>(sdins_target::kFingerprintWords)) && put(f, fp) &&
+       put(f, static_cast<std::uint32_t>(cfg_wire.size())) &&
+       std::fwrite(cfg_wire.data(), 1, cfg_wire.size(), f) == cfg_wire.size();
   std::uint64_t n_imu = 0, n_gnss = 0, n_alm = 0;
   fsw::InputEvent in;
   while (ok && reader.next(in) == hal::LcmLogStatus::kOk) {
@@ -83,7 +90,11 @@ int record(const std::string& log, const std::string& path, const std::string& f
   std::printf("sdins_target record: %llu IMU samples, %llu GNSS epochs, %llu almanac entries, %llu log rejections\n",
               static_cast<unsigned long long>(n_imu), static_cast<unsigned long long>(n_gnss),
               static_cast<unsigned long long>(n_alm), static_cast<unsigned long long>(rejected));
-  if (!ok) std::fprintf(stderr, "sdins_target: writing %s failed\n", path.c_str());
+  if (ok) ok = std::rename(part.c_str(), path.c_str()) == 0;
+  if (!ok) {
+    std::fprintf(stderr, "sdins_target: writing %s failed\n", path.c_str());
+    std::remove(part.c_str());
+  }
   return ok && rejected == 0 ? 0 : 1;
 }
 

@@ -1,9 +1,11 @@
-// Every field of fsw::FlightAppConfig, listed once: X(path, in_schema). in_schema false: set by the
-// flight application or a harness, not by a file (FlightApp replaces the EKF's initial sigmas by
-// init_*; the diagnosis sets the extension sigmas per run). Used by the test that config/default.toml
-// sets every key (tests/unit/test_flight_config.cpp, which also pins the structs' sizes so that a
-// new field must be listed) and by the generator of the bare-metal image's configuration
-// (cfg/gen/gen_baremetal_config.cpp).
+// Every field of fsw::FlightAppConfig (fsw/flight_app_config.hpp), listed once beside it:
+// X(path, in_schema). in_schema false: set by the flight application or a harness, not by a file
+// (FlightApp replaces the EKF's initial sigmas by init_*; the diagnosis sets the extension sigmas
+// per run). Used by the test that config/default.toml sets every key
+// (tests/unit/test_flight_config.cpp, which also pins the structs' sizes so that an added field
+// must be listed), by the generator of the bare-metal image's configuration
+// (cfg/gen/gen_baremetal_config.cpp) and by the configuration's encoding for the target replay
+// (fsw/flight_app_config_wire.hpp).
 #pragma once
 
 #define FLIGHT_CONFIG_FIELDS(X)                                                                       \
