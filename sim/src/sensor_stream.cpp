@@ -1,5 +1,6 @@
 #include "sim/sensor_stream.hpp"
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -16,24 +17,75 @@ int imu_samples_per_epoch(const Scenario& sc) {
   return static_cast<int>(std::lround(spe));
 }
 
-TruthTrack TruthTrack::generate(const Scenario& sc) {
-  const auto t0 = std::chrono::steady_clock::now();
+struct TruthTrack::Progress {
+  std::unique_ptr<FlightMotion> motion;
+  std::unique_ptr<TruthGenerator> gen;
+  long long written = 0;              ///< fill()'s own count (its thread only)
+  std::atomic<long long> ready{0};    ///< samples published to readers
+  mutable std::atomic<bool> stop{false};
+  std::atomic<bool> stopped{false};   ///< fill() returned before the end: waits past ready fail
+};
+
+TruthTrack TruthTrack::prepare(const Scenario& sc) {
   std::string err;
-  auto motion = FlightMotion::create(sc, err);
-  if (!motion) throw std::runtime_error(err);
+  auto p = std::make_shared<Progress>();
+  p->motion = FlightMotion::create(sc, err);
+  if (!p->motion) throw std::runtime_error(err);
   TruthTrack tt;
   tt.samples_per_epoch = imu_samples_per_epoch(sc);
   const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
-  tt.imu.reserve(static_cast<std::size_t>(n));
-  tt.epochs.reserve(static_cast<std::size_t>(n / tt.samples_per_epoch + 1));
-  TruthGenerator gen(*motion, sc.imu.rate_hz);
-  tt.epochs.push_back(gen.current());
-  for (long long k = 1; k <= n; ++k) {
-    const TruthSample& s = gen.next();
-    tt.imu.push_back({s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps});
-    if (k % tt.samples_per_epoch == 0) tt.epochs.push_back(s);
+  tt.imu.resize(static_cast<std::size_t>(n));
+  tt.epochs.resize(static_cast<std::size_t>(n / tt.samples_per_epoch + 1));
+  p->gen = std::make_unique<TruthGenerator>(*p->motion, sc.imu.rate_hz);
+  tt.epochs[0] = p->gen->current();
+  tt.progress = std::move(p);
+  return tt;
+}
+
+void TruthTrack::fill() {
+  Progress& p = *progress;
+  const auto t0 = std::chrono::steady_clock::now();
+  const long long n = static_cast<long long>(imu.size());
+  for (long long k = p.written + 1; k <= n; ++k) {
+    const TruthSample& s = p.gen->next();
+    imu[static_cast<std::size_t>(k - 1)] = {s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps};
+    if (k % samples_per_epoch == 0) epochs[static_cast<std::size_t>(k / samples_per_epoch)] = s;
+    p.written = k;
+    if (k % kPublishSamples == 0 || k == n) {
+      p.ready.store(k, std::memory_order_release);
+      p.ready.notify_all();
+      if (p.stop.load(std::memory_order_relaxed) && k < n) {
+        p.stopped.store(true, std::memory_order_release);
+        p.ready.store(-1, std::memory_order_release);  // a new value: every wait wakes and sees stopped
+        p.ready.notify_all();
+        break;
+      }
+    }
   }
-  tt.generate_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  generate_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void TruthTrack::stop_fill() const {
+  if (progress) progress->stop.store(true, std::memory_order_relaxed);
+}
+
+long long TruthTrack::wait_for(long long k) const {
+  if (!progress) return static_cast<long long>(imu.size());
+  const Progress& p = *progress;
+  long long r = p.ready.load(std::memory_order_acquire);
+  while (r <= k) {
+    if (p.stopped.load(std::memory_order_acquire))
+      throw std::runtime_error("the truth's integration stopped before sample " + std::to_string(k));
+    p.ready.wait(r, std::memory_order_acquire);
+    r = p.ready.load(std::memory_order_acquire);
+  }
+  return r;
+}
+
+TruthTrack TruthTrack::generate(const Scenario& sc) {
+  TruthTrack tt = prepare(sc);
+  tt.fill();
+  tt.progress.reset();  // complete: no reader waits
   return tt;
 }
 
@@ -68,6 +120,7 @@ SensorStream::~SensorStream() = default;
 
 const TruthSample& SensorStream::next_truth() {
   if (gen_) return gen_->next();
+  if (sample_ >= track_ready_) track_ready_ = track_->wait_for(sample_);  // a track being generated
   const TruthTrack::Increment& inc = track_->imu[static_cast<std::size_t>(sample_)];
   track_sample_.t_s = inc.t_s;
   track_sample_.dt_s = inc.dt_s;

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include "sim/almanac.hpp"
@@ -97,4 +99,69 @@ TEST(SensorStream, SharedTruthTrackGivesTheSameEventsAsTheLiveGenerator) {
   sim::Scenario other = sc;
   other.gps.rate_hz = 2.0;
   EXPECT_THROW(sim::SensorStream(other, track, *alm.almanac, 11), std::runtime_error);
+}
+
+namespace {
+
+bool same_imu_events(const std::vector<fsw::InputEvent>& a, const std::vector<fsw::InputEvent>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].kind != b[i].kind || std::memcmp(&a[i].t_s, &b[i].t_s, sizeof a[i].t_s) != 0) return false;
+    if (a[i].kind == fsw::InputEvent::Kind::kImu && std::memcmp(&a[i].imu, &b[i].imu, sizeof a[i].imu) != 0) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+// A track read while it is integrated on another thread (TruthTrack::prepare / fill, what the
+// Monte Carlo does): two streams that start before the first sample is published read the same
+// events, bit for bit, as from a track generated whole; each waits where it is ahead.
+TEST(SensorStream, TrackReadWhileItIsGeneratedGivesTheSameEvents) {
+  sim::Scenario sc = short_flight();
+  sc.duration_s = 12.0;  // 12 publications of TruthTrack::kPublishSamples
+  const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
+  ASSERT_TRUE(alm.ok()) << alm.error;
+  const sim::TruthTrack whole = sim::TruthTrack::generate(sc);
+  EXPECT_EQ(whole.progress, nullptr);
+  sim::SensorStream ref(sc, whole, *alm.almanac, 5);
+  const std::vector<fsw::InputEvent> want = all_events(ref);
+
+  sim::TruthTrack growing = sim::TruthTrack::prepare(sc);
+  ASSERT_NE(growing.progress, nullptr);
+  ASSERT_EQ(growing.imu.size(), whole.imu.size());
+  ASSERT_EQ(growing.epochs.size(), whole.epochs.size());
+  std::vector<fsw::InputEvent> got1, got2;
+  std::thread r1([&] {
+    sim::SensorStream s(sc, growing, *alm.almanac, 5);
+    got1 = all_events(s);
+  });
+  std::thread r2([&] {
+    sim::SensorStream s(sc, growing, *alm.almanac, 5);
+    got2 = all_events(s);
+  });
+  std::thread gen([&] { growing.fill(); });
+  gen.join();
+  r1.join();
+  r2.join();
+  EXPECT_TRUE(same_imu_events(want, got1));
+  EXPECT_TRUE(same_imu_events(want, got2));
+  for (std::size_t k = 0; k < whole.epochs.size(); ++k) EXPECT_EQ(whole.epochs[k].llh, growing.epochs[k].llh) << k;
+  EXPECT_GT(growing.generate_wall_s, 0.0);
+}
+
+// A fill stopped early (an aborted Monte Carlo) fails a reader that needs a sample it never
+// wrote, with an error, instead of leaving it waiting.
+TEST(SensorStream, AStoppedTrackFailsItsReaderInsteadOfHanging) {
+  sim::Scenario sc = short_flight();
+  sc.duration_s = 5.0;
+  const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
+  ASSERT_TRUE(alm.ok()) << alm.error;
+  sim::TruthTrack growing = sim::TruthTrack::prepare(sc);
+  growing.stop_fill();  // stops at its first publication: samples 1..kPublishSamples written
+  growing.fill();
+  EXPECT_THROW(growing.wait_for(0), std::runtime_error);  // stopped: no sample is promised
+  sim::SensorStream s(sc, growing, *alm.almanac, 5);
+  std::thread reader([&] { EXPECT_THROW(all_events(s), std::runtime_error); });
+  reader.join();  // returns: the reader failed, it did not wait for ever
 }

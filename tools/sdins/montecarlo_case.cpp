@@ -286,8 +286,24 @@ CaseResult run_case_impl(const sim::Scenario& sc, const sim::TruthTrack* given_t
   const MpiWorld& w = mpi_world();
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
+  // Without a given truth, the runs start while it is integrated on a thread of its own
+  // (sim::TruthTrack::prepare/fill: a run reading ahead of it waits): the cores are not idle for
+  // the integration's second or so. Joined before the statistics, and on an error (stopped first).
   std::optional<sim::TruthTrack> own_truth;
-  if (given_truth == nullptr) own_truth = sim::TruthTrack::generate(sc);
+  std::thread truth_thread;
+  if (given_truth == nullptr) {
+    own_truth = sim::TruthTrack::prepare(sc);
+    truth_thread = std::thread([&t = *own_truth] { t.fill(); });
+  }
+  struct JoinTruth {
+    std::thread& thread;
+    const sim::TruthTrack* track;
+    ~JoinTruth() {
+      if (!thread.joinable()) return;
+      track->stop_fill();  // a no-op once it has finished
+      thread.join();
+    }
+  } join_truth{truth_thread, own_truth ? &*own_truth : nullptr};
   const sim::TruthTrack& truth = given_truth != nullptr ? *given_truth : *own_truth;
   // This rank's block of runs; with one rank, all of them.
   tools::MonteCarloConfig local = mc;
@@ -297,6 +313,7 @@ CaseResult run_case_impl(const sim::Scenario& sc, const sim::TruthTrack* given_t
   if (local.threads == 0 && w.size > 1) local.threads = 1;  // ranks, not threads, fill the cores
   std::vector<tools::RunResult> results;
   if (local.runs > 0) results = tools::run_many(sc, truth, *alm.almanac, local);
+  if (truth_thread.joinable()) truth_thread.join();  // every run has read all of it: it is complete
   maybe_inject_failure(w);
   const auto tg = std::chrono::steady_clock::now();
   double gather_s = 0.0;

@@ -43,9 +43,27 @@ struct TruthTrack {
   std::vector<Increment> imu;       ///< samples 1..n (the sample at t = 0 has no increment)
   std::vector<TruthSample> epochs;  ///< truth at t = k / gps_rate, k = 0..; epochs[0] is t = 0
   int samples_per_epoch = 1000;     ///< IMU samples between GNSS epochs
-  double generate_wall_s = 0.0;
+  double generate_wall_s = 0.0;     ///< the integration's own wall time (fill())
   /// Throws std::runtime_error for a scenario it cannot fly (e.g. rates that do not divide).
   static TruthTrack generate(const Scenario& sc);
+
+  // Generated while it is read: prepare() sizes the arrays and writes epochs[0]; fill(), on its
+  // own thread, integrates the rest and publishes how far it got every kPublishSamples samples;
+  // a stream reading sample k waits in wait_for(k) (blocked, not spinning) until it is written.
+  // The values are generate()'s, whatever the threads' timing. A Monte Carlo's runs start while
+  // the truth they share is integrated instead of after it (docs/performance.md).
+  static constexpr long long kPublishSamples = 1000;
+  struct Progress;
+  std::shared_ptr<Progress> progress;  ///< null: the track is complete (generate())
+  /// Throws std::runtime_error like generate().
+  static TruthTrack prepare(const Scenario& sc);
+  /// Integrates every sample not yet written, publishing progress; returns early when stopped.
+  void fill();
+  /// Makes a fill() in progress return at its next publication and the waits fail (an aborted run).
+  void stop_fill() const;
+  /// Blocks until imu[k] (and every epoch up to it) is written; returns how many samples are
+  /// written. Throws std::runtime_error when fill() stopped before k.
+  long long wait_for(long long k) const;
 };
 
 /// IMU samples per GNSS epoch of a scenario; throws std::runtime_error unless the GPS rate divides
@@ -111,6 +129,7 @@ class SensorStream {
   std::unique_ptr<TruthGenerator> gen_;   ///< live source only
   const TruthTrack* track_ = nullptr;     ///< shared source only
   TruthSample track_sample_;              ///< shared source: the fields the IMU model reads
+  long long track_ready_ = 0;             ///< shared source: samples known written (TruthTrack::wait_for)
   std::unique_ptr<ImuModel> imu_;
   std::unique_ptr<GpsModel> gps_;
   std::size_t almanac_sent_ = 0;
