@@ -324,9 +324,10 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // ------------------------------------------------------------------------------------------------
 
 /// One frame of the data per iteration, the whole loop timed: step(f) for frames 0, 1, ... and,
-/// on wrapping to the start of the data (once in 6000 frames), restart() first.
+/// on wrapping to the start of the data (once in 6000 frames), restart() first. items: what one
+/// step counts for in the rate (1 frame; 2 for two solutions stepped).
 template <class Restart, class Step>
-void time_over_frames(benchmark::State& state, const FlightData& d, Restart restart, Step step) {
+void time_over_frames(benchmark::State& state, const FlightData& d, Restart restart, Step step, double items = 1.0) {
   const int nf = d.frames();
   int f = 0;
   AllocScope allocs;
@@ -339,7 +340,7 @@ void time_over_frames(benchmark::State& state, const FlightData& d, Restart rest
     step(f++);
     benchmark::ClobberMemory();
   }
-  finish(state, allocs, 1.0, seconds_since(t_loop));
+  finish(state, allocs, items, seconds_since(t_loop));
 }
 
 /// FrameBuilder::add for the 5 samples of a frame and Strapdown::step: one navigation frame.
@@ -398,34 +399,28 @@ void BM_StrapdownStep(benchmark::State& state) {
 /// each iteration (items: steps). The step is a chain of dependent operations (latitude -> radius
 /// -> latitude -> sine -> rate -> rotation); when the second chain overlaps the first in the
 /// core's out-of-order window, a step here costs less than mech/strapdown_step (docs/performance.md:
-/// "Where a frame's time goes").
+/// "A navigation frame, term by term").
 void BM_StrapdownStepTwoStates(benchmark::State& state) {
   const FlightData& d = flight();
   fsw::Strapdown a, b;
   fsw::NavState other = d.init;
   other.llh.x() += 1e-4;  // another solution: no shared values the compiler could reuse
-  const auto restart = [&] {
-    a.init(d.init);
-    b.init(other);
-  };
-  restart();
-  const int nf = d.frames();
-  int f = 0;
-  AllocScope allocs;
-  const auto t_loop = Clock::now();
-  for (auto _ : state) {
-    if (f == nf) {
-      f = 0;
-      restart();
-    }
-    const fsw::FrameIncrement& inc = d.inc[static_cast<std::size_t>(f++)];
-    Status st = a.step(inc);
-    benchmark::DoNotOptimize(st);
-    st = b.step(inc);
-    benchmark::DoNotOptimize(st);
-    benchmark::ClobberMemory();
-  }
-  finish(state, allocs, 2.0, seconds_since(t_loop));
+  a.init(d.init);
+  b.init(other);
+  time_over_frames(
+      state, d,
+      [&] {
+        a.init(d.init);
+        b.init(other);
+      },
+      [&](int f) {
+        const fsw::FrameIncrement& inc = d.inc[static_cast<std::size_t>(f)];
+        Status st = a.step(inc);
+        benchmark::DoNotOptimize(st);
+        st = b.step(inc);
+        benchmark::DoNotOptimize(st);
+      },
+      2.0);
 }
 
 /// The latency of one libm sine against its throughput (items: sines): each argument depends on
