@@ -280,31 +280,43 @@ json health_json(const fsw::ExecutiveHealth& h) {
               {"gating_runaway_epochs", h.ekf.gating_runaway_epochs}, {"filter_resets", h.ekf.resets}};
 }
 
+/// A case's truth: the one given, or its own, integrated on a thread beside the runs
+/// (sim::TruthTrack::prepare/fill: a run reading ahead of it waits), so the cores are not idle
+/// for the integration's second or so. complete() joins it once the runs have read it all; on an
+/// error the destructor stops it first.
+class CaseTruth {
+ public:
+  CaseTruth(const sim::Scenario& sc, const sim::TruthTrack* given) : given_(given) {
+    if (given_ != nullptr) return;
+    own_ = sim::TruthTrack::prepare(sc);
+    thread_ = std::thread([&t = *own_] { t.fill(); });
+  }
+  ~CaseTruth() {
+    if (!thread_.joinable()) return;
+    own_->stop_fill();
+    thread_.join();
+  }
+  CaseTruth(const CaseTruth&) = delete;
+  CaseTruth& operator=(const CaseTruth&) = delete;
+  const sim::TruthTrack& track() const { return given_ != nullptr ? *given_ : *own_; }
+  void complete() {
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  const sim::TruthTrack* given_;
+  std::optional<sim::TruthTrack> own_;
+  std::thread thread_;
+};
+
 CaseResult run_case_impl(const sim::Scenario& sc, const sim::TruthTrack* given_truth, const tools::MonteCarloConfig& mc,
                          const std::string& out_dir, const std::string& prefix) {
   const auto t0 = std::chrono::steady_clock::now();
   const MpiWorld& w = mpi_world();
   const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
   if (!alm.ok()) throw std::runtime_error(alm.error);
-  // Without a given truth, the runs start while it is integrated on a thread of its own
-  // (sim::TruthTrack::prepare/fill: a run reading ahead of it waits): the cores are not idle for
-  // the integration's second or so. Joined before the statistics, and on an error (stopped first).
-  std::optional<sim::TruthTrack> own_truth;
-  std::thread truth_thread;
-  if (given_truth == nullptr) {
-    own_truth = sim::TruthTrack::prepare(sc);
-    truth_thread = std::thread([&t = *own_truth] { t.fill(); });
-  }
-  struct JoinTruth {
-    std::thread& thread;
-    const sim::TruthTrack* track;
-    ~JoinTruth() {
-      if (!thread.joinable()) return;
-      track->stop_fill();  // a no-op once it has finished
-      thread.join();
-    }
-  } join_truth{truth_thread, own_truth ? &*own_truth : nullptr};
-  const sim::TruthTrack& truth = given_truth != nullptr ? *given_truth : *own_truth;
+  CaseTruth case_truth(sc, given_truth);
+  const sim::TruthTrack& truth = case_truth.track();
   // This rank's block of runs; with one rank, all of them.
   tools::MonteCarloConfig local = mc;
   const int begin = block_begin(mc.runs, w.size, w.rank), end = block_begin(mc.runs, w.size, w.rank + 1);
@@ -313,7 +325,7 @@ CaseResult run_case_impl(const sim::Scenario& sc, const sim::TruthTrack* given_t
   if (local.threads == 0 && w.size > 1) local.threads = 1;  // ranks, not threads, fill the cores
   std::vector<tools::RunResult> results;
   if (local.runs > 0) results = tools::run_many(sc, truth, *alm.almanac, local);
-  if (truth_thread.joinable()) truth_thread.join();  // every run has read all of it: it is complete
+  case_truth.complete();
   maybe_inject_failure(w);
   const auto tg = std::chrono::steady_clock::now();
   double gather_s = 0.0;
