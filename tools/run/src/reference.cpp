@@ -52,7 +52,10 @@ Reference load_reference(const std::string& log_path) {
     const bool att_finite = s.q_b_n.coeffs().allFinite();
     s.has_attitude = att_finite && std::abs(s.q_b_n.norm() - 1.0) < 1e-3;
     s.attitude_not_unit = att_finite && !s.has_attitude;
-    if (s.has_attitude) s.q_b_n.normalize();
+    if (s.has_attitude)
+      s.q_b_n.normalize();
+    else
+      s.q_b_n = fsw::Quat::Identity();
     if (!s.has_position && !s.has_velocity && !s.has_attitude) {
       ++r.rejected;
       continue;

@@ -17,15 +17,15 @@
 #include <vector>
 
 #include "fsw/strapdown.hpp"
+#include "sim/truth.hpp"
 
 namespace tools {
 
-struct ReferenceSample {
-  double t_s = 0.0;
-  fsw::Vec3 llh = fsw::Vec3::Zero();
-  fsw::Vec3 vel_enu_mps = fsw::Vec3::Zero();
-  fsw::Quat q_b_n = fsw::Quat::Identity();
-  bool has_position = false, has_velocity = false, has_attitude = false;
+/// A reference sample: the truth sample (sim/truth.hpp: time, position, velocity, attitude, with
+/// q_b_n the identity and has_attitude false when there is none) and which parts are there.
+struct ReferenceSample : sim::TruthPoint {
+  ReferenceSample() { has_attitude = false; }
+  bool has_position = false, has_velocity = false;
   bool attitude_not_unit = false;  ///< the quaternion was finite but not of unit norm (has_attitude false)
 };
 
