@@ -88,7 +88,7 @@ assert j["time_fit"]["pairs"] == 32 and j["time_fit"]["gps_minus_utc_s"] == 18 a
 assert j["time_fit"]["residual_rms_ms"] < 10.0, j["time_fit"]
 assert j["truth"]["with_attitude"] == 261 and j["truth"]["with_position"] == 0  # PX4 had no position estimate yet
 assert j["reference"]["kind"] == "autopilot_estimate" and j["reference"]["source"] == "vehicle_attitude"
-assert abs(j["streams"]["imu"]["rate_hz"] - 200.0) < 10.0 and abs(j["streams"]["gnss"]["rate_hz"] - 5.0) < 0.1
+assert abs(j["imu"]["samples"]["rate_hz"] - 200.0) < 10.0 and abs(j["gnss_pvt"]["samples"]["rate_hz"] - 5.0) < 0.1
 assert "CUBEPILOT_CUBEORANGE" in text and "GPS-UTC 18 s" in text
 gravity_check(log, "small")
 
@@ -96,7 +96,7 @@ gravity_check(log, "small")
 log, j, text = imported("sitl", logs["sample_px4_events"])
 u = j["ulog"]
 assert u["info"]["ver_hw"] == "PX4_SITL" and u["info"]["sys_os_name"] == "Linux" and u["damage"]["total"] == 0
-assert j["imu"]["lines"]["accepted"] == 7783 and abs(j["streams"]["imu"]["rate_hz"] - 250.0) < 1e-6
+assert j["imu"]["lines"]["accepted"] == 7783 and abs(j["imu"]["samples"]["rate_hz"] - 250.0) < 1e-6
 assert j["gnss_pvt"]["lines"]["accepted"] == 423
 assert j["gnss_pvt"]["lines"]["rejected_by_reason"]["no 3D fix (fix_type < 3)"] == 160
 assert j["time_scale"]["gps_week0"] == 2306 and j["time_fit"]["residual_max_ms"] < 1e-3  # SITL: boot clock = UTC

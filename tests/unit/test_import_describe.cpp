@@ -16,6 +16,7 @@
 #include "lcm_test_util.hpp"
 #include "cfg/flight_config.hpp"
 #include "tools/import_describe.hpp"
+#include "tools/stream_summary.hpp"
 
 namespace {
 
@@ -236,7 +237,17 @@ TEST(ImportDescribe, ANewUsersTablesComeBackAsTheyWereMeant) {
   EXPECT_EQ(fit["pairs"].get<int>(), 51);  // the duplicate dropped first
   EXPECT_NEAR(fit["drift_ppm"].get<double>(), -Flight::kDrift / (1.0 + Flight::kDrift) * 1e6, 0.01);
   EXPECT_LT(fit["residual_rms_s"].get<double>(), 1e-5);
-  EXPECT_EQ(s["gnss_pvt"]["stream"]["duplicates_dropped"].get<int>(), 1);
+  EXPECT_EQ(s["gnss_pvt"]["samples"]["duplicates"].get<int>(), 1);
+  // Every stream of the summary in the one shape (tools/stream_summary.hpp), under "samples".
+  const nlohmann::json shape = tools::StreamSummary{}.to_json();
+  for (const char* stream : {"imu", "gnss_pvt", "truth"}) {
+    ASSERT_TRUE(s[stream].is_object()) << stream;
+    for (const auto& [key, value] : shape.items()) EXPECT_TRUE(s[stream]["samples"].contains(key)) << stream << "." << key;
+    EXPECT_EQ(s[stream]["samples"].size(), shape.size()) << stream;
+  }
+  EXPECT_EQ(s["imu"]["samples"]["name"], "imu");
+  EXPECT_EQ(s["truth"]["samples"]["name"], "reference");
+  EXPECT_EQ(s["gnss_pvt"]["samples"]["count"].get<int>(), 51);
   EXPECT_EQ(s["gnss_pvt"]["lines"]["rejected_by_reason"]["duplicate time (dropped)"].get<int>(), 1);
   EXPECT_EQ(s["reference"]["kind"], "autopilot_estimate");
   EXPECT_FALSE(s["reference"]["has_attitude"].get<bool>());
@@ -406,6 +417,31 @@ TEST(ImportDescribe, StartingConfigurationFromAMinimalSummary) {
   const cfg::FlightConfig slow = config_from(slow_summary);
   EXPECT_EQ(slow.app.exec.frames_per_ekf, 2);
   EXPECT_EQ(slow.app.exec.ekf_latency_frames, 1);
+}
+
+TEST(ImportDescribe, StartingRatesFromTheOneStreamShape) {
+  // Streams from their time tags, as every importer writes them: a 200 Hz IMU without gaps and 5 Hz
+  // solutions with two lost seconds (mean 4 Hz).
+  std::vector<double> t_imu, t_gnss;
+  for (int k = 0; k <= 2000; ++k) t_imu.push_back(100.0 + k * 0.005);
+  for (int k = 0; k <= 50; ++k)
+    if (k < 20 || k >= 30) t_gnss.push_back(100.0 + k * 0.2);
+  nlohmann::json s;
+  s["imu"]["samples"] = tools::summarize_stream("imu", "t", t_imu).to_json();
+  s["gnss_pvt"]["samples"] = tools::summarize_stream("gnss_pvt", "t", t_gnss).to_json();
+  s["gnss_pvt"]["by_quality"] = {{"5", t_gnss.size()}};
+  EXPECT_NEAR(s["gnss_pvt"]["samples"]["mean_rate_hz"].get<double>(), 40.0 / 10.0, 1e-9);
+  const cfg::FlightConfig cfg = config_from(s);
+  EXPECT_EQ(cfg.app.exec.imu_samples_per_frame, 1);
+  EXPECT_DOUBLE_EQ(cfg.app.exec.nav_rate_hz, 200.0);
+  EXPECT_EQ(cfg.app.exec.frames_per_ekf, 40);  // the solutions' nominal 5 Hz, not the mean
+  // An IMU whose mean rate gaps pull more than 2 % below its nominal one: the nominal 250 Hz.
+  std::vector<double> t_gappy;
+  for (int k = 0; k <= 1000; ++k)
+    if (k % 10 != 5) t_gappy.push_back(k * 0.004);
+  s["imu"]["samples"] = tools::summarize_stream("imu", "t", t_gappy).to_json();
+  EXPECT_LT(s["imu"]["samples"]["mean_rate_hz"].get<double>(), 0.98 * 250.0);
+  EXPECT_EQ(config_from(s).app.exec.imu_samples_per_frame, 2);  // 250 Hz -> 125 Hz frames
 }
 
 }  // namespace

@@ -355,10 +355,10 @@ TEST(UlogImport, AHandcraftedFlightLandsOnTheNavigationTimeScaleInTheProjectsFra
   EXPECT_EQ(j["reference"]["source"], "vehicle_global_position+vehicle_attitude");
   EXPECT_TRUE(j["reference"]["has_attitude"].get<bool>());
   EXPECT_DOUBLE_EQ(j["time_fit"]["px4_ekf2_gps_delay_ms"].get<double>(), 110.0);
-  EXPECT_EQ(r.streams.imu.samples, 600u);
+  EXPECT_EQ(r.streams.imu.count, 600u);
   EXPECT_NEAR(r.streams.imu.rate_hz, 200.0, 1e-6);
   EXPECT_NEAR(r.streams.gnss.rate_hz, 5.0, 1e-6);
-  EXPECT_EQ(r.streams.gnss.samples, 14u);
+  EXPECT_EQ(r.streams.gnss.count, 14u);
   EXPECT_NEAR(r.streams.imu_gnss_overlap_s, 2.6, 1e-6);
 
   // Read the log back.

@@ -15,6 +15,7 @@
 #include "fsw/gps_orbit.hpp"
 #include "hal/lcm_convert.hpp"
 #include "tools/importers.hpp"
+#include "tools/stream_summary.hpp"
 
 namespace tools::import_detail {
 
@@ -46,16 +47,29 @@ struct Collected {
 /// Writes the log atomically (time order; at equal times almanac, IMU, raw, solution, reference).
 nlohmann::json write_log(const std::string& path, const Collected& c);
 
-nlohmann::json span_json(double t_first, double t_last, std::size_t n);
+/// The one stream shape (tools/stream_summary.hpp) of any list of samples, from their time tags.
+template <class T, class TimeOf>
+nlohmann::json stream_json(const std::string& name, const std::string& source, const std::vector<T>& v, TimeOf t_of,
+                           std::uint64_t duplicates = 0) {
+  std::vector<double> t;
+  t.reserve(v.size());
+  for (const T& x : v) t.push_back(t_of(x));
+  StreamSummary s = summarize_stream(name, source, t);
+  s.duplicates = duplicates;
+  return s.to_json();
+}
 /// Ground-speed statistics of the solutions with velocity (median, p90, max, the moving share):
 /// what the starting configuration's initialisation speed is read from; null without velocities.
 nlohmann::json pvt_speed_json(const std::vector<hal::GnssPvtSample>& pvt);
 /// The same statistics of any list of speeds [m/s], labelled with their source; null when empty.
 nlohmann::json speed_stats_json(const std::vector<double>& speeds_mps, const std::string& source);
 double median(std::vector<double> v);
-/// IMU records through the IMU input validation, then the time statistics.
-nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, const AxisMap& axes);
-nlohmann::json pvt_json(const std::vector<hal::GnssPvtSample>& pvt, const LineStats& lines, const std::string& file);
+/// IMU records through the IMU input validation, then the stream ("samples") and the first second's means.
+nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, const AxisMap& axes,
+                          const std::string& source, std::uint64_t duplicates);
+/// The solutions' lines, stream ("samples") and count by quality.
+nlohmann::json pvt_json(const std::vector<hal::GnssPvtSample>& pvt, const LineStats& lines, const std::string& file,
+                        std::uint64_t duplicates);
 nlohmann::json almanacs_from_ephemeris(const std::vector<GpsEphemeris>& ephs, const std::set<int>& observed,
                                        const GpsTime& first, double first_t_s, double span_s, double max_err_m,
                                        std::vector<TimedAlmanac>& out);
@@ -74,7 +88,8 @@ struct RawMeas {
 
 /// One epoch from measurements (at most 16, the strongest first when there are more).
 bool make_epoch(double t_s, const GpsTime& t, std::vector<RawMeas> m, RawCounts& c, fsw::GnssRawEpoch& e);
-nlohmann::json raw_span(const std::vector<fsw::GnssRawEpoch>& raw);
+/// The raw epochs' stream (the one shape).
+nlohmann::json raw_stream(const std::vector<fsw::GnssRawEpoch>& raw, const std::string& source);
 
 std::vector<fs::path> files_with(const fs::path& dir, const std::string& suffix);
 std::string names(const std::vector<fs::path>& v);

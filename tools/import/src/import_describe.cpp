@@ -312,25 +312,8 @@ struct StreamInfo {
   std::string time_base;
 };
 
-nlohmann::json stream_json(const StreamInfo& s, const std::vector<double>& t) {
-  nlohmann::json j = {{"files", s.files}, {"time_base", s.time_base}, {"duplicates_dropped", s.duplicates}};
-  j["samples"] = t.empty() ? span_json(0, 0, 0) : span_json(t.front(), t.back(), t.size());
-  if (t.size() > 1) {
-    std::vector<double> d;
-    for (std::size_t k = 1; k < t.size(); ++k) d.push_back(t[k] - t[k - 1]);
-    const double med = median(d);
-    std::uint64_t gaps = 0;
-    double longest = 0.0;
-    for (double x : d) {
-      gaps += x > 1.5 * med ? 1 : 0;
-      longest = std::max(longest, x);
-    }
-    j["interval_s"] = {{"median", med}, {"max", longest}};
-    j["rate_hz"] = med > 0.0 ? 1.0 / med : 0.0;
-    j["gaps"] = gaps;
-  }
-  return j;
-}
+/// Where a stream came from; its statistics are its "samples" (the one stream shape).
+nlohmann::json stream_origin(const StreamInfo& s) { return {{"files", s.files}, {"time_base", s.time_base}}; }
 
 /// Vector columns of a row (k0, k0+1, k0+2) times the unit's scale.
 fsw::Vec3 vec_at(const Row& r, std::size_t k0, double scale) {
@@ -911,7 +894,7 @@ std::string number_text(double v) {
 }
 
 std::pair<double, double> span_of(const nlohmann::json& samples) {
-  if (!samples.is_object() || samples.value("count", 0) == 0) return {NAN, NAN};
+  if (!samples.is_object() || samples.value("count", std::uint64_t{0}) == 0) return {NAN, NAN};
   return {samples["t_first_s"].get<double>(), samples["t_last_s"].get<double>()};
 }
 
@@ -935,9 +918,8 @@ void overlap_checks(const nlohmann::json& sum, std::vector<std::string>& warning
     }
   };
   if (sum["gnss_pvt"].is_object()) check("gnss", "GNSS solutions'", sum["gnss_pvt"]["samples"]);
-  if (sum["gnss_raw"].is_object()) check("gnss_raw", "raw epochs'", sum["gnss_raw"]["epochs"]);
-  if (sum["reference"].is_object() && sum["truth"].is_object() && sum["truth"].contains("span"))
-    check("reference", "reference's", sum["truth"]["span"]);
+  if (sum["gnss_raw"].is_object()) check("gnss_raw", "raw epochs'", sum["gnss_raw"]["samples"]);
+  if (sum["reference"].is_object() && sum["truth"].is_object()) check("reference", "reference's", sum["truth"]["samples"]);
 }
 
 /// Speed statistics of the solutions (or the reference) for the initialisation speed.
@@ -967,17 +949,19 @@ std::string import_sidecar_path(const std::string& log_path) { return log_path +
 std::string describe_summary_text(const nlohmann::json& j) {
   std::ostringstream o;
   char b[400];
-  const auto stream_line = [&](const char* label, const nlohmann::json& s) {
-    if (!s.is_object() || !s.contains("rate_hz")) return;
+  const auto stream_line = [&](const char* label, const nlohmann::json& stream) {
+    if (!stream.is_object() || !stream.contains("samples") || !stream["samples"].is_object()) return;
+    const nlohmann::json& s = stream["samples"];
+    if (s.value("count", std::uint64_t{0}) < 2) return;
     std::snprintf(b, sizeof(b), "%-14s%s: %.3f Hz (median interval %.4f s, longest %.3f s), %llu gaps, %llu duplicates dropped\n",
-                  label, s["time_base"].get<std::string>().c_str(), s["rate_hz"].get<double>(),
-                  s["interval_s"]["median"].get<double>(), s["interval_s"]["max"].get<double>(),
+                  label, stream.contains("stream") ? stream["stream"]["time_base"].get<std::string>().c_str() : "",
+                  s["rate_hz"].get<double>(), s["dt_s"]["median"].get<double>(), s["dt_s"]["max"].get<double>(),
                   static_cast<unsigned long long>(s["gaps"].get<std::uint64_t>()),
-                  static_cast<unsigned long long>(s["duplicates_dropped"].get<std::uint64_t>()));
+                  static_cast<unsigned long long>(s["duplicates"].get<std::uint64_t>()));
     o << b;
   };
   if (j.contains("gnss_pvt") && j["gnss_pvt"].is_object() && j["gnss_pvt"].contains("stream"))
-    stream_line("GNSS stream:", j["gnss_pvt"]["stream"]);
+    stream_line("GNSS stream:", j["gnss_pvt"]);
   if (j.contains("time_fit") && j["time_fit"].is_object()) {
     const auto& f = j["time_fit"];
     std::snprintf(b, sizeof(b),
@@ -1075,7 +1059,7 @@ int read_streams(const RecordingDescription& d, Streams& st) {
 }
 
 nlohmann::json imu_summary(const RecordingDescription& d, ImuResult& imu, Collected& c) {
-  nlohmann::json ij = finish_imu(c.imu, imu.info.lines, imu.axes);
+  nlohmann::json ij = finish_imu(c.imu, imu.info.lines, imu.axes, imu.info.files, imu.info.duplicates);
   if (d.imu.time.base == TimeBase::kRtklibTag) {
     const GpsTime start = imu.tag.start();
     ij["tag"] = {{"label", imu.tag.label},
@@ -1100,10 +1084,7 @@ nlohmann::json imu_summary(const RecordingDescription& d, ImuResult& imu, Collec
   if (d.imu.has_rotation)
     ij["fixed_rotation_rpy_deg"] = {d.imu.rotation_rpy_deg[0], d.imu.rotation_rpy_deg[1], d.imu.rotation_rpy_deg[2]};
   for (auto& [k, v] : imu.extra.items()) ij[k] = v;
-  std::vector<double> t;
-  for (const auto& r : c.imu) t.push_back(r.sample.t_s);
-  nlohmann::json sj = stream_json(imu.info, t);
-  ij["stream"] = {{"time_base", sj["time_base"]}, {"duplicates_dropped", sj["duplicates_dropped"]}, {"files", sj["files"]}};
+  ij["stream"] = stream_origin(imu.info);
   return ij;
 }
 
@@ -1129,13 +1110,10 @@ nlohmann::json streams_summary(const RecordingDescription& d, const DescribeOpti
   if (d.raw.present) sum["files"]["gnss_raw"] = st.raw.files;
   sum["imu"] = st.imu.have ? imu_summary(d, st.imu, c) : nlohmann::json(nullptr);
   if (d.gnss.present) {
-    nlohmann::json gj = pvt_json(c.pvt, st.gnss.info.lines, st.gnss.info.files);
+    nlohmann::json gj = pvt_json(c.pvt, st.gnss.info.lines, st.gnss.info.files, st.gnss.info.duplicates);
     gj["clipped_to_imu"] = clipped_pvt;
     gj["has_velocity"] = st.gnss.has_velocity;
-    std::vector<double> t;
-    for (const auto& p : c.pvt) t.push_back(p.t_s);
-    const nlohmann::json sj = stream_json(st.gnss.info, t);
-    gj["stream"] = sj;
+    gj["stream"] = stream_origin(st.gnss.info);
     gj["sigmas"] = st.gnss.sigma_source;
     gj["latency_s"] = d.gnss.latency_s;
     if (st.gnss.geoid_rows > 0)
@@ -1147,7 +1125,7 @@ nlohmann::json streams_summary(const RecordingDescription& d, const DescribeOpti
   if (d.raw.present) {
     nlohmann::json rj = rc.to_json();
     if (d.raw.format == RawFormat::kTable) rj["lines"] = st.raw.table_lines.to_json();
-    rj["epochs"] = raw_span(c.raw);
+    rj["samples"] = raw_stream(c.raw, st.raw.files);
     rj["clipped_to_imu"] = clipped_raw;
     rj["files"] = st.raw.files;
     rj["pseudorange_rate"] = d.raw.format == RawFormat::kTable
@@ -1163,15 +1141,15 @@ nlohmann::json streams_summary(const RecordingDescription& d, const DescribeOpti
   sum["convbin"] = st.raw.convbin;
   sum["almanac"] = alm_json;
   if (d.reference.present) {
-    nlohmann::json tj = {{"samples", c.truth.size()}, {"kind", d.reference.kind}, {"source", st.ref.source}};
+    nlohmann::json tj = {{"kind", d.reference.kind}, {"source", st.ref.source}};
     if (d.reference.from_gnss) {
       tj["max_quality"] = d.reference.max_quality;
       tj["left_out"] = st.ref.left_out;
     } else {
       sum["reference_lines"] = {{"lines", st.ref.info.lines.to_json()}};
-      tj["duplicates_dropped"] = st.ref.info.duplicates;
     }
-    tj["span"] = c.truth.empty() ? span_json(0, 0, 0) : span_json(c.truth.front().t_s, c.truth.back().t_s, c.truth.size());
+    tj["samples"] = stream_json("reference", st.ref.source, c.truth, [](const ReferenceEpoch& r) { return r.t_s; },
+                                d.reference.from_gnss ? 0 : st.ref.info.duplicates);
     tj["note"] = "the reference (" + d.reference.kind + "), not truth: position" +
                  std::string(st.ref.has_velocity ? ", velocity" : "") +
                  (st.ref.has_attitude ? ", attitude" : "; attitude NaN");
@@ -1216,7 +1194,7 @@ void finish_import_outputs(nlohmann::json& sum, const std::string& log_path, con
     nlohmann::json side = sum;
     side["format"] = "sdins-import-summary";
     side["importer"] = importer;
-    side["version"] = 1;
+    side["version"] = kImportSummaryVersion;
     write_json_file(import_sidecar_path(log_path), side);
   }
 }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "tools/import_describe.hpp"
 
@@ -33,9 +34,10 @@ double number_at(const nlohmann::json& j, const char* key, double def) {
   return v.is_number() ? v.get<double>() : def;
 }
 
-double rate_of(const nlohmann::json& samples) {
-  if (number_at(samples, "count", 0) < 2) return 0.0;
-  return number_at(samples, "rate_hz", 0.0);
+/// A stream's rates (tools/stream_summary.hpp): {mean, nominal}, 0 with fewer than two samples.
+std::pair<double, double> rates_of(const nlohmann::json& samples) {
+  if (number_at(samples, "count", 0) < 2) return {0.0, 0.0};
+  return {number_at(samples, "mean_rate_hz", 0.0), number_at(samples, "rate_hz", 0.0)};
 }
 
 /// The navigation rate from the IMU's: samples per frame so that frames run at <= 200 Hz.
@@ -51,9 +53,7 @@ Rates rates_from(const nlohmann::json& s) {
     const auto& i = at(s, "imu");
     // The mean rate over the span, unless gaps make it differ from the median interval's by more
     // than 2 % (quantised time tags make single intervals, and so the median, jitter).
-    const double mean = rate_of(at(i, "samples"));
-    const double med_dt = number_at(at(i, "dt_s"), "median", 0.0);
-    const double med = med_dt > 0.0 ? 1.0 / med_dt : 0.0;
+    const auto [mean, med] = rates_of(at(i, "samples"));
     if (mean > 0.0 && (med <= 0.0 || std::abs(mean - med) <= 0.02 * mean)) {
       r.imu_hz = mean;
       r.imu_from = "the IMU's mean rate over its span";
@@ -71,19 +71,17 @@ Rates rates_from(const nlohmann::json& s) {
   r.nav_hz = r.imu_hz / r.samples_per_frame;
   // Whole hertz when the rate is within 1 % of one (the measured rate is a clock ratio away from it).
   if (std::abs(r.nav_hz - std::round(r.nav_hz)) <= 0.01 * r.nav_hz) r.nav_hz = std::round(r.nav_hz);
-  const auto gnss_rate = [&](const char* key, const char* samples, const char* what) {
-    if (!at(s, key).is_object()) return;
-    const auto& g = at(s, key);
-    double hz = 0.0;
-    hz = number_at(at(g, "stream"), "rate_hz", 0.0);
-    if (!(hz > 0.0)) hz = rate_of(at(g, samples));
+  // The GNSS: the nominal rate (median interval), so that lost epochs do not slow the EKF.
+  const auto gnss_rate = [&](const char* key, const char* what) {
+    const auto [mean, nominal] = rates_of(at(at(s, key), "samples"));
+    const double hz = nominal > 0.0 ? nominal : mean;
     if (hz > r.gnss_hz) {
       r.gnss_hz = hz;
       r.gnss_from = what;
     }
   };
-  gnss_rate("gnss_pvt", "samples", "the GNSS solutions' rate");
-  gnss_rate("gnss_raw", "epochs", "the raw epochs' rate");
+  gnss_rate("gnss_pvt", "the GNSS solutions' rate");
+  gnss_rate("gnss_raw", "the raw epochs' rate");
   if (!(r.gnss_hz > 0.0)) {
     r.gnss_hz = 1.0;
     r.gnss_from = "no GNSS in the import: 1 Hz";

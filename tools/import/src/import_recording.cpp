@@ -104,17 +104,6 @@ nlohmann::json write_log(const std::string& path, const Collected& c) {
 // ---------------------------------------------------------------------------------------------
 // Summaries
 
-nlohmann::json span_json(double t_first, double t_last, std::size_t n) {
-  nlohmann::json j;
-  if (n == 0) return {{"count", 0}};
-  j["count"] = n;
-  j["t_first_s"] = t_first;
-  j["t_last_s"] = t_last;
-  j["span_s"] = t_last - t_first;
-  j["rate_hz"] = (n > 1 && t_last > t_first) ? static_cast<double>(n - 1) / (t_last - t_first) : 0.0;
-  return j;
-}
-
 nlohmann::json speed_stats_json(const std::vector<double>& v, const std::string& source) {
   if (v.empty()) return nullptr;
   std::vector<double> s = v;
@@ -144,7 +133,8 @@ double median(std::vector<double> v) {
 
 /// IMU records through the IMU input validation (what `sdins replay` would reject is not written),
 /// then the time statistics.
-nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, const AxisMap& axes) {
+nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, const AxisMap& axes,
+                          const std::string& source, std::uint64_t duplicates) {
   std::vector<hal::ImuRecord> kept;
   kept.reserve(imu.size());
   std::uint64_t rejected = 0;
@@ -163,21 +153,8 @@ nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, co
   }
   imu.swap(kept);
   nlohmann::json j = {{"lines", lines.to_json()}, {"axes", axes.text()}};
-  if (imu.empty()) {
-    j["samples"] = span_json(0, 0, 0);
-    return j;
-  }
-  j["samples"] = span_json(imu.front().sample.t_s, imu.back().sample.t_s, imu.size());
-  std::vector<double> dts;
-  dts.reserve(imu.size());
-  for (const hal::ImuRecord& r : imu) dts.push_back(r.sample.dt_s);
-  const double med = median(dts);
-  std::uint64_t gaps = 0;
-  for (double d : dts) gaps += d > 1.5 * med ? 1 : 0;
-  j["dt_s"] = {{"min", *std::min_element(dts.begin(), dts.end())},
-               {"median", med},
-               {"max", *std::max_element(dts.begin(), dts.end())}};
-  j["gaps"] = gaps;  // intervals longer than 1.5 median intervals
+  j["samples"] = stream_json("imu", source, imu, [](const hal::ImuRecord& r) { return r.sample.t_s; }, duplicates);
+  if (imu.empty()) return j;
   // Mean specific force and rate over the first second (body axes): at rest f is about (0, 0, -g)
   // when the axis map is right (z down).
   fsw::Vec3 dv = fsw::Vec3::Zero(), dth = fsw::Vec3::Zero();
@@ -196,9 +173,10 @@ nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, co
   return j;
 }
 
-nlohmann::json pvt_json(const std::vector<hal::GnssPvtSample>& pvt, const LineStats& lines, const std::string& file) {
+nlohmann::json pvt_json(const std::vector<hal::GnssPvtSample>& pvt, const LineStats& lines, const std::string& file,
+                        std::uint64_t duplicates) {
   nlohmann::json j = {{"file", file}, {"lines", lines.to_json()}};
-  j["samples"] = pvt.empty() ? span_json(0, 0, 0) : span_json(pvt.front().t_s, pvt.back().t_s, pvt.size());
+  j["samples"] = stream_json("gnss_pvt", file, pvt, [](const hal::GnssPvtSample& p) { return p.t_s; }, duplicates);
   std::map<std::string, std::uint64_t> q;
   for (const hal::GnssPvtSample& p : pvt) ++q[std::to_string(p.quality)];
   j["by_quality"] = q;
@@ -348,8 +326,8 @@ bool make_epoch(double t_s, const GpsTime& t, std::vector<RawMeas> m, RawCounts&
   return true;
 }
 
-nlohmann::json raw_span(const std::vector<fsw::GnssRawEpoch>& raw) {
-  return raw.empty() ? span_json(0, 0, 0) : span_json(raw.front().t_s, raw.back().t_s, raw.size());
+nlohmann::json raw_stream(const std::vector<fsw::GnssRawEpoch>& raw, const std::string& source) {
+  return stream_json("gnss_raw", source, raw, [](const fsw::GnssRawEpoch& e) { return e.t_s; });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -421,13 +399,6 @@ using namespace import_detail;
 // Text
 
 
-std::string span_text(const nlohmann::json& s) {
-  if (s.is_null() || s.value("count", 0) == 0) return "none";
-  return std::to_string(s["count"].get<std::uint64_t>()) + ", t_s " + fmt("%.3f", s["t_first_s"].get<double>()) + " .. " +
-         fmt("%.3f", s["t_last_s"].get<double>()) + " (" + fmt("%.3f", s["span_s"].get<double>()) + " s, " +
-         fmt("%.3f", s["rate_hz"].get<double>()) + " Hz)";
-}
-
 std::string lines_text(const nlohmann::json& l) {
   std::string s = std::to_string(l["lines"].get<std::uint64_t>()) + " lines, " +
                   std::to_string(l["accepted"].get<std::uint64_t>()) + " accepted, " +
@@ -475,11 +446,11 @@ std::string import_summary_text(const nlohmann::json& j) {
   if (has(j, "imu")) {
     const auto& i = j["imu"];
     o << "IMU:          " << lines_text(i["lines"]) << "\n";
-    o << "              samples " << span_text(i["samples"]);
-    if (i.contains("dt_s"))
-      o << ", dt " << fmt("%.4f", i["dt_s"]["min"].get<double>()) << " .. " << fmt("%.4f", i["dt_s"]["max"].get<double>())
-        << " s (median " << fmt("%.4f", i["dt_s"]["median"].get<double>()) << "), " << i["gaps"].get<std::uint64_t>()
-        << " gaps";
+    o << "              samples " << stream_summary_text(i["samples"]);
+    if (i["samples"].value("count", std::uint64_t{0}) > 1)
+      o << ", interval " << fmt("%.4f", i["samples"]["dt_s"]["min"].get<double>()) << " .. "
+        << fmt("%.4f", i["samples"]["dt_s"]["max"].get<double>()) << " s (median "
+        << fmt("%.4f", i["samples"]["dt_s"]["median"].get<double>()) << ")";
     o << "\n              body axes = sensor (" << i["axes"].get<std::string>() << ")";
     if (i.contains("first_second_mean_f_body_mps2")) {
       const auto& f = i["first_second_mean_f_body_mps2"];
@@ -495,13 +466,13 @@ std::string import_summary_text(const nlohmann::json& j) {
   }
   if (has(j, "gnss_pvt")) {
     const auto& p = j["gnss_pvt"];
-    o << "GNSS_PVT:     " << lines_text(p["lines"]) << "\n              solutions " << span_text(p["samples"]) << ", Q";
+    o << "GNSS_PVT:     " << lines_text(p["lines"]) << "\n              solutions " << stream_summary_text(p["samples"]) << ", Q";
     for (const auto& [k, v] : p["by_quality"].items()) o << " " << k << ":" << v.get<std::uint64_t>();
     o << "\n";
   }
   if (has(j, "truth")) {
     const auto& t = j["truth"];
-    o << "TRUTH:        " << t["samples"].get<std::uint64_t>() << " reference epochs (" << t.value("kind", std::string("rtk"));
+    o << "TRUTH:        " << t["samples"].value("count", std::uint64_t{0}) << " reference epochs (" << t.value("kind", std::string("rtk"));
     if (t.contains("max_quality"))
       o << " from the solutions, Q <= " << t["max_quality"].get<int>() << "), " << t["left_out"].get<std::uint64_t>()
         << " left out\n";
@@ -522,7 +493,7 @@ std::string import_summary_text(const nlohmann::json& j) {
     } else {
       o << "GNSS_RAW:     ";
     }
-    o << "epochs " << span_text(r["epochs"]) << ", " << r["measurements"].get<std::uint64_t>() << " measurements, PRN";
+    o << "epochs " << stream_summary_text(r["samples"]) << ", " << r["measurements"].get<std::uint64_t>() << " measurements, PRN";
     for (const auto& p : r["satellites"]) o << " " << p.get<int>();
     std::string sk;
     for (const auto& [k, v] : r["skipped"].items())

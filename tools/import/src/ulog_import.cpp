@@ -674,19 +674,19 @@ nlohmann::json time_fit_json(const UlogClockFit& clock, const UlogImportOptions&
                      "(timestamp + timestamp_time_relative - latency, time_utc_usec + GPS-UTC) of the GNSS fixes"}};
 }
 
-RecordingStreams recording_streams(const Converted& c, const std::string& imu_source, const std::string& gnss_source,
-                                   const std::string& ref_source, const LineStats& gnss_lines) {
-  RecordingStreams r;
+UlogStreams recording_streams(const Converted& c, const std::string& imu_source, const std::string& gnss_source,
+                              const std::string& ref_source, const LineStats& gnss_lines) {
+  UlogStreams r;
   std::vector<double> t;
   for (const hal::ImuRecord& x : c.imu) t.push_back(x.sample.t_s);
   r.imu = summarize_stream("imu", imu_source, t);
   t.clear();
   for (const hal::GnssPvtSample& p : c.pvt) t.push_back(p.t_s);
-  r.gnss = summarize_stream("gnss", gnss_source, t);
+  r.gnss = summarize_stream("gnss_pvt", gnss_source, t);
   const auto dup = gnss_lines.by_reason.find("duplicate epoch (same time_utc_usec)");
   r.gnss.duplicates = dup == gnss_lines.by_reason.end() ? 0 : dup->second;
   r.reference = summarize_stream("reference", ref_source, c.truth_t_s);
-  if (r.imu.samples > 0 && r.gnss.samples > 0)
+  if (r.imu.count > 0 && r.gnss.count > 0)
     r.imu_gnss_overlap_s = std::max(0.0, std::min(r.imu.t_last_s, r.gnss.t_last_s) - std::max(r.imu.t_first_s, r.gnss.t_first_s));
   return r;
 }
@@ -789,7 +789,6 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
   UlogImportResult res;
   res.streams = recording_streams(c, it.name() + " instance " + std::to_string(it.instance()),
                                   gt.name() + " instance " + std::to_string(gt.instance()), rs.timeline, gnss_lines);
-  sum["streams"] = res.streams.to_json();
   sum["imu"] = imu_json(it, imu_name, is, res.streams.imu, vi_cov);
   std::uint64_t no_vel = 0;
   for (const hal::GnssPvtSample& p : c.pvt) no_vel += p.has_velocity() ? 0 : 1;
@@ -800,7 +799,7 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
                      {"sigmas", "eph -> East and North, epv -> Up, s_variance_m_s (speed accuracy) -> each velocity axis"},
                      {"velocity", "NED -> ENU (E = vel_e_m_s, N = vel_n_m_s, U = -vel_d_m_s)"},
                      {"quality", "fix_type 3 -> 5 single, 4 -> 4 DGPS, 5 -> 2 RTK float, 6 -> 1 RTK fixed"}};
-  sum["truth"] = {{"samples", c.truth.size()},
+  sum["truth"] = {{"samples", res.streams.reference.to_json()},
                   {"with_position", rs.with_position},
                   {"with_velocity", rs.with_velocity},
                   {"with_attitude", rs.with_attitude},
@@ -809,15 +808,12 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
                   {"out_of_order_left_out", rs.out_of_order},
                   {"attitude", "vehicle_attitude.q (FRD -> NED) turned to body -> ENU"}};
   sum["reference"] = reference_label(rs, opt.reference);
-  // The keys the one starting-configuration generator reads (tools::starting_filter_config).
-  sum["imu"]["samples"] = c.imu.empty() ? import_detail::span_json(0, 0, 0)
-                                        : import_detail::span_json(c.imu.front().sample.t_s, c.imu.back().sample.t_s, c.imu.size());
-  sum["imu"]["dt_s"] = {{"median", res.streams.imu.dt_median_s}};
-  {
-    const nlohmann::json pj = import_detail::pvt_json(c.pvt, gnss_lines, gt.name());
-    sum["gnss_pvt"]["samples"] = pj["samples"];
-    sum["gnss_pvt"]["by_quality"] = pj["by_quality"];
-  }
+  // Every stream in the one shape (tools/stream_summary.hpp): what the starting-configuration
+  // generator reads (tools::starting_filter_config) and the summary prints.
+  sum["imu"]["samples"] = res.streams.imu.to_json();
+  sum["gnss_pvt"]["samples"] = res.streams.gnss.to_json();
+  sum["gnss_pvt"]["by_quality"] = import_detail::pvt_json(c.pvt, gnss_lines, gt.name(), 0)["by_quality"];
+  sum["imu_gnss_overlap_s"] = res.streams.imu_gnss_overlap_s;
   sum["speed"] = import_detail::pvt_speed_json(c.pvt);
   sum["log"] = write_ulog_log(opt.log_path, c);
   sum["rejected_lines_total"] = is.lines.rejected + gnss_lines.rejected;
@@ -831,13 +827,6 @@ UlogImportResult import_ulog(const UlogImportOptions& opt) {
 }
 
 namespace {
-std::string stream_text(const nlohmann::json& s) {
-  if (s["samples"].get<std::uint64_t>() == 0) return "none";
-  return std::to_string(s["samples"].get<std::uint64_t>()) + ", t_s " + fmt("%.3f", s["t_first_s"].get<double>()) + " .. " +
-         fmt("%.3f", s["t_last_s"].get<double>()) + " (" + fmt("%.2f", s["span_s"].get<double>()) + " s, " +
-         fmt("%.2f", s["rate_hz"].get<double>()) + " Hz nominal, " + std::to_string(s["gaps"].get<std::uint64_t>()) +
-         " gaps, longest " + fmt("%.3f", s["longest_gap_s"].get<double>()) + " s)";
-}
 std::string counts_text(const nlohmann::json& l) {
   std::string s = std::to_string(l["lines"].get<std::uint64_t>()) + " messages, " +
                   std::to_string(l["accepted"].get<std::uint64_t>()) + " used, " +
@@ -881,16 +870,17 @@ std::string ulog_import_summary_text(const nlohmann::json& j) {
   if (!tf["leap_table_valid"].get<bool>()) o << "WARNING:      the log is later than the leap-second table's validity: GPS-UTC assumed\n";
   o << "time scale:   " << j["time_scale"]["definition"].get<std::string>() << "\n";
   o << "IMU:          " << j["imu"]["topic"].get<std::string>() << " " << counts_text(j["imu"]["lines"]) << "\n              "
-    << stream_text(j["streams"]["imu"]) << "; coverage " << fmt("%.4f", j["imu"]["coverage"].get<double>()) << ", "
+    << stream_summary_text(j["imu"]["samples"]) << "; coverage " << fmt("%.4f", j["imu"]["coverage"].get<double>()) << ", "
     << j["imu"]["clipped_samples"].get<std::uint64_t>() << " clipped; " << j["imu"]["axes"].get<std::string>() << "\n";
   o << "GNSS_PVT:     " << j["gnss_pvt"]["topic"].get<std::string>() << " " << counts_text(j["gnss_pvt"]["lines"]) << "\n              "
-    << stream_text(j["streams"]["gnss"]) << "\n";
+    << stream_summary_text(j["gnss_pvt"]["samples"]) << "\n";
   const auto& t = j["truth"];
-  o << "TRUTH:        " << t["samples"].get<std::uint64_t>() << " samples of PX4's estimate (" << t["with_position"].get<std::uint64_t>()
-    << " with position, " << t["with_velocity"].get<std::uint64_t>() << " velocity, " << t["with_attitude"].get<std::uint64_t>()
+  o << "TRUTH:        PX4's estimate (" << t["with_position"].get<std::uint64_t>() << " with position, "
+    << t["with_velocity"].get<std::uint64_t>() << " velocity, " << t["with_attitude"].get<std::uint64_t>()
     << " attitude; resets: " << t["position_resets"].get<std::uint64_t>() << " position, "
     << t["attitude_resets"].get<std::uint64_t>() << " attitude)";
   if (!j["reference"].is_null()) o << ", reference '" << j["reference"]["kind"].get<std::string>() << "' from " << j["reference"]["source"].get<std::string>();
+  o << "\n              " << stream_summary_text(t["samples"]);
   o << "\nlog:          " << j["log"]["path"].get<std::string>() << ", " << j["log"]["events"].get<std::uint64_t>() << " events (";
   bool first = true;
   for (const auto& [k, v] : j["log"]["per_channel"].items()) {

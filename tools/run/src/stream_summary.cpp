@@ -2,6 +2,7 @@
 #include "tools/stream_summary.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 namespace tools {
 
@@ -9,7 +10,7 @@ StreamSummary summarize_stream(const std::string& name, const std::string& sourc
   StreamSummary s;
   s.name = name;
   s.source = source;
-  s.samples = t_s.size();
+  s.count = t_s.size();
   if (t_s.empty()) return s;
   s.t_first_s = t_s.front();
   s.t_last_s = t_s.back();
@@ -35,7 +36,7 @@ StreamSummary summarize_stream(const std::string& name, const std::string& sourc
 nlohmann::json StreamSummary::to_json() const {
   return {{"name", name},
           {"source", source},
-          {"samples", samples},
+          {"count", count},
           {"t_first_s", t_first_s},
           {"t_last_s", t_last_s},
           {"span_s", span_s},
@@ -47,11 +48,15 @@ nlohmann::json StreamSummary::to_json() const {
           {"duplicates", duplicates}};
 }
 
-nlohmann::json RecordingStreams::to_json() const {
-  return {{"imu", imu.to_json()},
-          {"gnss", gnss.to_json()},
-          {"reference", reference.to_json()},
-          {"imu_gnss_overlap_s", imu_gnss_overlap_s}};
+std::string stream_summary_text(const nlohmann::json& s) {
+  if (!s.is_object() || s.value("count", std::uint64_t{0}) == 0) return "none";
+  char b[300];
+  std::snprintf(b, sizeof(b), "%llu, t_s %.3f .. %.3f (%.3f s, %.3f Hz nominal, %.3f Hz mean, %llu gaps, longest %.3f s)",
+                static_cast<unsigned long long>(s["count"].get<std::uint64_t>()), s["t_first_s"].get<double>(),
+                s["t_last_s"].get<double>(), s["span_s"].get<double>(), s["rate_hz"].get<double>(),
+                s["mean_rate_hz"].get<double>(), static_cast<unsigned long long>(s["gaps"].get<std::uint64_t>()),
+                s["longest_gap_s"].get<double>());
+  return b;
 }
 
 }  // namespace tools

@@ -200,6 +200,11 @@ nlohmann::json import_described(const RecordingDescription& d, const DescribeOpt
 /// written files), appended by import_summary_text.
 std::string describe_summary_text(const nlohmann::json& summary);
 
+/// The sidecar's schema ("version"): 2 since every stream of the summary ("imu", "gnss_pvt",
+/// "gnss_raw", "truth") keeps its statistics under "samples" in the one shape of
+/// tools/stream_summary.hpp (1: "samples"/"epochs"/"span" with count and mean rate only).
+inline constexpr int kImportSummaryVersion = 2;
+
 /// The sidecar of an imported log: "<log>.json" ("format": "sdins-import-summary"); its
 /// "reference" names what TRUTH holds: {"kind", "source", "has_attitude"}.
 std::string import_sidecar_path(const std::string& log_path);
@@ -217,10 +222,11 @@ void finish_import_outputs(nlohmann::json& sum, const std::string& log_path, con
 /// import summary's streams: navigation rate from the IMU, EKF rate from the GNSS, a valid
 /// ekf_latency_frames, the GNSS source and its floors, the initialisation speed. Used by the
 /// description import and by any importer that produces the same summary keys: "input";
-/// "imu": {"samples": span_json (count, rate_hz), "dt_s": {"median"}} or null; "gnss_pvt":
-/// {"samples", "by_quality": {"Q": n}, optional "stream": {"rate_hz"}} or null; "gnss_raw":
-/// {"epochs": span_json} or null; "almanac": {"written": [PRNs]} or null; "speed": {"p90_mps",
-/// "source"} or null (missing keys mean "not in this recording").
+/// "imu": {"samples": a StreamSummary} or null; "gnss_pvt": {"samples": a StreamSummary,
+/// "by_quality": {"Q": n}} or null; "gnss_raw": {"samples": a StreamSummary} or null; "almanac":
+/// {"written": [PRNs]} or null; "speed": {"p90_mps", "source"} or null (missing keys mean "not in
+/// this recording"). The IMU's rate is its mean rate unless gaps move it more than 2 % from the
+/// nominal (median-interval) rate; the GNSS rate is the nominal rate (lost epochs do not slow the EKF).
 std::string starting_filter_config(const nlohmann::json& summary, const std::string& name);
 
 /// The presets (`sdins import rtklib|psins`): a description built from a recording's directory.

@@ -71,9 +71,17 @@ struct UlogClockFit {
 /// without pairs.
 UlogClockFit fit_boot_to_gps(const std::vector<std::pair<std::int64_t, std::int64_t>>& boot_utc_us);
 
+/// The streams of one imported log, in the one shape of tools/stream_summary.hpp.
+struct UlogStreams {
+  StreamSummary imu, gnss, reference;
+  /// Time over which IMU and GNSS both have data [s] (0: they do not overlap).
+  double imu_gnss_overlap_s = 0.0;
+};
+
 struct UlogImportResult {
-  nlohmann::json summary;    ///< what `sdins import ulog --json` writes (and LOG.json beside the log)
-  RecordingStreams streams;  ///< the same streams as summary["streams"], for a configuration generator
+  nlohmann::json summary;  ///< what `sdins import ulog --json` writes (and LOG.json beside the log)
+  /// The summary's imu.samples, gnss_pvt.samples, truth.samples and imu_gnss_overlap_s as structs.
+  UlogStreams streams;
 };
 
 /// The import of a parsed file (the tests feed handcrafted ULog bytes): writes opt.log_path and
