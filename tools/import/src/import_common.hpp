@@ -49,15 +49,17 @@ nlohmann::json write_log(const std::string& path, const Collected& c);
 
 /// The one stream shape (tools/stream_summary.hpp) of any list of samples, from their time tags.
 template <class T, class TimeOf>
-nlohmann::json stream_json(const std::string& name, const std::string& source, const std::vector<T>& v, TimeOf t_of,
-                           std::uint64_t duplicates = 0) {
+StreamSummary stream_of(const std::string& name, const std::string& source, const std::vector<T>& v, TimeOf t_of,
+                        std::uint64_t duplicates = 0) {
   std::vector<double> t;
   t.reserve(v.size());
   for (const T& x : v) t.push_back(t_of(x));
   StreamSummary s = summarize_stream(name, source, t);
   s.duplicates = duplicates;
-  return s.to_json();
+  return s;
 }
+/// The solutions counted by quality: {"Q": n}.
+nlohmann::json by_quality_json(const std::vector<hal::GnssPvtSample>& pvt);
 /// Ground-speed statistics of the solutions with velocity (median, p90, max, the moving share):
 /// what the starting configuration's initialisation speed is read from; null without velocities.
 nlohmann::json pvt_speed_json(const std::vector<hal::GnssPvtSample>& pvt);

@@ -949,19 +949,17 @@ std::string import_sidecar_path(const std::string& log_path) { return log_path +
 std::string describe_summary_text(const nlohmann::json& j) {
   std::ostringstream o;
   char b[400];
-  const auto stream_line = [&](const char* label, const nlohmann::json& stream) {
-    if (!stream.is_object() || !stream.contains("samples") || !stream["samples"].is_object()) return;
-    const nlohmann::json& s = stream["samples"];
-    if (s.value("count", std::uint64_t{0}) < 2) return;
-    std::snprintf(b, sizeof(b), "%-14s%s: %.3f Hz (median interval %.4f s, longest %.3f s), %llu gaps, %llu duplicates dropped\n",
-                  label, stream.contains("stream") ? stream["stream"]["time_base"].get<std::string>().c_str() : "",
-                  s["rate_hz"].get<double>(), s["dt_s"]["median"].get<double>(), s["dt_s"]["max"].get<double>(),
+  // The solutions' stream: its nominal rate and intervals in the stream's own time base.
+  if (j.contains("gnss_pvt") && j["gnss_pvt"].is_object() && j["gnss_pvt"].contains("stream") &&
+      j["gnss_pvt"]["samples"].value("count", std::uint64_t{0}) >= 2) {
+    const nlohmann::json& s = j["gnss_pvt"]["samples"];
+    std::snprintf(b, sizeof(b), "GNSS stream:  %s: %.3f Hz (median interval %.4f s, longest %.3f s), %llu gaps, %llu duplicates dropped\n",
+                  j["gnss_pvt"]["stream"]["time_base"].get<std::string>().c_str(), s["rate_hz"].get<double>(),
+                  s["dt_s"]["median"].get<double>(), s["dt_s"]["max"].get<double>(),
                   static_cast<unsigned long long>(s["gaps"].get<std::uint64_t>()),
                   static_cast<unsigned long long>(s["duplicates"].get<std::uint64_t>()));
     o << b;
-  };
-  if (j.contains("gnss_pvt") && j["gnss_pvt"].is_object() && j["gnss_pvt"].contains("stream"))
-    stream_line("GNSS stream:", j["gnss_pvt"]);
+  }
   if (j.contains("time_fit") && j["time_fit"].is_object()) {
     const auto& f = j["time_fit"];
     std::snprintf(b, sizeof(b),
@@ -1148,8 +1146,9 @@ nlohmann::json streams_summary(const RecordingDescription& d, const DescribeOpti
     } else {
       sum["reference_lines"] = {{"lines", st.ref.info.lines.to_json()}};
     }
-    tj["samples"] = stream_json("reference", st.ref.source, c.truth, [](const ReferenceEpoch& r) { return r.t_s; },
-                                d.reference.from_gnss ? 0 : st.ref.info.duplicates);
+    tj["samples"] = stream_of("reference", st.ref.source, c.truth, [](const ReferenceEpoch& r) { return r.t_s; },
+                              d.reference.from_gnss ? 0 : st.ref.info.duplicates)
+                        .to_json();
     tj["note"] = "the reference (" + d.reference.kind + "), not truth: position" +
                  std::string(st.ref.has_velocity ? ", velocity" : "") +
                  (st.ref.has_attitude ? ", attitude" : "; attitude NaN");

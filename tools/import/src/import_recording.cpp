@@ -137,7 +137,6 @@ nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, co
                           const std::string& source, std::uint64_t duplicates) {
   std::vector<hal::ImuRecord> kept;
   kept.reserve(imu.size());
-  std::uint64_t rejected = 0;
   for (const hal::ImuRecord& r : imu) {
     sdins::imu_sample_t m{};
     hal::to_msg(r, m);
@@ -146,14 +145,13 @@ nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, co
     if (st != hal::LcmInputStatus::kOk) {
       lines.reject(static_cast<std::uint64_t>(r.counter) + 1, std::string("IMU input validation: ") + hal::to_string(st));
       --lines.accepted;
-      ++rejected;
       continue;
     }
     kept.push_back(r);
   }
   imu.swap(kept);
   nlohmann::json j = {{"lines", lines.to_json()}, {"axes", axes.text()}};
-  j["samples"] = stream_json("imu", source, imu, [](const hal::ImuRecord& r) { return r.sample.t_s; }, duplicates);
+  j["samples"] = stream_of("imu", source, imu, [](const hal::ImuRecord& r) { return r.sample.t_s; }, duplicates).to_json();
   if (imu.empty()) return j;
   // Mean specific force and rate over the first second (body axes): at rest f is about (0, 0, -g)
   // when the axis map is right (z down).
@@ -173,13 +171,17 @@ nlohmann::json finish_imu(std::vector<hal::ImuRecord>& imu, LineStats& lines, co
   return j;
 }
 
+nlohmann::json by_quality_json(const std::vector<hal::GnssPvtSample>& pvt) {
+  std::map<std::string, std::uint64_t> q;
+  for (const hal::GnssPvtSample& p : pvt) ++q[std::to_string(p.quality)];
+  return q;
+}
+
 nlohmann::json pvt_json(const std::vector<hal::GnssPvtSample>& pvt, const LineStats& lines, const std::string& file,
                         std::uint64_t duplicates) {
   nlohmann::json j = {{"file", file}, {"lines", lines.to_json()}};
-  j["samples"] = stream_json("gnss_pvt", file, pvt, [](const hal::GnssPvtSample& p) { return p.t_s; }, duplicates);
-  std::map<std::string, std::uint64_t> q;
-  for (const hal::GnssPvtSample& p : pvt) ++q[std::to_string(p.quality)];
-  j["by_quality"] = q;
+  j["samples"] = stream_of("gnss_pvt", file, pvt, [](const hal::GnssPvtSample& p) { return p.t_s; }, duplicates).to_json();
+  j["by_quality"] = by_quality_json(pvt);
   return j;
 }
 
@@ -327,7 +329,7 @@ bool make_epoch(double t_s, const GpsTime& t, std::vector<RawMeas> m, RawCounts&
 }
 
 nlohmann::json raw_stream(const std::vector<fsw::GnssRawEpoch>& raw, const std::string& source) {
-  return stream_json("gnss_raw", source, raw, [](const fsw::GnssRawEpoch& e) { return e.t_s; });
+  return stream_of("gnss_raw", source, raw, [](const fsw::GnssRawEpoch& e) { return e.t_s; }).to_json();
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -677,14 +677,10 @@ nlohmann::json time_fit_json(const UlogClockFit& clock, const UlogImportOptions&
 UlogStreams recording_streams(const Converted& c, const std::string& imu_source, const std::string& gnss_source,
                               const std::string& ref_source, const LineStats& gnss_lines) {
   UlogStreams r;
-  std::vector<double> t;
-  for (const hal::ImuRecord& x : c.imu) t.push_back(x.sample.t_s);
-  r.imu = summarize_stream("imu", imu_source, t);
-  t.clear();
-  for (const hal::GnssPvtSample& p : c.pvt) t.push_back(p.t_s);
-  r.gnss = summarize_stream("gnss_pvt", gnss_source, t);
+  r.imu = import_detail::stream_of("imu", imu_source, c.imu, [](const hal::ImuRecord& x) { return x.sample.t_s; });
   const auto dup = gnss_lines.by_reason.find("duplicate epoch (same time_utc_usec)");
-  r.gnss.duplicates = dup == gnss_lines.by_reason.end() ? 0 : dup->second;
+  r.gnss = import_detail::stream_of("gnss_pvt", gnss_source, c.pvt, [](const hal::GnssPvtSample& p) { return p.t_s; },
+                                    dup == gnss_lines.by_reason.end() ? 0 : dup->second);
   r.reference = summarize_stream("reference", ref_source, c.truth_t_s);
   if (r.imu.count > 0 && r.gnss.count > 0)
     r.imu_gnss_overlap_s = std::max(0.0, std::min(r.imu.t_last_s, r.gnss.t_last_s) - std::max(r.imu.t_first_s, r.gnss.t_first_s));
@@ -812,7 +808,7 @@ UlogImportResult import_ulog_file(const ulog::File& f, const UlogImportOptions& 
   // generator reads (tools::starting_filter_config) and the summary prints.
   sum["imu"]["samples"] = res.streams.imu.to_json();
   sum["gnss_pvt"]["samples"] = res.streams.gnss.to_json();
-  sum["gnss_pvt"]["by_quality"] = import_detail::pvt_json(c.pvt, gnss_lines, gt.name(), 0)["by_quality"];
+  sum["gnss_pvt"]["by_quality"] = import_detail::by_quality_json(c.pvt);
   sum["imu_gnss_overlap_s"] = res.streams.imu_gnss_overlap_s;
   sum["speed"] = import_detail::pvt_speed_json(c.pvt);
   sum["log"] = write_ulog_log(opt.log_path, c);
