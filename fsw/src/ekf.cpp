@@ -91,6 +91,7 @@ Status Ekf<Layout>::init(const EkfConfig& cfg) {
     if ((cfg.frozen_states >> i) & 1u) sig(i) = 0.0;
   init_var_ = sig.array().square().matrix();
   P_ = init_var_.asDiagonal();
+  find_dead_states();
   health_ = EkfHealth{};
   nis_head_ = 0;
   nis_count_ = 0;
@@ -223,6 +224,69 @@ void EkfTransition<Layout>::flush() {
 }
 
 template <class Layout>
+typename Ekf<Layout>::Vec Ekf<Layout>::white_noise_psd() const {
+  Vec qc = Vec::Zero();
+  qc.template segment<3>(3).setConstant(cfg_.vrw_mps_per_rts * cfg_.vrw_mps_per_rts);
+  qc.template segment<3>(6).setConstant(cfg_.arw_rad_per_rts * cfg_.arw_rad_per_rts);
+  if constexpr (Layout::has(Block::kAccelBias))
+    qc.template segment<3>(Layout::offset(Block::kAccelBias))
+        .setConstant(cfg_.accel_bias_rw_mps2_per_rts * cfg_.accel_bias_rw_mps2_per_rts);
+  if constexpr (Layout::has(Block::kGyroBias))
+    qc.template segment<3>(Layout::offset(Block::kGyroBias))
+        .setConstant(cfg_.gyro_bias_rw_radps_per_rts * cfg_.gyro_bias_rw_radps_per_rts);
+  return qc;
+}
+
+template <class Layout>
+void Ekf<Layout>::find_dead_states() {
+  // Dead: a sensor or extension state (a diagonal row of Phi, decay > 0) started with zero
+  // variance and driven by no noise. Its row and column of P start +0; Phi P Phi^T keeps them +0
+  // (each element a sum of exact zeros with at least one +0 term, the diagonal of Phi being
+  // positive), no Qd term reaches them, and an update adds K(i) u(j) + u(i) K(j) with K and u +0
+  // there (s = P h^T starts +0). So they stay +0 for good, and the loops that skip them add
+  // nothing that would have changed a bit. The navigation rows (dense in Phi) and the clock
+  // (bias-drift coupled, always driven) are never dead.
+  const Vec qc = white_noise_psd();
+  constexpr int oc = Layout::offset(Block::kClock);
+  for (int i = 0; i < N; ++i) {
+    bool driven = qc(i) != 0.0 || i < 9 || i == oc || i == oc + 1;
+    if constexpr (Layout::has(Block::kRangeError)) {
+      constexpr int o = Layout::offset(Block::kRangeError);
+      if (i >= o && i < o + kGnssErrorChannels) driven = driven || cfg_.range_gm_sigma_m != 0.0;
+    }
+    if constexpr (Layout::has(Block::kRangeRateError)) {
+      constexpr int o = Layout::offset(Block::kRangeRateError);
+      if (i >= o && i < o + kGnssErrorChannels) driven = driven || cfg_.range_rate_gm_sigma_mps != 0.0;
+    }
+    dead_[static_cast<std::size_t>(i)] = !driven && init_var_(i) == 0.0;
+  }
+  index_live_states();
+}
+
+template <class Layout>
+void Ekf<Layout>::index_live_states() {
+  n_live_ = 0;
+  n_runs_ = 0;
+  for (int i = 0; i < N; ++i) {
+    if (!dense_loops_ && dead_[static_cast<std::size_t>(i)]) continue;
+    live_[static_cast<std::size_t>(n_live_++)] = i;
+    if (n_runs_ > 0 && run_end_[static_cast<std::size_t>(n_runs_ - 1)] == i) {
+      ++run_end_[static_cast<std::size_t>(n_runs_ - 1)];
+    } else {
+      run_begin_[static_cast<std::size_t>(n_runs_)] = i;
+      run_end_[static_cast<std::size_t>(n_runs_)] = i + 1;
+      ++n_runs_;
+    }
+  }
+}
+
+template <class Layout>
+void Ekf<Layout>::set_dense_covariance_loops(bool dense) {
+  dense_loops_ = dense;
+  index_live_states();
+}
+
+template <class Layout>
 Status Ekf<Layout>::propagate() {
   if (!initialised_) return Status::kNotInitialised;
   const Status st = propagate(trans_);
@@ -252,15 +316,7 @@ Status Ekf<Layout>::propagate(EkfTransition<Layout>& t) {
       Phi_(Layout::offset(Block::kRangeRateError) + k, Layout::offset(Block::kRangeRateError) + k) = a_rate;
   }
 
-  Vec qc = Vec::Zero();
-  qc.template segment<3>(3).setConstant(cfg_.vrw_mps_per_rts * cfg_.vrw_mps_per_rts);
-  qc.template segment<3>(6).setConstant(cfg_.arw_rad_per_rts * cfg_.arw_rad_per_rts);
-  if constexpr (Layout::has(Block::kAccelBias))
-    qc.template segment<3>(Layout::offset(Block::kAccelBias))
-        .setConstant(cfg_.accel_bias_rw_mps2_per_rts * cfg_.accel_bias_rw_mps2_per_rts);
-  if constexpr (Layout::has(Block::kGyroBias))
-    qc.template segment<3>(Layout::offset(Block::kGyroBias))
-        .setConstant(cfg_.gyro_bias_rw_radps_per_rts * cfg_.gyro_bias_rw_radps_per_rts);
+  const Vec qc = white_noise_psd();
   // Phi's structure: dense navigation rows (0..8); below them a diagonal (random constants,
   // Gauss-Markov decays) plus the clock's bias-drift coupling. P uses it (O(9 N^2), not N^3), and
   // every N x N intermediate lives in member scratch, not on the task's stack.
@@ -339,7 +395,7 @@ template <class Layout>
 bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu, double& S) {
   Vec s = Vec::Zero();  // P h^T over the few non-zeros of h
   for (int j = 0; j < N; ++j)
-    if (h(j) != 0.0) s.noalias() += h(j) * P_.col(j);
+    if (h(j) != 0.0 && !skipped(j)) s.noalias() += h(j) * P_.col(j);
   S = h.dot(s) + r;
   nu = y - h.dot(x_);
   if (!(S > 0.0) || (!ungated_ && !(nu * nu <= cfg_.gate_chi2 * S))) return false;
@@ -353,11 +409,16 @@ bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu,
   // Joseph form (I - K h) P (I - K h)^T + K r K^T, expanded for a scalar measurement.
   const Vec u = 0.5 * S * K - s;  // P - K s^T - s K^T + S K K^T = P + K u^T + u K^T
   // P <- (P + K u^T) + u K^T in one pass over P (the same two additions per element, in the same
-  // order, as the two rank-one updates one after the other).
-  for (int j = 0; j < N; ++j) {
-    const double uj = u(j), kj = K(j);
-    for (int i = 0; i < N; ++i) P_(i, j) = (P_(i, j) + K(i) * uj) + u(i) * kj;
-  }
+  // order, as the two rank-one updates one after the other), over the live states' runs: a dead
+  // state's row and column would stay +0 (find_dead_states).
+  for (int rj = 0; rj < n_runs_; ++rj)
+    for (int j = run_begin_[static_cast<std::size_t>(rj)]; j < run_end_[static_cast<std::size_t>(rj)]; ++j) {
+      const double uj = u(j), kj = K(j);
+      for (int ri = 0; ri < n_runs_; ++ri) {
+        const int end = run_end_[static_cast<std::size_t>(ri)];
+        for (int i = run_begin_[static_cast<std::size_t>(ri)]; i < end; ++i) P_(i, j) = (P_(i, j) + K(i) * uj) + u(i) * kj;
+      }
+    }
   return true;
 }
 
@@ -378,18 +439,37 @@ Status Ekf<Layout>::set_covariance(const Mat& P) {
     return Status::kBadInput;
   }
   P_ = P;
+  // A dead state stays dead only if P keeps its row and column +0 (find_dead_states' invariant).
+  bool revived = false;
+  for (int i = 0; i < N; ++i) {
+    if (!dead_[static_cast<std::size_t>(i)]) continue;
+    bool plus_zero = true;
+    for (int k = 0; k < N; ++k) {
+      const double a = P_(i, k), b = P_(k, i);
+      if (a != 0.0 || b != 0.0 || std::signbit(a) || std::signbit(b)) plus_zero = false;
+    }
+    if (!plus_zero) {
+      dead_[static_cast<std::size_t>(i)] = false;
+      revived = true;
+    }
+  }
+  if (revived) index_live_states();
   check_covariance();
   return Status::kOk;
 }
 
 template <class Layout>
 void Ekf<Layout>::symmetrise() {
-  for (int j = 0; j < N; ++j)
-    for (int i = j + 1; i < N; ++i) {
-      const double a = 0.5 * (P_(i, j) + P_(j, i));
-      P_(i, j) = a;
-      P_(j, i) = a;
+  // Over the live states (a dead state's row and column are +0 on both sides already).
+  for (int b = 0; b < n_live_; ++b) {
+    const int j = live_[static_cast<std::size_t>(b)];
+    for (int a = b + 1; a < n_live_; ++a) {
+      const int i = live_[static_cast<std::size_t>(a)];
+      const double v = 0.5 * (P_(i, j) + P_(j, i));
+      P_(i, j) = v;
+      P_(j, i) = v;
     }
+  }
 }
 
 template <class Layout>
@@ -405,25 +485,34 @@ void Ekf<Layout>::check_covariance() {
     d(i) = P_(i, i) > 0.0 ? 1.0 / std::sqrt(P_(i, i)) : 0.0;
   }
   constexpr double kMinPivot = 1e-12;
+  const int n = n_live_;
   for (int attempt = 0; ok; ++attempt) {
-    // The lower triangle (P is symmetric here): the factor overwrites it column by column.
-    for (int j = 0; j < N; ++j)
-      for (int i = j; i < N; ++i) work_(i, j) = d(i) * P_(i, j) * d(j);
-    for (int i = 0; i < N; ++i)
-      if (d(i) == 0.0) work_(i, i) = 1.0;
+    // The lower triangle of the live states' correlations, gathered into the top-left n x n of
+    // work_ (P is symmetric here): the factor overwrites it column by column. A dead state is an
+    // identity row and column of the full correlation matrix, uncoupled: leaving it out changes
+    // no pivot of the others (their updates from it are exact zeros).
+    for (int b = 0; b < n; ++b) {
+      const int j = live_[static_cast<std::size_t>(b)];
+      for (int a = b; a < n; ++a) {
+        const int i = live_[static_cast<std::size_t>(a)];
+        work_(a, b) = d(i) * P_(i, j) * d(j);
+      }
+    }
+    for (int a = 0; a < n; ++a)
+      if (d(live_[static_cast<std::size_t>(a)]) == 0.0) work_(a, a) = 1.0;
     // Left-looking by columns: column j less the columns before it, each a contiguous column
     // operation (column-major storage), then the pivot test and the scaling.
     bool pd = true;
-    for (int j = 0; j < N && pd; ++j) {
-      const int m = N - j;
-      for (int k = 0; k < j; ++k) work_.col(j).tail(m) -= work_(j, k) * work_.col(k).tail(m);
+    for (int j = 0; j < n && pd; ++j) {
+      const int m = n - j;
+      for (int k = 0; k < j; ++k) work_.col(j).segment(j, m) -= work_(j, k) * work_.col(k).segment(j, m);
       const double piv = work_(j, j);
       if (!(piv > kMinPivot)) {
         pd = false;
         break;
       }
       const double l = std::sqrt(piv);
-      work_.col(j).tail(m - 1) /= l;
+      work_.col(j).segment(j + 1, m - 1) /= l;
       work_(j, j) = l;
     }
     if (pd) return;

@@ -311,6 +311,15 @@ class Ekf {
   /// epoch's (a non-positive-definite P is repaired and counted). kBadInput for NaN/Inf.
   Status set_covariance(const Mat& P);
 
+  /// Dead states: sensor or extension states started with zero variance and driven by no noise
+  /// (EkfConfig::frozen_states, a diagnosis block switched off). Their rows and columns of P stay
+  /// exactly +0, so the update, the symmetrisation and the definiteness check leave them out: the
+  /// same bits, fewer operations (docs/filters.md, "Frozen states"). The number of live states:
+  int live_states() const { return n_live_; }
+  /// Tests and benchmarks: true runs those loops over every state, the reference the skip is
+  /// checked against (bit for bit); false (the default) skips the dead states.
+  void set_dense_covariance_loops(bool dense);
+
   const Vec& x() const { return x_; }
   const Mat& P() const { return P_; }
   /// Transition matrix of the interval closed by the last propagate().
@@ -351,6 +360,13 @@ class Ekf {
   void keep_correction();
   void symmetrise();
   void track_consistency(const EkfUpdateReport& report);
+  /// The white-noise spectral densities per state (velocity, attitude, bias random walks).
+  Vec white_noise_psd() const;
+  /// Marks the dead states after init() (live_states()) and indexes the others.
+  void find_dead_states();
+  /// live_ and the runs of consecutive live states from dead_ (and dense_loops_).
+  void index_live_states();
+  bool skipped(int i) const { return !dense_loops_ && dead_[static_cast<std::size_t>(i)]; }
 
   // The raw GNSS aid (fsw/src/ekf/aid_gnss_raw.cpp).
   /// Observation: each satellite's prediction from the antenna (valid[k] false and the record
@@ -400,6 +416,13 @@ class Ekf {
   static constexpr double kReacquirePosVar_m2 = 1.0e6;
   static constexpr double kReacquireVelVar_m2ps2 = 100.0;
   Vec init_var_ = Vec::Zero();  ///< initial variances (covariance repair, resets)
+  std::array<bool, N> dead_{};  ///< find_dead_states(); a reset with a variance revives one
+  bool dense_loops_ = false;    ///< set_dense_covariance_loops()
+  std::array<int, N> live_{};   ///< the states the covariance loops visit, ascending
+  int n_live_ = 0;
+  std::array<int, N> run_begin_{};  ///< live_ as runs [begin, end) of consecutive states
+  std::array<int, N> run_end_{};
+  int n_runs_ = 0;
   Vec3 last_f_enu_mps2_ = Vec3::Zero();  ///< specific force of the last frame of the last interval, ENU
   double clock_bias_m_ = 0.0;
   double clock_drift_mps_ = 0.0;

@@ -211,6 +211,10 @@ void Ekf<Layout>::reset_channel_state(int state, double sigma) {
   P_.row(state).setZero();
   P_.col(state).setZero();
   P_(state, state) = sigma * sigma;
+  if (sigma != 0.0 && dead_[static_cast<std::size_t>(state)]) {  // no longer +0: back into the covariance loops
+    dead_[static_cast<std::size_t>(state)] = false;
+    index_live_states();
+  }
 }
 
 template <class Layout>

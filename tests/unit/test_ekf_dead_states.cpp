@@ -1,0 +1,150 @@
+// The EKF's dead states (Ekf::live_states): sensor and extension states started with zero
+// variance and driven by no noise keep rows and columns of P at exactly +0, so the update, the
+// symmetrisation and the definiteness check leave them out. The filter must give the same bits as
+// with the dense loops (set_dense_covariance_loops) on a flight that exercises every path: the
+// transition through a turn, raw GNSS updates with channels bound and released, the feedback, a
+// covariance repair, and a dead state brought back to life by a new covariance.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "fsw/ekf.hpp"
+#include "fsw/gnss.hpp"
+#include "fsw/strapdown.hpp"
+#include "sim/scenario.hpp"
+#include "sim/trajectory.hpp"
+
+namespace {
+
+using fsw::Block;
+using fsw::LayoutDiag;
+using fsw::Vec3;
+using Ekf = fsw::Ekf<LayoutDiag>;
+constexpr int N = LayoutDiag::kSize;
+
+bool same_bits(const Ekf& a, const Ekf& b) {
+  return std::memcmp(a.P().data(), b.P().data(), sizeof(double) * N * N) == 0 &&
+         std::memcmp(a.x().data(), b.x().data(), sizeof(double) * N) == 0 &&
+         a.health().cov_checks == b.health().cov_checks && a.health().cov_repairs == b.health().cov_repairs;
+}
+
+/// Seven satellites at fixed ENU directions, 22,000 km from the true position at t; PRNs change
+/// every 20 s (one satellite set, then another that shares four of them), so channels are bound
+/// and released; ranges carry a 100 m clock drifting 0.5 m/s and a few metres of fixed errors.
+fsw::GnssEpoch epoch_at(const sim::TruthSample& t) {
+  fsw::GnssEpoch ep;
+  ep.t_s = t.t_s;
+  ep.n_obs = 7;
+  const double az[7] = {0.3, 1.2, 2.1, 3.0, 3.9, 4.8, 5.7}, el[7] = {0.3, 0.9, 0.6, 1.2, 0.45, 0.75, 1.0};
+  const int set = static_cast<int>(t.t_s / 20.0) % 2;
+  const fsw::Mat3 Cne = fsw::C_n_e(t.llh.x(), t.llh.y());
+  const Vec3 r = fsw::ecef_from_llh(t.llh), v = Cne * t.vel_enu_mps;
+  for (int k = 0; k < 7; ++k) {
+    const Vec3 u_n(std::cos(el[k]) * std::sin(az[k]), std::cos(el[k]) * std::cos(az[k]), std::sin(el[k]));
+    fsw::GnssObservation& o = ep.obs[static_cast<std::size_t>(k)];
+    o.prn = static_cast<std::uint8_t>(k < 4 || set == 0 ? k + 1 : k + 11);
+    o.sat_pos_ecef_m = r + Cne * u_n * 2.2e7;
+    o.sat_vel_ecef_mps = Vec3(800.0 * k, -500.0, 2000.0 - 300.0 * k);
+    const fsw::GnssGeometry g = fsw::gnss_geometry(o.sat_pos_ecef_m, o.sat_vel_ecef_mps, r, v);
+    o.pseudorange_m = g.range_m + 100.0 + 0.5 * t.t_s + 2.0 * std::sin(3.0 * k + t.t_s);
+    o.pseudorange_rate_mps = g.range_rate_mps + 0.5 + 0.05 * std::cos(2.0 * k + t.t_s);
+  }
+  return ep;
+}
+
+/// Flies a and b side by side over truth from t0 to t1 (1 Hz updates, corrections taken); false
+/// at the first epoch whose filters differ in a bit.
+bool fly_side_by_side(Ekf& a, Ekf& b, double t0, double t1, int& epochs) {
+  sim::Scenario sc;
+  sc.duration_s = t1 + 1.0;
+  std::string err;
+  auto motion = sim::FlightMotion::create(sc, err);
+  if (!motion) return false;
+  sim::TruthGenerator gen(*motion, 1000.0);
+  while (gen.current().t_s < t0 - 1e-9) gen.next();
+  fsw::Strapdown ins;
+  fsw::NavState nav0;
+  nav0.t_s = gen.current().t_s;
+  nav0.llh = gen.current().llh + fsw::llh_delta_from_enu(gen.current().llh, Vec3(3.0, -2.0, 1.0));
+  nav0.vel_enu_mps = gen.current().vel_enu_mps + Vec3(0.1, 0.05, -0.02);
+  nav0.q_b_n = fsw::Quat(gen.current().C_b_n);
+  ins.init(nav0);
+  fsw::FrameBuilder fb;
+  fb.configure(5);
+  int frames = 0;
+  while (gen.current().t_s < t1 - 1e-9) {
+    const sim::TruthSample& t = gen.next();
+    fsw::ImuSample s;
+    s.t_s = t.t_s;
+    s.dt_s = t.dt_s;
+    s.dtheta_rad = t.dtheta_rad + Vec3(2e-9, -1e-9, 3e-9);  // a gyro bias the filter can see
+    s.dv_mps = t.dv_mps;
+    if (fb.add(s) != fsw::Status::kOk) continue;
+    ins.step(fb.frame());
+    a.accumulate(fb.frame(), ins.state());
+    b.accumulate(fb.frame(), ins.state());
+    if (++frames % 200 != 0) continue;
+    a.propagate();
+    b.propagate();
+    const fsw::GnssEpoch ep = epoch_at(t);
+    fsw::EkfUpdateReport ra, rb;
+    a.update(ep, ins.state(), t.omega_ib_b_radps, ra);
+    b.update(ep, ins.state(), t.omega_ib_b_radps, rb);
+    Ekf::Vec xa, xb;
+    a.take_correction(xa);
+    b.take_correction(xb);
+    ++epochs;
+    if (!same_bits(a, b)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST(EkfDeadStates, SkippingThemGivesTheDenseLoopsBitsInATurningFlight) {
+  fsw::EkfConfig cfg;
+  cfg.lever_arm_sigma_m = 0.5;
+  cfg.time_offset_sigma_s = 0.01;
+  const int ogm = LayoutDiag::offset(Block::kGyroMisalign), oas = LayoutDiag::offset(Block::kAccelScale);
+  cfg.frozen_states = (std::uint64_t{1} << (ogm + 1)) | (std::uint64_t{1} << (ogm + 4)) | (std::uint64_t{1} << (oas + 2));
+  static Ekf a, b;  // 66 x 66 matrices: not on the test's stack
+  ASSERT_EQ(a.init(cfg), fsw::Status::kOk);
+  ASSERT_EQ(b.init(cfg), fsw::Status::kOk);
+  b.set_dense_covariance_loops(true);
+  // Dead: g-sensitivity (3), time drift, tropo and iono scales (block sigma 0) and the three
+  // frozen components; the frozen misalignments are driven by the turn's specific force and rate
+  // through Phi's navigation rows, which must not bring them to life.
+  EXPECT_EQ(a.live_states(), N - 9);
+  EXPECT_EQ(b.live_states(), N);
+
+  int epochs = 0;
+  ASSERT_TRUE(fly_side_by_side(a, b, 60.0, 140.0, epochs)) << "first difference after " << epochs << " epochs";
+  ASSERT_EQ(epochs, 80);
+  EXPECT_GT(a.health().cov_checks, 70u);
+  // The dead rows and columns are +0, not merely zero.
+  for (int i : {ogm + 1, ogm + 4, oas + 2, LayoutDiag::offset(Block::kIonoScale)})
+    for (int k = 0; k < N; ++k) {
+      ASSERT_EQ(a.P()(i, k), 0.0);
+      ASSERT_FALSE(std::signbit(a.P()(i, k)));
+      ASSERT_FALSE(std::signbit(a.P()(k, i)));
+    }
+  // The live ones learned something (the filter ran): the lever arm's variance dropped.
+  EXPECT_LT(a.P()(LayoutDiag::offset(Block::kLeverArm), LayoutDiag::offset(Block::kLeverArm)), 0.25);
+
+  // A covariance with a variance on a dead state (the iono scale) and a correlation of 1.5
+  // between position and attitude: the iono scale lives again, the repair is the dense one's.
+  Ekf::Mat P = a.P();
+  const int oi = LayoutDiag::offset(Block::kIonoScale);
+  P(oi, oi) = 0.04;
+  const double s0 = std::sqrt(P(0, 0)), s6 = std::sqrt(P(6, 6));
+  P(0, 6) = P(6, 0) = 1.5 * s0 * s6;
+  ASSERT_EQ(a.set_covariance(P), fsw::Status::kOk);
+  ASSERT_EQ(b.set_covariance(P), fsw::Status::kOk);
+  EXPECT_EQ(a.live_states(), N - 8);
+  EXPECT_EQ(a.health().cov_repairs, 1u);
+  ASSERT_TRUE(same_bits(a, b));
+  ASSERT_TRUE(fly_side_by_side(a, b, 140.0, 170.0, epochs)) << "first difference after " << epochs << " epochs";
+  EXPECT_LT(a.P()(oi, oi), 0.04);  // the range rows see the iono scale: it is estimated again
+}
