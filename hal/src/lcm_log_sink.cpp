@@ -66,9 +66,15 @@ LcmLogStatus LcmLogSink::write_health(double t_s, const fsw::ExecutiveHealth& he
 }
 
 // ---------------------------------------------------------------------------------------------
-namespace {
-bool later(const std::pair<double, std::uint64_t>& a, const std::pair<double, std::uint64_t>& b) { return a > b; }
-}  // namespace
+std::uint64_t max_imu_samples(std::uint64_t log_bytes, const std::string& imu_channel) {
+  const std::uint64_t event_bytes = kLcmLogHeaderBytes + imu_channel.size() +
+                                    static_cast<std::uint64_t>(sdins::imu_sample_t{}.getEncodedSize());
+  return log_bytes / event_bytes;
+}
+
+bool LcmReplayReader::later_pending(const Pending& a, const Pending& b) {
+  return std::pair<double, std::uint64_t>(a.t_s, a.seq) > std::pair<double, std::uint64_t>(b.t_s, b.seq);
+}
 
 LcmLogStatus LcmReplayReader::open(const std::string& path, const LcmReplayConfig& cfg) {
   cfg_ = cfg;
@@ -76,6 +82,8 @@ LcmLogStatus LcmReplayReader::open(const std::string& path, const LcmReplayConfi
   if (!(cfg_.max_time_jump_s > 0.0)) cfg_.max_time_jump_s = LcmReplayConfig{}.max_time_jump_s;
   stats_ = LcmReplayStats{};
   pending_.clear();
+  slots_.clear();
+  free_slots_.clear();
   seq_ = 0;
   eof_ = false;
   have_newest_ = false;
@@ -107,10 +115,17 @@ void LcmReplayReader::enqueue(fsw::InputEvent&& in) {
   }
   if (!have_newest_ || in.t_s > newest_t_s_) newest_t_s_ = in.t_s;
   have_newest_ = true;
-  pending_.push_back(Pending{seq_++, std::move(in)});
-  std::push_heap(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) {
-    return later({a.input.t_s, a.seq}, {b.input.t_s, b.seq});
-  });
+  std::uint32_t slot;
+  if (free_slots_.empty()) {
+    slot = static_cast<std::uint32_t>(slots_.size());
+    slots_.push_back(std::move(in));
+  } else {
+    slot = free_slots_.back();
+    free_slots_.pop_back();
+    slots_[slot] = std::move(in);
+  }
+  pending_.push_back(Pending{slots_[slot].t_s, seq_++, slot});
+  std::push_heap(pending_.begin(), pending_.end(), later_pending);
 }
 
 namespace {
@@ -177,11 +192,12 @@ void LcmReplayReader::take(const LcmLogEvent& ev) {
 }
 
 LcmLogStatus LcmReplayReader::next(fsw::InputEvent& in) {
-  const auto cmp = [](const Pending& a, const Pending& b) { return later({a.input.t_s, a.seq}, {b.input.t_s, b.seq}); };
   for (;;) {
-    if (!pending_.empty() && (eof_ || pending_.front().input.t_s <= newest_t_s_ - cfg_.reorder_window_s)) {
-      std::pop_heap(pending_.begin(), pending_.end(), cmp);
-      in = std::move(pending_.back().input);
+    if (!pending_.empty() && (eof_ || pending_.front().t_s <= newest_t_s_ - cfg_.reorder_window_s)) {
+      std::pop_heap(pending_.begin(), pending_.end(), later_pending);
+      const std::uint32_t slot = pending_.back().slot;
+      in = std::move(slots_[slot]);
+      free_slots_.push_back(slot);
       pending_.pop_back();
       have_delivered_ = true;
       last_delivered_t_s_ = in.t_s;

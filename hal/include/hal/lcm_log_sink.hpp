@@ -145,6 +145,11 @@ struct LcmReplayStats {
   }
 };
 
+/// At most how many IMU samples a log of log_bytes can hold on imu_channel: one per smallest IMU
+/// event (the event header, the channel name, an encoded sdins.imu_sample_t). A bound for
+/// reserving arrays before reading, so they never regrow.
+std::uint64_t max_imu_samples(std::uint64_t log_bytes, const std::string& imu_channel);
+
 class LcmReplayReader {
  public:
   LcmLogStatus open(const std::string& path, const LcmReplayConfig& cfg = {});
@@ -165,10 +170,16 @@ class LcmReplayReader {
   const std::string& error() const { return log_.error(); }
 
  private:
+  /// A heap entry: the input's order key and where it waits (slots_). The inputs themselves
+  /// (864 bytes each) stay put while the heap moves its 24-byte keys.
   struct Pending {
+    double t_s;
     std::uint64_t seq;
-    fsw::InputEvent input;
+    std::uint32_t slot;
   };
+  /// The heap's order: time, then arrival (seq is unique, so the order is total and the delivery
+  /// order does not depend on how the heap arranges its entries).
+  static bool later_pending(const Pending& a, const Pending& b);
   /// Decodes one event into pending_ (or counts why not).
   void take(const LcmLogEvent& ev);
   void push(fsw::InputEvent&& in);
@@ -178,6 +189,8 @@ class LcmReplayReader {
   LcmReplayConfig cfg_{};
   LcmReplayStats stats_{};
   std::vector<Pending> pending_;  ///< min-heap on (t_s, seq)
+  std::vector<fsw::InputEvent> slots_;     ///< the pending inputs, by Pending::slot
+  std::vector<std::uint32_t> free_slots_;  ///< slots_ not in use
   TimeTagFilter<fsw::InputEvent> gate_;
   std::uint64_t seq_ = 0;
   bool eof_ = false;
