@@ -269,7 +269,7 @@ void Ekf<Layout>::index_live_states() {
   n_runs_ = 0;
   for (int i = 0; i < N; ++i) {
     if (!dense_loops_ && dead_[static_cast<std::size_t>(i)]) continue;
-    live_[static_cast<std::size_t>(n_live_++)] = i;
+    ++n_live_;
     if (n_runs_ > 0 && run_end_[static_cast<std::size_t>(n_runs_ - 1)] == i) {
       ++run_end_[static_cast<std::size_t>(n_runs_ - 1)];
     } else {
@@ -410,7 +410,15 @@ bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu,
   const Vec u = 0.5 * S * K - s;  // P - K s^T - s K^T + S K K^T = P + K u^T + u K^T
   // P <- (P + K u^T) + u K^T in one pass over P (the same two additions per element, in the same
   // order, as the two rank-one updates one after the other), over the live states' runs: a dead
-  // state's row and column would stay +0 (find_dead_states).
+  // state's row and column would stay +0 (find_dead_states). With every state live, the loop of
+  // compile-time size (the Cortex-M7 image's filters: the compiler unrolls it).
+  if (n_live_ == N) {
+    for (int j = 0; j < N; ++j) {
+      const double uj = u(j), kj = K(j);
+      for (int i = 0; i < N; ++i) P_(i, j) = (P_(i, j) + K(i) * uj) + u(i) * kj;
+    }
+    return true;
+  }
   for (int rj = 0; rj < n_runs_; ++rj)
     for (int j = run_begin_[static_cast<std::size_t>(rj)]; j < run_end_[static_cast<std::size_t>(rj)]; ++j) {
       const double uj = u(j), kj = K(j);
@@ -460,16 +468,36 @@ Status Ekf<Layout>::set_covariance(const Mat& P) {
 
 template <class Layout>
 void Ekf<Layout>::symmetrise() {
-  // Over the live states (a dead state's row and column are +0 on both sides already).
-  for (int b = 0; b < n_live_; ++b) {
-    const int j = live_[static_cast<std::size_t>(b)];
-    for (int a = b + 1; a < n_live_; ++a) {
-      const int i = live_[static_cast<std::size_t>(a)];
-      const double v = 0.5 * (P_(i, j) + P_(j, i));
-      P_(i, j) = v;
-      P_(j, i) = v;
+  // Over the live states' runs (a dead state's row and column are +0 on both sides already);
+  // with every state live, one run: the plain triangle.
+  for (int rj = 0; rj < n_runs_; ++rj)
+    for (int j = run_begin_[static_cast<std::size_t>(rj)]; j < run_end_[static_cast<std::size_t>(rj)]; ++j)
+      for (int ri = rj; ri < n_runs_; ++ri) {
+        const int end = run_end_[static_cast<std::size_t>(ri)];
+        for (int i = std::max(run_begin_[static_cast<std::size_t>(ri)], j + 1); i < end; ++i) {
+          const double v = 0.5 * (P_(i, j) + P_(j, i));
+          P_(i, j) = v;
+          P_(j, i) = v;
+        }
+      }
+}
+
+template <class Layout>
+void Ekf<Layout>::gather_live_correlations(const Vec& d) {
+  // work_(a, b), a >= b: the correlation of the a-th and b-th live states (d = 1 / sigma), by runs
+  // (with every state live, one run: the plain lower triangle); a live state of zero variance
+  // gets a unit diagonal.
+  int b = 0;
+  for (int rj = 0; rj < n_runs_; ++rj)
+    for (int j = run_begin_[static_cast<std::size_t>(rj)]; j < run_end_[static_cast<std::size_t>(rj)]; ++j, ++b) {
+      int a = b;
+      for (int ri = rj; ri < n_runs_; ++ri) {
+        const int end = run_end_[static_cast<std::size_t>(ri)];
+        for (int i = std::max(run_begin_[static_cast<std::size_t>(ri)], j); i < end; ++i, ++a)
+          work_(a, b) = d(i) * P_(i, j) * d(j);
+      }
+      if (d(j) == 0.0) work_(b, b) = 1.0;
     }
-  }
 }
 
 template <class Layout>
@@ -491,15 +519,7 @@ void Ekf<Layout>::check_covariance() {
     // work_ (P is symmetric here): the factor overwrites it column by column. A dead state is an
     // identity row and column of the full correlation matrix, uncoupled: leaving it out changes
     // no pivot of the others (their updates from it are exact zeros).
-    for (int b = 0; b < n; ++b) {
-      const int j = live_[static_cast<std::size_t>(b)];
-      for (int a = b; a < n; ++a) {
-        const int i = live_[static_cast<std::size_t>(a)];
-        work_(a, b) = d(i) * P_(i, j) * d(j);
-      }
-    }
-    for (int a = 0; a < n; ++a)
-      if (d(live_[static_cast<std::size_t>(a)]) == 0.0) work_(a, a) = 1.0;
+    gather_live_correlations(d);
     // Left-looking by columns: column j less the columns before it, each a contiguous column
     // operation (column-major storage), then the pivot test and the scaling.
     bool pd = true;

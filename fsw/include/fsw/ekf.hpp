@@ -364,8 +364,10 @@ class Ekf {
   Vec white_noise_psd() const;
   /// Marks the dead states after init() (live_states()) and indexes the others.
   void find_dead_states();
-  /// live_ and the runs of consecutive live states from dead_ (and dense_loops_).
+  /// The runs of consecutive live states from dead_ (and dense_loops_).
   void index_live_states();
+  /// The live states' correlations into the top-left n_live_ x n_live_ lower triangle of work_.
+  void gather_live_correlations(const Vec& d);
   bool skipped(int i) const { return !dense_loops_ && dead_[static_cast<std::size_t>(i)]; }
 
   // The raw GNSS aid (fsw/src/ekf/aid_gnss_raw.cpp).
@@ -418,9 +420,8 @@ class Ekf {
   Vec init_var_ = Vec::Zero();  ///< initial variances (covariance repair, resets)
   std::array<bool, N> dead_{};  ///< find_dead_states(); a reset with a variance revives one
   bool dense_loops_ = false;    ///< set_dense_covariance_loops()
-  std::array<int, N> live_{};   ///< the states the covariance loops visit, ascending
-  int n_live_ = 0;
-  std::array<int, N> run_begin_{};  ///< live_ as runs [begin, end) of consecutive states
+  int n_live_ = 0;                  ///< the states the covariance loops visit
+  std::array<int, N> run_begin_{};  ///< those states as runs [begin, end) of consecutive states
   std::array<int, N> run_end_{};
   int n_runs_ = 0;
   Vec3 last_f_enu_mps2_ = Vec3::Zero();  ///< specific force of the last frame of the last interval, ENU
