@@ -270,13 +270,10 @@ void Ekf<Layout>::index_live_states() {
   for (int i = 0; i < N; ++i) {
     if (!dense_loops_ && dead_[static_cast<std::size_t>(i)]) continue;
     ++n_live_;
-    if (n_runs_ > 0 && run_end_[static_cast<std::size_t>(n_runs_ - 1)] == i) {
-      ++run_end_[static_cast<std::size_t>(n_runs_ - 1)];
-    } else {
-      run_begin_[static_cast<std::size_t>(n_runs_)] = i;
-      run_end_[static_cast<std::size_t>(n_runs_)] = i + 1;
-      ++n_runs_;
-    }
+    if (n_runs_ > 0 && runs_[static_cast<std::size_t>(n_runs_ - 1)].end == i)
+      ++runs_[static_cast<std::size_t>(n_runs_ - 1)].end;
+    else
+      runs_[static_cast<std::size_t>(n_runs_++)] = LiveRun{i, i + 1};
   }
 }
 
@@ -419,13 +416,11 @@ bool Ekf<Layout>::scalar_update(const RowVec& h, double y, double r, double& nu,
     }
     return true;
   }
-  for (int rj = 0; rj < n_runs_; ++rj)
-    for (int j = run_begin_[static_cast<std::size_t>(rj)]; j < run_end_[static_cast<std::size_t>(rj)]; ++j) {
+  for (const LiveRun& cols : live_runs())
+    for (int j = cols.begin; j < cols.end; ++j) {
       const double uj = u(j), kj = K(j);
-      for (int ri = 0; ri < n_runs_; ++ri) {
-        const int end = run_end_[static_cast<std::size_t>(ri)];
-        for (int i = run_begin_[static_cast<std::size_t>(ri)]; i < end; ++i) P_(i, j) = (P_(i, j) + K(i) * uj) + u(i) * kj;
-      }
+      for (const LiveRun& rows : live_runs())
+        for (int i = rows.begin; i < rows.end; ++i) P_(i, j) = (P_(i, j) + K(i) * uj) + u(i) * kj;
     }
   return true;
 }
@@ -470,16 +465,15 @@ template <class Layout>
 void Ekf<Layout>::symmetrise() {
   // Over the live states' runs (a dead state's row and column are +0 on both sides already);
   // with every state live, one run: the plain triangle.
-  for (int rj = 0; rj < n_runs_; ++rj)
-    for (int j = run_begin_[static_cast<std::size_t>(rj)]; j < run_end_[static_cast<std::size_t>(rj)]; ++j)
-      for (int ri = rj; ri < n_runs_; ++ri) {
-        const int end = run_end_[static_cast<std::size_t>(ri)];
-        for (int i = std::max(run_begin_[static_cast<std::size_t>(ri)], j + 1); i < end; ++i) {
+  const std::span<const LiveRun> runs = live_runs();
+  for (auto cols = runs.begin(); cols != runs.end(); ++cols)
+    for (int j = cols->begin; j < cols->end; ++j)
+      for (auto rows = cols; rows != runs.end(); ++rows)
+        for (int i = std::max(rows->begin, j + 1); i < rows->end; ++i) {
           const double v = 0.5 * (P_(i, j) + P_(j, i));
           P_(i, j) = v;
           P_(j, i) = v;
         }
-      }
 }
 
 template <class Layout>
@@ -488,14 +482,12 @@ void Ekf<Layout>::gather_live_correlations(const Vec& d) {
   // (with every state live, one run: the plain lower triangle); a live state of zero variance
   // gets a unit diagonal.
   int b = 0;
-  for (int rj = 0; rj < n_runs_; ++rj)
-    for (int j = run_begin_[static_cast<std::size_t>(rj)]; j < run_end_[static_cast<std::size_t>(rj)]; ++j, ++b) {
+  const std::span<const LiveRun> runs = live_runs();
+  for (auto cols = runs.begin(); cols != runs.end(); ++cols)
+    for (int j = cols->begin; j < cols->end; ++j, ++b) {
       int a = b;
-      for (int ri = rj; ri < n_runs_; ++ri) {
-        const int end = run_end_[static_cast<std::size_t>(ri)];
-        for (int i = std::max(run_begin_[static_cast<std::size_t>(ri)], j); i < end; ++i, ++a)
-          work_(a, b) = d(i) * P_(i, j) * d(j);
-      }
+      for (auto rows = cols; rows != runs.end(); ++rows)
+        for (int i = std::max(rows->begin, j); i < rows->end; ++i, ++a) work_(a, b) = d(i) * P_(i, j) * d(j);
       if (d(j) == 0.0) work_(b, b) = 1.0;
     }
 }

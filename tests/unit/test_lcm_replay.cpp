@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <random>
 #include <vector>
@@ -410,12 +411,7 @@ TEST(LcmReplay, EqualTimeTagsKeepTheirWrittenOrderAndTheImuBoundIsExact) {
     ASSERT_EQ(sink.write_imu(r), hal::LcmLogStatus::kOk);
   }
   ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  ASSERT_NE(f, nullptr);
-  std::fseek(f, 0, SEEK_END);
-  const long bytes = std::ftell(f);
-  std::fclose(f);
-  EXPECT_EQ(hal::max_imu_samples(static_cast<std::uint64_t>(bytes), hal::kLcmChannelImu), 2500u);
+  EXPECT_EQ(hal::max_imu_samples(std::filesystem::file_size(path), hal::kLcmChannelImu), 2500u);
   hal::LcmReplayReader rd;
   hal::LcmReplayConfig rc;
   rc.reorder_window_s = 1.0;

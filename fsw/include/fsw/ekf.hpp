@@ -34,6 +34,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <span>
 #include <cmath>
 #include <limits>
 #include <cstdint>
@@ -421,9 +422,13 @@ class Ekf {
   std::array<bool, N> dead_{};  ///< find_dead_states(); a reset with a variance revives one
   bool dense_loops_ = false;    ///< set_dense_covariance_loops()
   int n_live_ = 0;                  ///< the states the covariance loops visit
-  std::array<int, N> run_begin_{};  ///< those states as runs [begin, end) of consecutive states
-  std::array<int, N> run_end_{};
+  /// Consecutive live states [begin, end), ascending.
+  struct LiveRun {
+    int begin = 0, end = 0;
+  };
+  std::array<LiveRun, N> runs_{};
   int n_runs_ = 0;
+  std::span<const LiveRun> live_runs() const { return {runs_.data(), static_cast<std::size_t>(n_runs_)}; }
   Vec3 last_f_enu_mps2_ = Vec3::Zero();  ///< specific force of the last frame of the last interval, ENU
   double clock_bias_m_ = 0.0;
   double clock_drift_mps_ = 0.0;

@@ -233,9 +233,6 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
     error = "cannot read " + path + ": " + rd.error();
     return false;
   }
-  // Truth / reference: its own channel, never an input; the one reader (tools/reference.hpp) with
-  // the diagnosis' rule on top. It reads the log a second time, so on a second thread while this
-  // one reads the inputs (the two readers share nothing but the file).
   // The arrays sized once for the most IMU samples the file can hold (address space: pages never
   // written cost nothing), capped at 2^26 (18 h at 1 kHz; beyond it they regrow): regrowing them
   // was half of the load's time.
@@ -246,6 +243,9 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
     out.imu.reserve(static_cast<std::size_t>(n));
     out.order.reserve(static_cast<std::size_t>(n) + 4096);
   }
+  // Truth / reference: its own channel, never an input; the one reader (tools/reference.hpp) with
+  // the diagnosis' rule on top. It reads the log a second time, so on a second thread while this
+  // one reads the inputs (the two readers share nothing but the file).
   std::future<Reference> reference = std::async(std::launch::async, [&path] { return load_reference(path); });
   fsw::InputEvent in;
   hal::LcmLogStatus st;
