@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iterator>
 #include <limits>
 #include <random>
@@ -18,6 +19,7 @@
 #include "lcm_test_util.hpp"
 #include "sim/effects.hpp"
 #include "tools/diagnosis.hpp"
+#include "tools/diagnosis_chain.hpp"
 #include "tools/diagnosis_intervals.hpp"
 #include "tools/reference.hpp"
 #include "cfg/flight_config.hpp"
@@ -406,6 +408,67 @@ TEST(DiagnosisIntervals, TimeOffsetProfileWithLateImuTagsIsUnbiasedInEitherInput
   // The order the inputs came in does not move the interval.
   EXPECT_LT(std::abs(pi[0].lo - pi[1].lo), 0.5 * s[1]);
   EXPECT_LT(std::abs(pi[0].hi - pi[1].hi), 0.5 * s[1]);
+}
+
+// A profile run reads the recording through a view: the fixed component applied to each IMU
+// sample as it passes, the re-timed arrival order and the data selection standing in for the
+// recording's. Each run must be bit for bit the run on a corrected copy (with_fixed_effect), for
+// every kind of correction, re-timed ones in either direction included.
+TEST(DiagnosisIntervals, ACorrectionAppliedAsSamplesPassIsTheRunOnACorrectedCopy) {
+  if (kSanitized) GTEST_SKIP() << "seven pairs of 150 s runs: release stage";
+  const tools::RecordedData data = tools::record_scenario(baseline_scenario(150.0, 29), 29);
+  const tools::DiagnosisConfig cfg = tools::default_diagnosis_config();
+  const double t_ref_s = tools::drift_reference_time(data, cfg);
+  // A selection: one pseudorange of every 7th epoch left out, as a profile leaves out what the
+  // gate rejected.
+  std::vector<fsw::GnssRawEpoch> selected_gnss = data.gnss;
+  for (std::size_t e = 0; e < selected_gnss.size(); e += 7)
+    if (selected_gnss[e].n_meas > 4) --selected_gnss[e].n_meas;
+  const struct {
+    const char* name;
+    double value;
+  } cases[] = {{"gyro_misalignment.zy", 60.0}, {"gyro_scale_factor.x", 400.0}, {"accel_misalignment.zx", -80.0},
+               {"gyro_g_sensitivity.z", 4.0},  {"imu_gnss_time_offset", 0.012}, {"imu_gnss_time_offset", -0.03},
+               {"imu_clock_drift", 250.0}};
+  const std::vector<int> model = cfg.baseline_states;
+  const tools::DiagnosisRun plain = tools::run_diagnosis_model(data, cfg, model);
+  for (const auto& c : cases) {
+    SCOPED_TRACE(std::string(c.name) + " = " + std::to_string(c.value));
+    const int cand = tools::candidate_index(c.name);
+    ASSERT_GE(cand, 0);
+    const tools::Candidate& cd = tools::diagnosis_candidates()[static_cast<std::size_t>(cand)];
+    tools::ImuCorrection corr;
+    ASSERT_TRUE(tools::fixed_effect_correction(cd, c.value, t_ref_s, corr));
+    for (const bool select : {false, true}) {
+      tools::RecordedData copy = data;
+      if (select) copy.gnss = selected_gnss;
+      const tools::DiagnosisRun a = tools::run_diagnosis_model(tools::with_fixed_effect(copy, cd, c.value, t_ref_s), cfg, model);
+      tools::RecordingView v{&data};
+      if (select) v.gnss = &selected_gnss;
+      v.imu = &corr;
+      std::vector<tools::RecordedData::Event> order;
+      if (corr.retimed()) {
+        order = tools::retimed_order(v, corr);
+        v.order = &order;
+      }
+      const tools::DiagnosisRun b = tools::run_diagnosis_model(v, cfg, model);
+      ASSERT_TRUE(a.initialised && b.initialised);
+      ASSERT_GT(a.scalars.size(), 1000u);
+      ASSERT_EQ(a.scalars.size(), b.scalars.size());
+      for (std::size_t i = 0; i < a.scalars.size(); ++i) {
+        ASSERT_EQ(a.scalars[i].key, b.scalars[i].key) << i;
+        ASSERT_EQ(std::memcmp(&a.scalars[i].nu, &b.scalars[i].nu, sizeof(double)), 0) << i;
+        ASSERT_EQ(std::memcmp(&a.scalars[i].S, &b.scalars[i].S, sizeof(double)), 0) << i;
+      }
+      EXPECT_EQ(a.init_t_s, b.init_t_s);
+      EXPECT_EQ(a.estimate, b.estimate);
+      EXPECT_EQ(a.sigma, b.sigma);
+      // The correction is not nothing: the run without it differs.
+      bool differs = plain.scalars.size() != a.scalars.size();
+      for (std::size_t i = 0; !differs && i < a.scalars.size(); ++i) differs = plain.scalars[i].nu != a.scalars[i].nu;
+      EXPECT_TRUE(differs);
+    }
+  }
 }
 
 // A reference without attitude (what `sdins import` writes from a GNSS solution: NaN attitude)

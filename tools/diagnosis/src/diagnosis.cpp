@@ -124,8 +124,10 @@ struct StepScores {
 /// (joining that group); otherwise the strongest significant candidate becomes a new finding.
 class GroupSearch {
  public:
-  GroupSearch(const RecordedData& data, const DiagnosisConfig& cfg, DiagnosisResult& res, const Progress& say)
-      : data_(data), cfg_(cfg), res_(res), say_(say), cands_(diagnosis_candidates()),
+  /// refs: every run's profile reference is kept there (a group member's interval starts from it).
+  GroupSearch(const RecordedData& data, const DiagnosisConfig& cfg, DiagnosisResult& res, const Progress& say,
+              ProfileReferences& refs)
+      : data_(data), cfg_(cfg), res_(res), say_(say), refs_(refs), cands_(diagnosis_candidates()),
         nc_(static_cast<int>(cands_.size())), excluded_(at(nc_), false) {}
 
   /// Each step adds a finding, grows a group (then runs again on the larger subspace) or ends.
@@ -154,6 +156,7 @@ class GroupSearch {
     say_("step " + std::to_string(step) + ": " + std::to_string(models.size()) + " candidate models of " +
          std::to_string(m0.size() - base.size() + 1) + " extension states");
     std::vector<DiagnosisRun> runs = run_models(data_, cfg_, models);
+    for (std::size_t k = 0; k < runs.size(); ++k) refs_[models[k]] = ProfileReference::of(runs[k]);
     if (!screened_) {
       res_.screening_z2.assign(at(nc_), 0.0);
       res_.screening_ratio.assign(at(nc_), 1.0);
@@ -271,6 +274,7 @@ class GroupSearch {
   const DiagnosisConfig& cfg_;
   DiagnosisResult& res_;
   const Progress& say_;
+  ProfileReferences& refs_;
   const std::vector<Candidate>& cands_;
   const int nc_;
   std::vector<bool> excluded_;  ///< unobservable, explained by the baseline, or in a group
@@ -307,8 +311,9 @@ bool joint_statistic(const DiagnosisRun& ext, const DiagnosisConfig& cfg, Group&
 /// cfg.max_confirmation_passes times).
 /// The first pass runs the baseline model beside it (into res.base: it does not depend on the
 /// findings), and sets base_done.
+/// Each extended run's profile reference goes into refs.
 void confirm_groups(const RecordedData& data, const DiagnosisConfig& cfg, double alpha_each, std::vector<Group>& groups,
-                    DiagnosisResult& res, bool& base_done, const Progress& say) {
+                    DiagnosisResult& res, bool& base_done, ProfileReferences& refs, const Progress& say) {
   for (int pass = 0; !groups.empty(); ++pass) {
     say("extended model: baseline + " + std::to_string(groups.size()) + " findings");
     if (pass == 0) {
@@ -319,6 +324,7 @@ void confirm_groups(const RecordedData& data, const DiagnosisConfig& cfg, double
     } else {
       res.extended = run_diagnosis_model(data, cfg, search_model(cfg.baseline_states, groups));
     }
+    refs[res.extended.active] = ProfileReference::of(res.extended);
     std::vector<Group> keep;
     for (Group& g : groups) {
       if (!joint_statistic(res.extended, cfg, g)) continue;
@@ -391,13 +397,14 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
   };
   DiagnosisResult res;
   res.baseline = fsw::to_string(cfg.baseline);
-  std::vector<Group> groups = GroupSearch(data, cfg, res, say).run();
+  ProfileReferences refs;  // the runs' data selections, for the intervals' profiles
+  std::vector<Group> groups = GroupSearch(data, cfg, res, say, refs).run();
   const double alpha_each = res.tested > 0 ? cfg.alpha / static_cast<double>(res.tested) : 0.0;
   bool base_done = false;
-  confirm_groups(data, cfg, alpha_each, groups, res, base_done, say);
+  confirm_groups(data, cfg, alpha_each, groups, res, base_done, refs, say);
   score_baseline_and_outages(data, cfg, groups.empty(), base_done, res, say);
   findings_from_groups(groups, alpha_each, res);
-  add_finding_intervals(res, data, cfg, progress);
+  add_finding_intervals(res, data, cfg, progress, refs);
   set_headline_estimates(res.findings);
   return res;
 }

@@ -209,7 +209,7 @@ MountingEstimate estimate_mounting_yaw(const RecordedData& data, const Diagnosis
     if (A > 0.0) {
       const double v = std::clamp(-B / (2.0 * A), x0, x2);
       const double C = y1 - A * x1 * x1 - B * x1, y_min = A * v * v + B * v + C;
-      const double half = std::sqrt(std::max(0.0, 3.841458820694124 + y_min) / A);
+      const double half = std::sqrt(std::max(0.0, kDeviance95 + y_min) / A);
       m.yaw_deg = v;
       m.lo_deg = v - half;
       m.hi_deg = v + half;

@@ -33,8 +33,9 @@ Contributions contributions(const DiagnosisRun& run) {
   return c;
 }
 
-/// The model with `cand` held at each value: runs in parallel, results in input order.
-std::vector<Contributions> profile_runs(const RecordedData& data, const DiagnosisConfig& cfg,
+/// The model with `cand` held at each value: runs in parallel, results in input order. The
+/// component is applied to the samples as each run reads them (ImuCorrection), not to a copy.
+std::vector<Contributions> profile_runs(const RecordingView& data, const DiagnosisConfig& cfg,
                                         const std::vector<int>& model, int cand, const std::vector<double>& thetas,
                                         double t_ref_s) {
   const Candidate& c = diagnosis_candidates()[static_cast<std::size_t>(cand)];
@@ -44,12 +45,19 @@ std::vector<Contributions> profile_runs(const RecordedData& data, const Diagnosi
   std::vector<Contributions> out(thetas.size());
   for_each_parallel(thetas.size(), [&](std::size_t i) {
     DiagnosisConfig k = cfg;
+    RecordingView v = data;
+    ImuCorrection corr;
+    std::vector<RecordedData::Event> order;
     if (c.effect == Effect::kAntennaLeverArm) {
       k.app.exec.ekf.lever_arm_b_m(c.component) += thetas[i] * fsw::effect_info(c.effect).unit_to_si;
-      out[i] = contributions(run_diagnosis_model(data, k, fixed_model));
-    } else {
-      out[i] = contributions(run_diagnosis_model(with_fixed_effect(data, c, thetas[i], t_ref_s), k, fixed_model));
+    } else if (fixed_effect_correction(c, thetas[i], t_ref_s, corr)) {
+      v.imu = &corr;
+      if (corr.retimed()) {
+        order = retimed_order(data, corr);
+        v.order = &order;
+      }
     }
+    out[i] = contributions(run_diagnosis_model(v, k, fixed_model));
   });
   return out;
 }
@@ -92,29 +100,46 @@ std::vector<double> common_log_likelihood(const std::vector<const Contributions*
   return ll;
 }
 
-/// The data without the observations `gated` names ((GNSS frame, PRN); PRN 0: the GNSS solution
-/// of that frame): the selection a profile holds fixed.
-RecordedData without_observations(const RecordedData& data, const std::vector<std::pair<std::uint64_t, std::uint8_t>>& gated,
-                                  double nav_rate_hz) {
-  if (gated.empty()) return data;
-  RecordedData d = data;
+/// The observations `gated` names ((GNSS frame, PRN); PRN 0: the GNSS solution of that frame) left
+/// out of a recording: the selection a profile holds fixed. Its GNSS epochs and order stand in for
+/// the recording's (view()); nothing else is copied.
+struct Selection {
+  const RecordedData* data = nullptr;
+  bool selected = false;  ///< false: nothing gated, the recording as it is
+  std::vector<fsw::GnssRawEpoch> gnss;
+  std::vector<RecordedData::Event> order;
+  RecordingView view() const {
+    RecordingView v{data};
+    if (selected) {
+      v.gnss = &gnss;
+      v.order = &order;
+    }
+    return v;
+  }
+};
+
+Selection without_observations(const RecordedData& data, const std::vector<std::pair<std::uint64_t, std::uint8_t>>& gated,
+                               double nav_rate_hz) {
+  Selection sel;
+  sel.data = &data;
+  if (gated.empty()) return sel;
+  sel.selected = true;
+  sel.gnss = data.gnss;
   const auto frame_of = [nav_rate_hz](double t) { return static_cast<std::uint64_t>(std::llround(t * nav_rate_hz)); };
   const auto is_gated = [&gated](std::uint64_t f, std::uint8_t prn) {
     return std::find(gated.begin(), gated.end(), std::make_pair(f, prn)) != gated.end();
   };
-  for (fsw::GnssRawEpoch& e : d.gnss) {
+  for (fsw::GnssRawEpoch& e : sel.gnss) {
     const std::uint64_t f = frame_of(e.t_s);
     int n = 0;
     for (int k = 0; k < e.n_meas; ++k)
       if (!is_gated(f, e.meas[static_cast<std::size_t>(k)].prn)) e.meas[static_cast<std::size_t>(n++)] = e.meas[static_cast<std::size_t>(k)];
     e.n_meas = n;
   }
-  std::vector<RecordedData::Event> order;
-  order.reserve(d.order.size());
-  for (const RecordedData::Event& ev : d.order)
-    if (ev.kind != RecordedData::Kind::kPvt || !is_gated(frame_of(d.pvt[ev.index].t_s), 0)) order.push_back(ev);
-  d.order = std::move(order);
-  return d;
+  sel.order.reserve(data.order.size());
+  for (const RecordedData::Event& ev : data.order)
+    if (ev.kind != RecordedData::Kind::kPvt || !is_gated(frame_of(data.pvt[ev.index].t_s), 0)) sel.order.push_back(ev);
+  return sel;
 }
 
 }  // namespace
@@ -123,89 +148,88 @@ bool profile_supported(Effect e) {
   return e != Effect::kTroposphericDelay && e != Effect::kIonosphericDelay && e != Effect::kCount;
 }
 
-RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, double value, double t_ref_s) {
-  RecordedData d = data;
+bool fixed_effect_correction(const Candidate& c, double value, double t_ref_s, ImuCorrection& k) {
+  k = ImuCorrection{};
+  k.t_ref_s = t_ref_s;
   const double v = value * fsw::effect_info(c.effect).unit_to_si;
-  // The compensation of fsw::ImuCompensation with this one component set (its sign convention:
-  // the estimate is the error that is removed).
-  fsw::Mat3 Eg = fsw::Mat3::Zero(), Ea = fsw::Mat3::Zero();
-  fsw::Vec3 gs = fsw::Vec3::Zero();
-  double offset_s = 0.0, drift = 0.0;
   switch (c.effect) {
     case Effect::kGyroMisalignment: {
       const auto ax = fsw::kGyroMisalignmentAxes[static_cast<std::size_t>(c.component)];
-      Eg(ax.i, ax.j) = v;
-      break;
+      k.Eg(ax.i, ax.j) = v;
+      return true;
     }
     case Effect::kAccelMisalignment: {
       const auto ax = fsw::kAccelMisalignmentAxes[static_cast<std::size_t>(c.component)];
-      Ea(ax.i, ax.j) = v;
-      break;
+      k.Ea(ax.i, ax.j) = v;
+      return true;
     }
-    case Effect::kGyroScaleFactor: Eg(c.component, c.component) = v; break;
-    case Effect::kAccelScaleFactor: Ea(c.component, c.component) = v; break;
-    case Effect::kGyroGSensitivity: gs(c.component) = v; break;
-    case Effect::kImuGnssTimeOffset: offset_s = v; break;
-    case Effect::kImuClockDrift: drift = v; break;
-    default: return d;
+    case Effect::kGyroScaleFactor: k.Eg(c.component, c.component) = v; return true;
+    case Effect::kAccelScaleFactor: k.Ea(c.component, c.component) = v; return true;
+    case Effect::kGyroGSensitivity: k.gs(c.component) = v; return true;
+    case Effect::kImuGnssTimeOffset: k.offset_s = v; return true;
+    case Effect::kImuClockDrift: k.drift = v; return true;
+    default: return false;
   }
-  const bool retimed = offset_s != 0.0 || drift != 0.0;
-  for (fsw::ImuSample& s : d.imu) {
-    const fsw::Vec3 dth = s.dtheta_rad, dv = s.dv_mps;
-    s.dtheta_rad = dth - Eg * dth - gs.cwiseProduct(dv);
-    s.dv_mps = dv - Ea * dv;
-    // IMU tags at t (1 + drift) + offset (sim::ImuModel): the tag and the frame length restored.
-    s.t_s = s.t_s - offset_s - drift * (s.t_s - t_ref_s);
-    s.dt_s = s.dt_s / (1.0 + drift);
-  }
-  if (retimed) {
-    // Arrival order on the corrected clock. A GNSS input arrived after a given IMU sample: that is
-    // a fact of the recording, and it stays after that sample (whose tag is now corrected), unless
-    // the corrected tag lies before the input's own time, when it arrives after the sample of its
-    // time instead (the flight software holds an input until its time anyway). Keeping instead the
-    // lag of the original tags behind the input's time carried the hidden offset itself into the
-    // corrected data (in a simulation the epoch follows the IMU sample of its true time, whose tag
-    // is late by the offset): measured on the coverage study's imu_gnss_time_offset, the profile's
-    // maximum then sat 2-4 ms above the truth for either sign, its interval covering 5 of 20; then
-    // 14 of 20, positive offsets still biased by the initialisation epoch (kProfileBurnIn_s); now
-    // 20 of 20 (docs/diagnosis-intervals.md).
-    std::vector<double> key(d.order.size(), -1e300);
-    double prev_new = -1e300, prev_key = -1e300;
-    for (std::size_t i = 0; i < d.order.size(); ++i) {
-      const RecordedData::Event& ev = d.order[i];
-      switch (ev.kind) {
-        case RecordedData::Kind::kImu:
-          prev_new = d.imu[ev.index].t_s;
-          key[i] = prev_new;
-          break;
-        // Capped at the input's own time + kMaxRetimedLateness_s: a log is written in time-tag
-        // order, so with IMU tags early by tau (a negative offset) an epoch sits after the IMU
-        // sample of true time t + tau; kept there on the corrected clock it arrived tau late, and
-        // at tau = 0.4 s every epoch was older than the executive's max_gnss_age_s (0.25 s) at use:
-        // stale, no update at all (the corrected -400 ms flight, issue 26). The recording's order
-        // says nothing of a latency that large; its tags are what is being corrected.
-        case RecordedData::Kind::kGnss:
-          key[i] = std::min(std::max(d.gnss[ev.index].t_s, prev_new), d.gnss[ev.index].t_s + kMaxRetimedLateness_s);
-          break;
-        case RecordedData::Kind::kPvt:
-          key[i] = std::min(std::max(d.pvt[ev.index].t_s, prev_new), d.pvt[ev.index].t_s + kMaxRetimedLateness_s);
-          break;
-        case RecordedData::Kind::kAlmanac: key[i] = prev_key; break;
-      }
-      prev_key = key[i];
+}
+
+std::vector<RecordedData::Event> retimed_order(const RecordingView& v, const ImuCorrection& k) {
+  // Arrival order on the corrected clock. A GNSS input arrived after a given IMU sample: that is
+  // a fact of the recording, and it stays after that sample (whose tag is now corrected), unless
+  // the corrected tag lies before the input's own time, when it arrives after the sample of its
+  // time instead (the flight software holds an input until its time anyway). Keeping instead the
+  // lag of the original tags behind the input's time carried the hidden offset itself into the
+  // corrected data (in a simulation the epoch follows the IMU sample of its true time, whose tag
+  // is late by the offset): measured on the coverage study's imu_gnss_time_offset, the profile's
+  // maximum then sat 2-4 ms above the truth for either sign, its interval covering 5 of 20; then
+  // 14 of 20, positive offsets still biased by the initialisation epoch (kProfileBurnIn_s); now
+  // 20 of 20 (docs/diagnosis-intervals.md).
+  const std::vector<RecordedData::Event>& in = v.events();
+  const RecordedData& d = *v.data;
+  const std::vector<fsw::GnssRawEpoch>& gnss = v.gnss_epochs();
+  std::vector<double> key(in.size(), -1e300);
+  double prev_new = -1e300, prev_key = -1e300;
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const RecordedData::Event& ev = in[i];
+    switch (ev.kind) {
+      case RecordedData::Kind::kImu:
+        prev_new = k.tag(d.imu[ev.index].t_s);
+        key[i] = prev_new;
+        break;
+      // Capped at the input's own time + kMaxRetimedLateness_s: a log is written in time-tag
+      // order, so with IMU tags early by tau (a negative offset) an epoch sits after the IMU
+      // sample of true time t + tau; kept there on the corrected clock it arrived tau late, and
+      // at tau = 0.4 s every epoch was older than the executive's max_gnss_age_s (0.25 s) at use:
+      // stale, no update at all (the corrected -400 ms flight, issue 26). The recording's order
+      // says nothing of a latency that large; its tags are what is being corrected.
+      case RecordedData::Kind::kGnss:
+        key[i] = std::min(std::max(gnss[ev.index].t_s, prev_new), gnss[ev.index].t_s + kMaxRetimedLateness_s);
+        break;
+      case RecordedData::Kind::kPvt:
+        key[i] = std::min(std::max(d.pvt[ev.index].t_s, prev_new), d.pvt[ev.index].t_s + kMaxRetimedLateness_s);
+        break;
+      case RecordedData::Kind::kAlmanac: key[i] = prev_key; break;
     }
-    std::vector<std::size_t> idx(d.order.size());
-    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = i;
-    // Ties: inputs that are not IMU samples after the sample (they arrived after it).
-    std::stable_sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
-      if (key[a] != key[b]) return key[a] < key[b];
-      return (d.order[a].kind == RecordedData::Kind::kImu) && (d.order[b].kind != RecordedData::Kind::kImu);
-    });
-    std::vector<RecordedData::Event> order;
-    order.reserve(idx.size());
-    for (std::size_t i : idx) order.push_back(d.order[i]);
-    d.order = std::move(order);
+    prev_key = key[i];
   }
+  std::vector<std::size_t> idx(in.size());
+  for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+  // Ties: inputs that are not IMU samples after the sample (they arrived after it).
+  std::stable_sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
+    if (key[a] != key[b]) return key[a] < key[b];
+    return (in[a].kind == RecordedData::Kind::kImu) && (in[b].kind != RecordedData::Kind::kImu);
+  });
+  std::vector<RecordedData::Event> order;
+  order.reserve(idx.size());
+  for (std::size_t i : idx) order.push_back(in[i]);
+  return order;
+}
+
+RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, double value, double t_ref_s) {
+  RecordedData d = data;
+  ImuCorrection k;
+  if (!fixed_effect_correction(c, value, t_ref_s, k)) return d;
+  if (k.retimed()) d.order = retimed_order(RecordingView{&data}, k);
+  for (fsw::ImuSample& s : d.imu) k.apply(s);
   return d;
 }
 
@@ -321,7 +345,7 @@ void read_profile(ProfileInterval& pi, const std::vector<double>& theta, const s
 }
 
 ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& model,
-                                 int cand, double x, double s, double level_z2) {
+                                 int cand, double x, double s, double level_z2, const ProfileReference* known) {
   ProfileInterval pi;
   const Candidate& c = diagnosis_candidates()[static_cast<std::size_t>(cand)];
   if (!profile_supported(c.effect) || !(s > 0.0) || !std::isfinite(x)) return pi;
@@ -334,8 +358,8 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
   // intervals that missed the truth). The model with the component estimated (the run that gave
   // x) gates once; its gated observations are left out of the data, and the profile runs, on
   // that fixed selection, are not gated.
-  const DiagnosisRun ref = run_diagnosis_model(data, cfg, model);
-  const RecordedData selected = without_observations(data, ref.gated, cfg.app.exec.nav_rate_hz);
+  const ProfileReference ref = known ? *known : ProfileReference::of(run_diagnosis_model(data, cfg, model));
+  const Selection selected = without_observations(data, ref.gated, cfg.app.exec.nav_rate_hz);
   DiagnosisConfig ungated = cfg;
   ungated.app.exec.ekf.gate_chi2 = std::numeric_limits<double>::max();
   pi.gated = static_cast<int>(ref.gated.size());
@@ -345,7 +369,7 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
   std::vector<double> theta;
   std::vector<Contributions> runs;
   const auto add = [&](const std::vector<double>& t) {
-    std::vector<Contributions> r = profile_runs(selected, ungated, model, cand, t, t_ref_s);
+    std::vector<Contributions> r = profile_runs(selected.view(), ungated, model, cand, t, t_ref_s);
     for (std::size_t i = 0; i < t.size(); ++i) {
       theta.push_back(t[i]);
       runs.push_back(std::move(r[i]));
@@ -388,7 +412,7 @@ ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig
     // slower than the GNSS epochs, phased by the initialisation time) leaves them few or none in
     // common, and a likelihood over nothing is flat. Then there is no profile (the filter's own
     // interval is kept), and no more runs are spent following a flat curve outward.
-    if (2 * static_cast<std::size_t>(pi.measurements) < ref.scalars.size()) return pi;
+    if (2 * static_cast<std::size_t>(pi.measurements) < ref.scalars) return pi;
     const double ll_max = *std::max_element(ll.begin(), ll.end());
     dev.assign(ll.size(), 0.0);
     for (std::size_t i = 0; i < ll.size(); ++i) dev[i] = 2.0 * (ll_max - ll[i]);
@@ -431,7 +455,8 @@ ProfileInterval profile_component(const RecordedData& data, const DiagnosisConfi
       filter_s = run.sigma[a];
     }
   if (!run.initialised) return {};
-  return profile_interval(data, cfg, model, cand, filter_x, filter_s);
+  const ProfileReference ref = ProfileReference::of(run);
+  return profile_interval(data, cfg, model, cand, filter_x, filter_s, kDeviance95, &ref);
 }
 
 namespace {
@@ -477,7 +502,7 @@ ReportedInterval reported_interval(const ProfileInterval& pi) {
 }
 
 void add_finding_intervals(DiagnosisResult& res, const RecordedData& data, const DiagnosisConfig& cfg,
-                           const std::function<void(const std::string&)>& progress) {
+                           const std::function<void(const std::string&)>& progress, const ProfileReferences& known) {
   const bool profile = cfg.profile_intervals && res.extended.initialised;
   // Every interval first as the filter's; the profile intervals are then independent jobs (a
   // finding, or a group member alone on top of the model at the lead's selection, where its alone
@@ -514,7 +539,9 @@ void add_finding_intervals(DiagnosisResult& res, const RecordedData& data, const
   }
   for_each_parallel(jobs.size(), [&](std::size_t i) {
     Job& j = jobs[i];
-    j.pi = profile_interval(data, cfg, j.model, j.cand, j.x, j.s);
+    const auto ref = known.find(j.model);
+    j.pi = profile_interval(data, cfg, j.model, j.cand, j.x, j.s, kDeviance95,
+                            ref == known.end() ? nullptr : &ref->second);
   });
   for (const Job& j : jobs) {
     if (progress) progress("interval: profile likelihood of " + j.what);

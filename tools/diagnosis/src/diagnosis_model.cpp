@@ -694,6 +694,12 @@ void final_estimates(const App& app, const DiagnosisConfig& cfg, DiagnosisRun& r
 
 DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
                              bool with_outages) {
+  return run_diagnosis_model(RecordingView{&data}, cfg, active, with_outages);
+}
+
+DiagnosisRun run_diagnosis_model(const RecordingView& view, const DiagnosisConfig& cfg, const std::vector<int>& active,
+                             bool with_outages) {
+  const RecordedData& data = *view.data;
   const std::vector<Candidate>& cands = diagnosis_candidates();
   DiagnosisRun run;
   run.active = active;
@@ -707,7 +713,7 @@ DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig
     run.prior_sigma[static_cast<std::size_t>(a)] = cfg.prior[static_cast<std::size_t>(cands[active[a]].effect)];
 
   RunScoring scoring(data, cfg, app, app_cfg.exec.nav_rate_hz, with_outages, run);
-  RecordedSource recording(data);
+  RecordedSource recording(view);
   auto inputs = fsw::filtered(recording, [&scoring](const fsw::InputEvent& in) { return scoring.keep(in); });
   auto observer = fsw::after_each([&scoring](const fsw::InputEvent& in, fsw::Status st, const fsw::FrameOutput& out) {
     scoring.score(in, st, out);

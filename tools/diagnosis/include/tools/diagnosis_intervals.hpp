@@ -11,7 +11,9 @@
 // {theta : 2 (l_max - l(theta)) <= 3.84} (chi-square, 1 dof), the estimate its maximum.
 #pragma once
 
+#include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -74,12 +76,34 @@ bool profile_supported(fsw::Effect e);
 /// units): what the flight software would see with that component calibrated out. t_ref_s: the
 /// reference time of the clock drift (IMU time; the offset at t_ref is unchanged).
 RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, double value, double t_ref_s);
+/// The same correction as samples pass (RecordingView::imu): false when c is not an IMU or timing
+/// effect (nothing to apply to the samples).
+bool fixed_effect_correction(const Candidate& c, double value, double t_ref_s, ImuCorrection& out);
+/// The arrival order of v's inputs on the clock that k corrects (with_fixed_effect's order).
+std::vector<RecordedData::Event> retimed_order(const RecordingView& v, const ImuCorrection& k);
+
+/// The deviance that bounds a 95% interval: the chi-square quantile of 1 degree of freedom.
+inline constexpr double kDeviance95 = 3.841458820694124;
+
+/// What a profile takes from the run of its model with the component estimated (its reference
+/// run, on the same data and configuration, without outages): the observations that run's gate
+/// rejected (the data selection the profile holds fixed) and how many scalars it used.
+struct ProfileReference {
+  std::vector<std::pair<std::uint64_t, std::uint8_t>> gated;
+  std::size_t scalars = 0;
+  static ProfileReference of(const DiagnosisRun& r) { return {r.gated, r.scalars.size()}; }
+};
+/// The references of the runs a diagnosis has already made, by model (its active candidates, in
+/// order): a profile of one of these models does not run it again.
+using ProfileReferences = std::map<std::vector<int>, ProfileReference>;
 
 /// The profile-likelihood interval of candidate `cand` in `model` (indices into
 /// diagnosis_candidates(); cand must be in model), started from the filter's estimate x and sigma
-/// s (catalogue units). level_z2: the deviance that bounds the interval (3.84 for 95%).
+/// s (catalogue units). level_z2: the deviance that bounds the interval (3.84 for 95%). ref: the
+/// model's reference run when it has been made already (nullptr: it is run here).
 ProfileInterval profile_interval(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& model,
-                                 int cand, double x, double s, double level_z2 = 3.841458820694124);
+                                 int cand, double x, double s, double level_z2 = kDeviance95,
+                                 const ProfileReference* ref = nullptr);
 
 /// A component's interval on top of a model whether or not it is a finding (`sdins diagnose
 /// --profile`): the model plus cand run once for the filter's estimate and sigma (returned in
@@ -94,8 +118,10 @@ int candidate_index(const std::string& name);
 /// Sets every finding's 95% interval: the filter's own (estimate +- 1.96 sigma), replaced for a
 /// separable finding by the profile-likelihood interval in the extended model (res.extended.active)
 /// when cfg.profile_intervals. Called by diagnose(); progress as there.
+/// known: the references of the runs already made on this data and cfg (diagnose()'s search).
 void add_finding_intervals(DiagnosisResult& res, const RecordedData& data, const DiagnosisConfig& cfg,
-                           const std::function<void(const std::string&)>& progress = {});
+                           const std::function<void(const std::string&)>& progress = {},
+                           const ProfileReferences& known = {});
 
 /// Sets each member's prior_z (from its profile maximum where the member's interval is a profile
 /// the filter agrees with, else from alone_estimate) and the group's plausibilities.

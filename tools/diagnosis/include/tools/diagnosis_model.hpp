@@ -58,19 +58,68 @@ struct RecordedData {
   void push(const fsw::InputEvent& ev);
 };
 
+/// One fixed component applied to the IMU samples as a run reads them (with_fixed_effect,
+/// tools/diagnosis_intervals.hpp): the compensation of fsw::ImuCompensation with that component
+/// set (its sign convention: the estimate is the error that is removed), and the tags re-timed for
+/// a clock offset or drift (sim::ImuModel tags at t (1 + drift) + offset; tag() restores t).
+struct ImuCorrection {
+  fsw::Mat3 Eg = fsw::Mat3::Zero(), Ea = fsw::Mat3::Zero();
+  fsw::Vec3 gs = fsw::Vec3::Zero();
+  double offset_s = 0.0, drift = 0.0, t_ref_s = 0.0;
+  bool retimed() const { return offset_s != 0.0 || drift != 0.0; }
+  double tag(double t_s) const { return t_s - offset_s - drift * (t_s - t_ref_s); }
+  void apply(fsw::ImuSample& s) const {
+    const fsw::Vec3 dth = s.dtheta_rad, dv = s.dv_mps;
+    s.dtheta_rad = dth - Eg * dth - gs.cwiseProduct(dv);
+    s.dv_mps = dv - Ea * dv;
+    s.t_s = tag(s.t_s);
+    s.dt_s = s.dt_s / (1.0 + drift);
+  }
+};
+
+/// What one run reads: a recording and, in place of its own, optionally another arrival order and
+/// other GNSS epochs (a data selection, a re-timed order), with its IMU samples corrected as they
+/// pass. Nothing of the recording is copied: a profile likelihood runs the model many times on
+/// the same 1800000 samples, each with its own correction.
+struct RecordingView {
+  const RecordedData* data = nullptr;
+  const std::vector<RecordedData::Event>* order = nullptr;  ///< nullptr: data->order
+  const std::vector<fsw::GnssRawEpoch>* gnss = nullptr;     ///< nullptr: data->gnss
+  const ImuCorrection* imu = nullptr;                       ///< nullptr: the samples as recorded
+
+  const std::vector<RecordedData::Event>& events() const { return order ? *order : data->order; }
+  const std::vector<fsw::GnssRawEpoch>& gnss_epochs() const { return gnss ? *gnss : data->gnss; }
+  /// RecordedData::input_event through the view.
+  void input_event(const RecordedData::Event& e, fsw::InputEvent& ev) const {
+    if (e.kind == RecordedData::Kind::kGnss && gnss) {
+      ev.kind = fsw::InputEvent::Kind::kGnssRaw;
+      ev.gnss = (*gnss)[e.index];
+      ev.t_s = ev.gnss.t_s;
+      return;
+    }
+    data->input_event(e, ev);
+    if (e.kind == RecordedData::Kind::kImu && imu) {
+      imu->apply(ev.imu);
+      ev.t_s = ev.imu.t_s;
+    }
+  }
+};
+
 /// A recording as an event source of the one driver (fsw/driver.hpp): its inputs in arrival order,
-/// one InputEvent filled per delivery (RecordedData::input_event).
+/// one InputEvent filled per delivery (RecordingView::input_event).
 class RecordedSource {
  public:
-  explicit RecordedSource(const RecordedData& d) : d_(d) {}
+  explicit RecordedSource(const RecordedData& d) : v_{&d} {}
+  explicit RecordedSource(const RecordingView& v) : v_(v) {}
   const fsw::InputEvent* next() {
-    if (k_ >= d_.order.size()) return nullptr;
-    d_.input_event(d_.order[k_++], ev_);
+    const std::vector<RecordedData::Event>& order = v_.events();
+    if (k_ >= order.size()) return nullptr;
+    v_.input_event(order[k_++], ev_);
     return &ev_;
   }
 
  private:
-  const RecordedData& d_;
+  RecordingView v_;
   std::size_t k_ = 0;
   fsw::InputEvent ev_{};
 };
@@ -219,6 +268,9 @@ struct DiagnosisRun {
 /// Runs the diagnosis model on the data with the given candidates active. with_outages: GNSS is
 /// withheld over the configured windows and the coasting error scored (needs truth).
 DiagnosisRun run_diagnosis_model(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
+                             bool with_outages = false);
+/// The same on a view of a recording (a selection, a correction applied as the samples pass).
+DiagnosisRun run_diagnosis_model(const RecordingView& data, const DiagnosisConfig& cfg, const std::vector<int>& active,
                              bool with_outages = false);
 
 /// Log-likelihood of both runs over the scalar measurements both used: fills a.innovations and
