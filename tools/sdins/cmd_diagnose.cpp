@@ -546,7 +546,7 @@ void search(Diagnosis& d) {
     r.findings = chain.findings;
     r.base = chain.first.base;
     tools::compare_likelihood(r.base, r.extended);
-    data = chain.corrected;
+    if (chain.recording_corrected) data = std::move(chain.corrected);
     cfg = chain.corrected_cfg;
   }
   tools::throw_if_interrupted("diagnose stopped; no output written");

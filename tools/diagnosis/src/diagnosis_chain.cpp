@@ -241,7 +241,7 @@ void apply_correction(RecordedData& data, DiagnosisConfig& cfg, int candidate, d
     cfg.app.exec.ekf.lever_arm_b_m(c.component) += value * fsw::effect_info(c.effect).unit_to_si;
     return;
   }
-  data = with_fixed_effect(data, c, value, drift_reference_time(data, cfg));
+  apply_fixed_effect(data, c, value, drift_reference_time(data, cfg));
 }
 
 /// The mounting from the direction of travel, on the recording initialised as the chain will
@@ -258,7 +258,7 @@ static void apply_mounting_from_travel(DiagnosisChain& ch, const RecordedData& d
 DiagnosisChain diagnose_chain(const RecordedData& data, const DiagnosisConfig& cfg,
                               const std::function<void(const std::string&)>& progress) {
   DiagnosisChain ch;
-  ch.corrected = data;
+  const RecordedData* searched = &data;  // the recording as corrected so far (ch.corrected once it is)
   ch.corrected_cfg = cfg;
   std::map<int, double> total;          // per candidate: applied so far
   std::map<int, Finding> last_found;    // per applied candidate: the last stage's finding, shifted
@@ -296,7 +296,7 @@ DiagnosisChain diagnose_chain(const RecordedData& data, const DiagnosisConfig& c
       }
       progress(prefix + "searching " + what);
     }
-    DiagnosisResult r = diagnose(ch.corrected, ch.corrected_cfg, [&](const std::string& m) {
+    DiagnosisResult r = diagnose(*searched, ch.corrected_cfg, [&](const std::string& m) {
       if (progress) progress(prefix + m);
     });
     st.findings = r.findings;
@@ -322,6 +322,12 @@ DiagnosisChain diagnose_chain(const RecordedData& data, const DiagnosisConfig& c
       if (!total.count(cand)) applied_order.push_back(cand);
       total[cand] = a.total;
       ch.applied.push_back(a);
+      if (diagnosis_candidates()[static_cast<std::size_t>(cand)].effect != Effect::kAntennaLeverArm &&
+          !ch.recording_corrected) {  // the first correction of the data itself: the copy it goes into
+        ch.corrected = data;
+        ch.recording_corrected = true;
+        searched = &ch.corrected;
+      }
       apply_correction(ch.corrected, ch.corrected_cfg, cand, pick.value);
     }
     ch.stages.push_back(st);

@@ -224,12 +224,16 @@ std::vector<RecordedData::Event> retimed_order(const RecordingView& v, const Imu
   return order;
 }
 
+void apply_fixed_effect(RecordedData& d, const Candidate& c, double value, double t_ref_s) {
+  ImuCorrection k;
+  if (!fixed_effect_correction(c, value, t_ref_s, k)) return;
+  if (k.retimed()) d.order = retimed_order(RecordingView{&d}, k);  // from the tags as recorded
+  for (fsw::ImuSample& s : d.imu) k.apply(s);
+}
+
 RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, double value, double t_ref_s) {
   RecordedData d = data;
-  ImuCorrection k;
-  if (!fixed_effect_correction(c, value, t_ref_s, k)) return d;
-  if (k.retimed()) d.order = retimed_order(RecordingView{&data}, k);
-  for (fsw::ImuSample& s : d.imu) k.apply(s);
+  apply_fixed_effect(d, c, value, t_ref_s);
   return d;
 }
 

@@ -94,7 +94,11 @@ struct DiagnosisChain {
   std::vector<std::string> vanished;
   DiagnosisResult first;   ///< stage 1: the search on the recording as given
   DiagnosisResult last;    ///< the last stage: on the corrected recording
-  RecordedData corrected;  ///< the recording with every timing correction applied
+  /// The recording with every timing correction applied, made when the first one is (a copy of a
+  /// 30-minute recording is 130 MB): empty while recording_corrected is false, when the recording
+  /// as given is the one every stage searched.
+  RecordedData corrected;
+  bool recording_corrected = false;
   DiagnosisConfig corrected_cfg;  ///< the configuration with every geometry correction applied
 };
 

@@ -76,6 +76,8 @@ bool profile_supported(fsw::Effect e);
 /// units): what the flight software would see with that component calibrated out. t_ref_s: the
 /// reference time of the clock drift (IMU time; the offset at t_ref is unchanged).
 RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, double value, double t_ref_s);
+/// The same in place.
+void apply_fixed_effect(RecordedData& data, const Candidate& c, double value, double t_ref_s);
 /// The same correction as samples pass (RecordingView::imu): false when c is not an IMU or timing
 /// effect (nothing to apply to the samples).
 bool fixed_effect_correction(const Candidate& c, double value, double t_ref_s, ImuCorrection& out);
