@@ -471,6 +471,48 @@ TEST(DiagnosisIntervals, ACorrectionAppliedAsSamplesPassIsTheRunOnACorrectedCopy
   }
 }
 
+// A profile's reference run (the model with the component estimated: its gated observations and
+// scalar count) is the run the search already made for that model (diagnose() keeps them): the
+// intervals are those of reference runs made afresh, for a separable finding (the extended
+// model's run) and for every member of a group (the step's run of the member alone).
+TEST(DiagnosisIntervals, ReusedReferenceRunsGiveTheIntervalsOfFreshOnes) {
+  if (kSanitized) GTEST_SKIP() << "a diagnosis of a 600 s flight: release stage";
+  sim::Scenario sc = baseline_scenario(600.0, 633);
+  ASSERT_EQ(sim::apply_effect_assignment(sc.effects, "accel_scale_factor.z=600"), "");
+  ASSERT_EQ(sim::apply_effect_assignment(sc.effects, "gyro_scale_factor.z=-400"), "");
+  const tools::RecordedData data = tools::record_scenario(sc, 633);
+  const tools::DiagnosisConfig cfg = tools::default_diagnosis_config();
+  const tools::DiagnosisResult r = tools::diagnose(data, cfg);
+  tools::DiagnosisResult fresh = r;  // the findings as they stood before their intervals
+  for (tools::Finding& f : fresh.findings) {
+    f.estimate = f.filter_estimate;
+    f.sigma = f.filter_sigma;
+  }
+  tools::add_finding_intervals(fresh, data, cfg, {}, {});
+  const auto same = [](const tools::ReportedInterval& a, const tools::ReportedInterval& b, const std::string& what) {
+    EXPECT_EQ(a.method, b.method) << what;
+    EXPECT_EQ(a.lo, b.lo) << what;
+    EXPECT_EQ(a.hi, b.hi) << what;
+    EXPECT_EQ(a.estimate, b.estimate) << what;
+    EXPECT_EQ(a.runs, b.runs) << what;
+    EXPECT_EQ(a.bounded, b.bounded) << what;
+    EXPECT_EQ(a.deviance_at_filter, b.deviance_at_filter) << what;
+  };
+  int separable = 0, members = 0;
+  ASSERT_EQ(fresh.findings.size(), r.findings.size());
+  for (std::size_t i = 0; i < r.findings.size(); ++i) {
+    const tools::Finding& f = r.findings[i];
+    same(f.interval, fresh.findings[i].interval, diagnosis_test::name_of(f));
+    if (f.separable() && f.interval.is_profile()) ++separable;
+    for (std::size_t k = 0; k < f.group.size(); ++k) {
+      same(f.group[k].alone_interval, fresh.findings[i].group[k].alone_interval, f.group[k].name);
+      if (f.group[k].alone_interval.is_profile()) ++members;
+    }
+  }
+  EXPECT_GE(separable, 1) << "no separable finding with a profile: the extended model's reference not exercised";
+  EXPECT_GE(members, 2) << "no group with profiles: the search steps' references not exercised";
+}
+
 // A reference without attitude (what `sdins import` writes from a GNSS solution: NaN attitude)
 // is kept for position and velocity; a broken one (NaN position) is counted.
 TEST(Diagnosis, LoadsAReferenceWithoutAttitudeAndCountsBrokenTruth) {
