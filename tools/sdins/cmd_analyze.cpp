@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "tools/output_file.hpp"
 #include "tools/analysis.hpp"
+#include "tools/parallel.hpp"
 
 namespace sdins {
 namespace {
@@ -156,10 +157,11 @@ std::vector<tools::BankTurnCase> analyze_bank_turn(const sim::Scenario& sc, doub
   // ---- Bank-to-turn ----
   std::printf("bank-to-turn (%s, %.0f s, each gyro misalignment alone at %.1f arcsec):\n", sc.name.c_str(),
               sc.duration_s, gamma_arcsec);
-  std::vector<tools::BankTurnCase> bcases;
-  for (std::size_t k = 0; k < 6; ++k) {
-    bcases.push_back(tools::run_bank_turn_case(sc, k, gamma_arcsec));
-    const tools::BankTurnCase& c = bcases.back();
+  // Six independent 1800 s flights: side by side, then written and printed in order.
+  std::vector<tools::BankTurnCase> bcases(6);
+  tools::for_each_parallel(bcases.size(), [&](std::size_t k) { bcases[k] = tools::run_bank_turn_case(sc, k, gamma_arcsec); });
+  for (std::size_t k = 0; k < bcases.size(); ++k) {
+    const tools::BankTurnCase& c = bcases[k];
     if (c.turn_end_t_s.empty()) throw std::runtime_error("the scenario completes no turn: nothing to analyse");
     write_out(out / ("bank_turn_" + c.component + ".csv"), [&](std::ostream& f) {
       f << "t_s,roll_deg,phi_E_arcsec,phi_N_arcsec,phi_U_arcsec\n";

@@ -7,7 +7,7 @@
 #include <map>
 #include <set>
 
-#include "tools/diagnosis_parallel.hpp"
+#include "tools/parallel.hpp"
 #include "tools/diagnosis_intervals.hpp"
 
 namespace tools {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <utility>
-#include "tools/diagnosis_parallel.hpp"
+#include "tools/parallel.hpp"
 
 namespace tools {
 namespace {

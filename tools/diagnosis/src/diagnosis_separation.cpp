@@ -10,7 +10,7 @@
 
 #include "sim/effects.hpp"
 #include "sim/trajectory.hpp"
-#include "tools/diagnosis_parallel.hpp"
+#include "tools/parallel.hpp"
 #include "tools/number_text.hpp"
 
 namespace tools {

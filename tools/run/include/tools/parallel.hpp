@@ -1,9 +1,11 @@
-// The diagnosis' one way of running independent flights side by side.
+// The tools' one way of running independent flights side by side (the Monte Carlo keeps its own
+// pool: tools/montecarlo.hpp).
 //
 // Every parallel step of the diagnosis (the search's candidate models, the track initialisation's
 // heading screen, the profile runs of an interval, the intervals of several findings, the
-// separation trials) is a list of independent jobs whose results go into their own slots in input
-// order: the outcome is the same whatever the number of threads or the order they finish in.
+// separation trials) and of the paper's analysis (its bank-to-turn flights) is a list of
+// independent jobs whose results go into their own slots in input order: the outcome is the same
+// whatever the number of threads or the order they finish in.
 #pragma once
 
 #include <algorithm>
