@@ -58,6 +58,16 @@ inline hal::LcmLogStatus open_log_only(hal::LcmLogSink& sink, const std::string&
   return sink.open(cfg);
 }
 
+/// Writes a log at path holding the IMU records make(0), ..., make(n - 1) in that order and
+/// nothing else. Call it under ASSERT_NO_FATAL_FAILURE.
+template <class Make>
+void write_imu_log(const std::string& path, int n, Make&& make) {
+  hal::LcmLogSink sink;
+  ASSERT_EQ(open_log_only(sink, path), hal::LcmLogStatus::kOk);
+  for (int k = 0; k < n; ++k) ASSERT_EQ(sink.write_imu(make(k)), hal::LcmLogStatus::kOk);
+  ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
+}
+
 /// The time tags of the inputs rd replays from the log at path (default replay settings), in the
 /// order delivered; rd's stats are then those of the whole log.
 inline std::vector<double> replayed_times(hal::LcmReplayReader& rd, const std::string& path) {

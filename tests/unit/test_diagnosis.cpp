@@ -412,7 +412,7 @@ TEST(DiagnosisIntervals, TimeOffsetProfileWithLateImuTagsIsUnbiasedInEitherInput
 
 // A profile run reads the recording through a view: the fixed component applied to each IMU
 // sample as it passes, the re-timed arrival order and the data selection standing in for the
-// recording's. Each run must be bit for bit the run on a corrected copy (with_fixed_effect), for
+// recording's. Each run must be bit for bit the run on a corrected copy (apply_fixed_effect), for
 // every kind of correction, re-timed ones in either direction included.
 TEST(DiagnosisIntervals, ACorrectionAppliedAsSamplesPassIsTheRunOnACorrectedCopy) {
   if (kSanitized) GTEST_SKIP() << "seven pairs of 150 s runs: release stage";
@@ -442,7 +442,8 @@ TEST(DiagnosisIntervals, ACorrectionAppliedAsSamplesPassIsTheRunOnACorrectedCopy
     for (const bool select : {false, true}) {
       tools::RecordedData copy = data;
       if (select) copy.gnss = selected_gnss;
-      const tools::DiagnosisRun a = tools::run_diagnosis_model(tools::with_fixed_effect(copy, cd, c.value, t_ref_s), cfg, model);
+      tools::apply_fixed_effect(copy, cd, c.value, t_ref_s);
+      const tools::DiagnosisRun a = tools::run_diagnosis_model(copy, cfg, model);
       tools::RecordingView v{&data};
       if (select) v.gnss = &selected_gnss;
       v.imu = &corr;

@@ -360,16 +360,11 @@ hal::ImuRecord imu_at(int k) {
 // The case: one far-ahead IMU time tag made the reorder logic drop the rest of the log.
 TEST(TimeTagGate, ReplayKeepsTheLogAfterOneFarAheadSample) {
   const std::string path = lcm_test::scratch("faults_far_ahead.lcmlog");
-  {
-    hal::LcmLogSink sink;
-    ASSERT_EQ(lcm_test::open_log_only(sink, path), hal::LcmLogStatus::kOk);
-    for (int k = 0; k < 2000; ++k) {
-      hal::ImuRecord r = imu_at(k);
-      if (k == 400) r.sample.t_s += 50.0;  // 50 s ahead
-      ASSERT_EQ(sink.write_imu(r), hal::LcmLogStatus::kOk);
-    }
-    ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
-  }
+  ASSERT_NO_FATAL_FAILURE(lcm_test::write_imu_log(path, 2000, [](int k) {
+    hal::ImuRecord r = imu_at(k);
+    if (k == 400) r.sample.t_s += 50.0;  // 50 s ahead
+    return r;
+  }));
   hal::LcmReplayReader rd;
   const std::vector<double> t = lcm_test::replayed_times(rd, path);
   EXPECT_EQ(t.size(), 1999u);  // every good sample

@@ -403,14 +403,11 @@ TEST(LcmReplay, SinkWritesEncodedMessagesStampedWithNavigationTime) {
 // window's). max_imu_samples is exact for a log of IMU samples alone.
 TEST(LcmReplay, EqualTimeTagsKeepTheirWrittenOrderAndTheImuBoundIsExact) {
   const std::string path = lcm_test::scratch("replay_ties.lcmlog");
-  hal::LcmLogSink sink;
-  ASSERT_EQ(lcm_test::open_log_only(sink, path), hal::LcmLogStatus::kOk);
-  for (int k = 0; k < 2500; ++k) {
+  ASSERT_NO_FATAL_FAILURE(lcm_test::write_imu_log(path, 2500, [](int k) {
     hal::ImuRecord r = imu_at(k);
     r.sample.t_s = 0.01 * (k / 10);  // ten samples to a time tag, told apart by their counters
-    ASSERT_EQ(sink.write_imu(r), hal::LcmLogStatus::kOk);
-  }
-  ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
+    return r;
+  }));
   EXPECT_EQ(hal::max_imu_samples(std::filesystem::file_size(path), hal::kLcmChannelImu), 2500u);
   hal::LcmReplayReader rd;
   hal::LcmReplayConfig rc;

@@ -12,7 +12,7 @@ namespace {
 
 using fsw::Effect;
 
-/// A re-timed GNSS input arrives at most this long after its own time (with_fixed_effect).
+/// A re-timed GNSS input arrives at most this long after its own time (apply_fixed_effect).
 constexpr double kMaxRetimedLateness_s = 0.05;
 
 /// A run's log-likelihood contributions, sorted by measurement key, and when it initialised.
@@ -229,12 +229,6 @@ void apply_fixed_effect(RecordedData& d, const Candidate& c, double value, doubl
   if (!fixed_effect_correction(c, value, t_ref_s, k)) return;
   if (k.retimed()) d.order = retimed_order(RecordingView{&d}, k);  // from the tags as recorded
   for (fsw::ImuSample& s : d.imu) k.apply(s);
-}
-
-RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, double value, double t_ref_s) {
-  RecordedData d = data;
-  apply_fixed_effect(d, c, value, t_ref_s);
-  return d;
 }
 
 /// The parabola y = A t^2 + B t + C through three points (a minimum only where A > 0).

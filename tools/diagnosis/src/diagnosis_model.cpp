@@ -288,28 +288,30 @@ bool load_recorded_data(const std::string& path, RecordedData& out, std::string&
   return true;
 }
 
-void RecordedData::input_event(const Event& e, fsw::InputEvent& ev) const {
+void RecordingView::input_event(const RecordedData::Event& e, fsw::InputEvent& ev) const {
+  using Kind = RecordedData::Kind;
   switch (e.kind) {
     case Kind::kAlmanac:
       ev.kind = fsw::InputEvent::Kind::kAlmanac;
       ev.t_s = 0.0;
-      ev.almanac = almanac[e.index];
+      ev.almanac = data->almanac[e.index];
       return;
     case Kind::kImu:
       ev.kind = fsw::InputEvent::Kind::kImu;
-      ev.imu = imu[e.index];
+      ev.imu = data->imu[e.index];
+      if (imu) imu->apply(ev.imu);
       ev.t_s = ev.imu.t_s;
       ev.imu_counter = -1;
       ev.imu_status = 0;
       return;
     case Kind::kGnss:
       ev.kind = fsw::InputEvent::Kind::kGnssRaw;
-      ev.gnss = gnss[e.index];
+      ev.gnss = gnss_epochs()[e.index];
       ev.t_s = ev.gnss.t_s;
       return;
     case Kind::kPvt:
       ev.kind = fsw::InputEvent::Kind::kGnssPvt;
-      ev.pvt = pvt[e.index];
+      ev.pvt = data->pvt[e.index];
       ev.t_s = ev.pvt.t_s;
       return;
   }

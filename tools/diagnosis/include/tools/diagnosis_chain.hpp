@@ -3,7 +3,7 @@
 // A timing or geometry finding (the IMU-GNSS time offset, the IMU clock drift, an antenna lever
 // arm component) changes what every other component sees: a 0.2 s offset on an aircraft makes a
 // lever arm and an accelerometer scale factor look significant. So after each such finding the
-// diagnosis applies it, exactly, to the data (the IMU re-timed: with_fixed_effect) or to the model
+// diagnosis applies it, exactly, to the data (the IMU re-timed: apply_fixed_effect) or to the model
 // (the configured antenna moved), at the profile likelihood's maximum (the large values are not
 // taken from the linearised state), and searches again from the corrected recording. The most
 // significant timing/geometry finding of a stage is applied; a finding is reported only if the

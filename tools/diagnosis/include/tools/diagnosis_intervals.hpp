@@ -72,16 +72,14 @@ ReportedInterval reported_interval(const ProfileInterval& pi);
 /// True when a component can be held fixed at a value (every effect except the delay scales).
 bool profile_supported(fsw::Effect e);
 
-/// The data with a component of an IMU or timing effect applied as a known correction (catalogue
+/// Applies a component of an IMU or timing effect to the data in place as a known correction (catalogue
 /// units): what the flight software would see with that component calibrated out. t_ref_s: the
 /// reference time of the clock drift (IMU time; the offset at t_ref is unchanged).
-RecordedData with_fixed_effect(const RecordedData& data, const Candidate& c, double value, double t_ref_s);
-/// The same in place.
 void apply_fixed_effect(RecordedData& data, const Candidate& c, double value, double t_ref_s);
 /// The same correction as samples pass (RecordingView::imu): false when c is not an IMU or timing
 /// effect (nothing to apply to the samples).
 bool fixed_effect_correction(const Candidate& c, double value, double t_ref_s, ImuCorrection& out);
-/// The arrival order of v's inputs on the clock that k corrects (with_fixed_effect's order).
+/// The arrival order of v's inputs on the clock that k corrects (apply_fixed_effect's order).
 std::vector<RecordedData::Event> retimed_order(const RecordingView& v, const ImuCorrection& k);
 
 /// The deviance that bounds a 95% interval: the chi-square quantile of 1 degree of freedom.

@@ -30,8 +30,8 @@ using sim::TruthPoint;
 
 /// A recording in memory, in arrival order: the inputs of the flight software and, separately,
 /// truth (used only to score navigation). Stored by type (an fsw::InputEvent is about 1 KiB, an
-/// IMU sample 64 B) with an index of the arrival order; input_event() gives the flight
-/// application's input type for one entry of the order.
+/// IMU sample 64 B) with an index of the arrival order; RecordingView::input_event gives the
+/// flight application's input type for one entry of the order.
 struct RecordedData {
   enum class Kind : std::uint8_t { kAlmanac, kImu, kGnss, kPvt };
   struct Event {
@@ -51,14 +51,11 @@ struct RecordedData {
   int damaged_stretches = 0;                ///< IMU holes > kDamagedImuGap_s (exclude_damaged_stretches)
   std::uint64_t excluded_imu_samples = 0;   ///< IMU samples outside the stretch kept
 
-  /// Fills ev (kind, t_s and that kind's payload; the other payloads are left as they are) with the
-  /// input of e. An almanac element's t_s is 0 (the recording keeps no receive time for it).
-  void input_event(const Event& e, fsw::InputEvent& ev) const;
-  /// Appends ev's payload to its array and its entry to the order (the inverse of input_event).
+  /// Appends ev's payload to its array and its entry to the order (the inverse of RecordingView::input_event).
   void push(const fsw::InputEvent& ev);
 };
 
-/// One fixed component applied to the IMU samples as a run reads them (with_fixed_effect,
+/// One fixed component applied to the IMU samples as a run reads them (apply_fixed_effect,
 /// tools/diagnosis_intervals.hpp): the compensation of fsw::ImuCompensation with that component
 /// set (its sign convention: the estimate is the error that is removed), and the tags re-timed for
 /// a clock offset or drift (sim::ImuModel tags at t (1 + drift) + offset; tag() restores t).
@@ -89,20 +86,10 @@ struct RecordingView {
 
   const std::vector<RecordedData::Event>& events() const { return order ? *order : data->order; }
   const std::vector<fsw::GnssRawEpoch>& gnss_epochs() const { return gnss ? *gnss : data->gnss; }
-  /// RecordedData::input_event through the view.
-  void input_event(const RecordedData::Event& e, fsw::InputEvent& ev) const {
-    if (e.kind == RecordedData::Kind::kGnss && gnss) {
-      ev.kind = fsw::InputEvent::Kind::kGnssRaw;
-      ev.gnss = (*gnss)[e.index];
-      ev.t_s = ev.gnss.t_s;
-      return;
-    }
-    data->input_event(e, ev);
-    if (e.kind == RecordedData::Kind::kImu && imu) {
-      imu->apply(ev.imu);
-      ev.t_s = ev.imu.t_s;
-    }
-  }
+  /// Fills ev (kind, t_s and that kind's payload; the other payloads are left as they are) with the
+  /// input of e as this view gives it. An almanac element's t_s is 0 (the recording keeps no
+  /// receive time for it).
+  void input_event(const RecordedData::Event& e, fsw::InputEvent& ev) const;
 };
 
 /// A recording as an event source of the one driver (fsw/driver.hpp): its inputs in arrival order,
