@@ -171,6 +171,15 @@ Status Ekf<Layout>::accumulate(const FrameIncrement& inc, const NavState& nav) {
 }
 
 template <class Layout>
+void EkfTransition<Layout>::set_dead_states(const std::array<bool, N>& dead) {
+  every_column_ = true;
+  for (int c = 0; c < kNavCols; ++c) {
+    dead_col_[static_cast<std::size_t>(c)] = dead[static_cast<std::size_t>(c)];
+    if (dead[static_cast<std::size_t>(c)]) every_column_ = false;
+  }
+}
+
+template <class Layout>
 void EkfTransition<Layout>::flush() {
   if (sub_frames_ == 0) return;
   const double T = sub_T_;
@@ -179,10 +188,22 @@ void EkfTransition<Layout>::flush() {
   A.noalias() += 0.5 * FT.lazyProduct(FT);  // coefficient-based: no GEMM blocking (alloca/malloc)
 
   // Phi_nav <- A Phi_nav + (I + FT / 2) B, B the integrated sensor-error columns of the
-  // navigation rows (sparse: added block by block, never formed). top_ is member scratch.
+  // navigation rows (sparse: added block by block, never formed). top_ is member scratch. A dead
+  // state's column (set_dead_states) is neither formed nor copied: it keeps the zero of reset().
+  // Each element of a formed column is the same sum, in the same order, as in the whole block's
+  // product. One function with branches, not two instantiations: a separate every-column path
+  // cost the Cortex-M7 image's sub-step frame 680 instructions (docs/baremetal-qemu.md).
   const Mat9 half = Mat9::Identity() + 0.5 * FT;
   constexpr int K = EkfTransition<Layout>::kNavCols;  // columns K.. of phi_nav_ and top_ stay zero
-  top_.template leftCols<K>().noalias() = A.lazyProduct(phi_nav_.template leftCols<K>());
+  if (every_column_) {
+    top_.template leftCols<K>().noalias() = A.lazyProduct(phi_nav_.template leftCols<K>());
+  } else {
+    for (int c = 0; c < K; ++c)
+      if (live_column(c))
+        top_.col(c).noalias() = A.lazyProduct(phi_nav_.col(c));
+      else
+        top_.col(c).setZero();  // the sums below add to it, and it is not copied
+  }
   if constexpr (Layout::has(Block::kAccelBias)) {
     top_.template middleCols<3>(Layout::offset(Block::kAccelBias)).noalias() +=
         half.template middleCols<3>(3).lazyProduct(sum_C_dt_);
@@ -217,7 +238,12 @@ void EkfTransition<Layout>::flush() {
     constexpr int o = Layout::offset(Block::kGyroGSens);
     for (int i = 0; i < 3; ++i) top_.col(o + i).noalias() -= half.template middleCols<3>(6).lazyProduct(sum_C_dv_.col(4 * i));
   }
-  phi_nav_.template leftCols<K>() = top_.template leftCols<K>();
+  if (every_column_) {
+    phi_nav_.template leftCols<K>() = top_.template leftCols<K>();
+  } else {
+    for (int c = 0; c < K; ++c)
+      if (live_column(c)) phi_nav_.col(c) = top_.col(c);
+  }
 
   interval_s_ += T;
   clear_substep();
@@ -267,14 +293,18 @@ template <class Layout>
 void Ekf<Layout>::index_live_states() {
   n_live_ = 0;
   n_runs_ = 0;
+  n_nav_live_ = 0;
   for (int i = 0; i < N; ++i) {
-    if (!dense_loops_ && dead_[static_cast<std::size_t>(i)]) continue;
+    skipped_[static_cast<std::size_t>(i)] = skipped(i);
+    if (skipped(i)) continue;
+    if (i < EkfTransition<Layout>::kNavCols) nav_live_[static_cast<std::size_t>(n_nav_live_++)] = i;
     ++n_live_;
     if (n_runs_ > 0 && runs_[static_cast<std::size_t>(n_runs_ - 1)].end == i)
       ++runs_[static_cast<std::size_t>(n_runs_ - 1)].end;
     else
       runs_[static_cast<std::size_t>(n_runs_++)] = LiveRun{i, i + 1};
   }
+  trans_.set_dead_states(skipped_);
 }
 
 template <class Layout>
@@ -294,6 +324,7 @@ Status Ekf<Layout>::propagate() {
 template <class Layout>
 Status Ekf<Layout>::propagate(EkfTransition<Layout>& t) {
   if (!initialised_) return Status::kNotInitialised;
+  t.set_dead_states(skipped_);  // the next interval of an executive's accumulator, this one's last sub-step
   t.flush();
   const double T = t.interval_s();
   if (t.frames() > 0) last_f_enu_mps2_ = t.last_f_enu_mps2();
@@ -324,18 +355,11 @@ Status Ekf<Layout>::propagate(EkfTransition<Layout>& t) {
     // (nav_driven_columns()), so both products stop there. Written out column by column, each
     // element summed over k = 0, 1, ... in order: what Eigen's product does at these sizes, so the
     // results are the same bits, whatever inner size Eigen would see (it sums a short fixed-size
-    // row as a tree).
-    for (int j = 0; j < N; ++j) {
-      Eigen::Matrix<double, 9, 1> acc = Phi_.template block<9, 1>(0, 0) * P_(0, j);
-      for (int k = 1; k < K; ++k) acc += Phi_.template block<9, 1>(0, k) * P_(k, j);
-      PhiP.template block<9, 1>(0, j) = acc;
-    }
-    for (int i = 9; i < N; ++i) PhiP.row(i) = Phi_(i, i) * P_.row(i);
-    PhiP.row(oc) += Phi_(oc, oc + 1) * P_.row(oc + 1);
-    for (int j = 0; j < 9; ++j) {
-      P_.col(j) = PhiP.col(0) * Phi_(j, 0);
-      for (int k = 1; k < K; ++k) P_.col(j) += PhiP.col(k) * Phi_(j, k);
-    }
+    // row as a tree). With dead states, k runs over the live columns only (nav_live_).
+    if (n_nav_live_ == K)
+      nav_products(PhiP, [](int c) { return c; }, K);
+    else
+      nav_products(PhiP, [this](int c) { return nav_live_[static_cast<std::size_t>(c)]; }, n_nav_live_);
   } else {
     PhiP.template topRows<9>().noalias() = Phi_.template topRows<9>().lazyProduct(P_);
     for (int i = 9; i < N; ++i) PhiP.row(i) = Phi_(i, i) * P_.row(i);
@@ -386,6 +410,33 @@ Status Ekf<Layout>::propagate(EkfTransition<Layout>& t) {
   clock_bias_m_ += clock_drift_mps_ * T;
   last_Phi_ = Phi_;
   return Status::kOk;
+}
+
+template <class Layout>
+template <class Column>
+void Ekf<Layout>::nav_products(Mat& PhiP, Column column, int n) {
+  // Why a dead column k may be left out with the same bits: P's row and column k are +0, so its
+  // terms are zeros, and each sum has met its own diagonal's term (k = i < 9, before every dead k)
+  // by then: +0 or non-zero, after which adding a zero changes no bit. The second product's dead
+  // columns of PhiP are +0 (sums of such zeros) and meet P's diagonal term (k = j < 9) first too.
+  constexpr int oc = Layout::offset(Block::kClock);
+  for (int j = 0; j < N; ++j) {
+    Eigen::Matrix<double, 9, 1> acc = Phi_.template block<9, 1>(0, 0) * P_(0, j);
+    for (int c = 1; c < n; ++c) {
+      const int k = column(c);
+      acc += Phi_.template block<9, 1>(0, k) * P_(k, j);
+    }
+    PhiP.template block<9, 1>(0, j) = acc;
+  }
+  for (int i = 9; i < N; ++i) PhiP.row(i) = Phi_(i, i) * P_.row(i);
+  PhiP.row(oc) += Phi_(oc, oc + 1) * P_.row(oc + 1);
+  for (int j = 0; j < 9; ++j) {
+    P_.col(j) = PhiP.col(0) * Phi_(j, 0);
+    for (int c = 1; c < n; ++c) {
+      const int k = column(c);
+      P_.col(j) += PhiP.col(k) * Phi_(j, k);
+    }
+  }
 }
 
 template <class Layout>

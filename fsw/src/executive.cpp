@@ -22,8 +22,10 @@ template <class Layout>
 void NavGroup<Layout>::reset(const ExecutiveConfig& cfg) {
   comp_ = ImuCompensation{};
   substep_frames_ = cfg.ekf.propagation_substep_frames;
-  transition_[0].reset(substep_frames_);
-  transition_[1].reset(substep_frames_);
+  for (EkfTransition<Layout>& t : transition_) {
+    t.set_dead_states({});  // every column until the filter's first propagate() names its dead states
+    t.reset(substep_frames_);
+  }
   acc_ = 0;
   have_last_sample_ = false;
   rate_window_frames_ = std::max(1, static_cast<int>(std::lround(cfg.nav_rate_hz)));

@@ -6,8 +6,10 @@
 // covariance repair, and a dead state brought back to life by a new covariance.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "fsw/ekf.hpp"
@@ -54,14 +56,21 @@ fsw::GnssEpoch epoch_at(const sim::TruthSample& t) {
   return ep;
 }
 
-/// Flies a and b side by side over truth from t0 to t1 (1 Hz updates, corrections taken); false
-/// at the first epoch whose filters differ in a bit.
-bool fly_side_by_side(Ekf& a, Ekf& b, double t0, double t1, int& epochs) {
+struct Frame {
+  fsw::FrameIncrement inc;
+  fsw::NavState nav;
+  sim::TruthSample truth;  ///< at the frame's end
+};
+
+/// The navigation frames (increments, the INS solution and the truth at their end) of the default
+/// flight from t0 to t1, mechanized from a few metres off and with a gyro bias the filter can see.
+std::vector<Frame> frames_of(double t0, double t1) {
   sim::Scenario sc;
   sc.duration_s = t1 + 1.0;
   std::string err;
   auto motion = sim::FlightMotion::create(sc, err);
-  if (!motion) return false;
+  std::vector<Frame> out;
+  if (!motion) return out;
   sim::TruthGenerator gen(*motion, 1000.0);
   while (gen.current().t_s < t0 - 1e-9) gen.next();
   fsw::Strapdown ins;
@@ -73,7 +82,6 @@ bool fly_side_by_side(Ekf& a, Ekf& b, double t0, double t1, int& epochs) {
   ins.init(nav0);
   fsw::FrameBuilder fb;
   fb.configure(5);
-  int frames = 0;
   while (gen.current().t_s < t1 - 1e-9) {
     const sim::TruthSample& t = gen.next();
     fsw::ImuSample s;
@@ -83,15 +91,27 @@ bool fly_side_by_side(Ekf& a, Ekf& b, double t0, double t1, int& epochs) {
     s.dv_mps = t.dv_mps;
     if (fb.add(s) != fsw::Status::kOk) continue;
     ins.step(fb.frame());
-    a.accumulate(fb.frame(), ins.state());
-    b.accumulate(fb.frame(), ins.state());
-    if (++frames % 200 != 0) continue;
+    out.push_back({fb.frame(), ins.state(), t});
+  }
+  return out;
+}
+
+/// Flies a and b side by side over truth from t0 to t1 (1 Hz updates, corrections taken); false
+/// at the first epoch whose filters differ in a bit.
+bool fly_side_by_side(Ekf& a, Ekf& b, double t0, double t1, int& epochs) {
+  const std::vector<Frame> frames = frames_of(t0, t1);
+  if (frames.empty()) return false;
+  int n = 0;
+  for (const Frame& f : frames) {
+    a.accumulate(f.inc, f.nav);
+    b.accumulate(f.inc, f.nav);
+    if (++n % 200 != 0) continue;
     a.propagate();
     b.propagate();
-    const fsw::GnssEpoch ep = epoch_at(t);
+    const fsw::GnssEpoch ep = epoch_at(f.truth);
     fsw::EkfUpdateReport ra, rb;
-    a.update(ep, ins.state(), t.omega_ib_b_radps, ra);
-    b.update(ep, ins.state(), t.omega_ib_b_radps, rb);
+    a.update(ep, f.nav, f.truth.omega_ib_b_radps, ra);
+    b.update(ep, f.nav, f.truth.omega_ib_b_radps, rb);
     Ekf::Vec xa, xb;
     a.take_correction(xa);
     b.take_correction(xb);
@@ -101,7 +121,55 @@ bool fly_side_by_side(Ekf& a, Ekf& b, double t0, double t1, int& epochs) {
   return true;
 }
 
+bool same_column(const fsw::EkfTransition<LayoutDiag>& a, const fsw::EkfTransition<LayoutDiag>& b, int c) {
+  return std::memcmp(a.phi_nav().col(c).data(), b.phi_nav().col(c).data(), sizeof(double) * 9) == 0;
+}
+
 }  // namespace
+
+// The transition forms only the live states' columns of the navigation rows: each one the same
+// bits as with every column formed, the dead ones exactly zero. A state brought back to life in the
+// middle of an interval enters at the sub-step in progress: its column is the one of an interval
+// that starts at that sub-step.
+TEST(EkfDeadStates, TheTransitionFormsTheLiveColumnsWithTheSameBits) {
+  const std::vector<Frame> frames = frames_of(60.0, 61.05);  // a turn: every sensor column driven
+  ASSERT_GE(frames.size(), 200u);
+  std::array<bool, N> dead{};
+  const int ogm = LayoutDiag::offset(Block::kGyroMisalign), oas = LayoutDiag::offset(Block::kAccelScale);
+  const int ogs = LayoutDiag::offset(Block::kGyroGSens);
+  for (int i : {ogm + 1, ogm + 4, oas + 2, ogs, ogs + 1, ogs + 2, LayoutDiag::offset(Block::kIonoScale)})
+    dead[static_cast<std::size_t>(i)] = true;
+  constexpr int K = fsw::EkfTransition<LayoutDiag>::kNavCols;
+  static fsw::EkfTransition<LayoutDiag> every, live, revived, late;
+  live.set_dead_states(dead);
+  revived.set_dead_states(dead);
+  for (auto* t : {&every, &live, &revived, &late}) t->reset(10);
+  for (int f = 0; f < 200; ++f) {
+    const Frame& fr = frames[static_cast<std::size_t>(f)];
+    if (f == 25) revived.set_dead_states({});  // in the third sub-step (frames 20-29)
+    if (f >= 20) ASSERT_EQ(late.accumulate(fr.inc, fr.nav), fsw::Status::kOk);
+    for (auto* t : {&every, &live, &revived}) ASSERT_EQ(t->accumulate(fr.inc, fr.nav), fsw::Status::kOk);
+  }
+  for (auto* t : {&every, &live, &revived, &late}) t->flush();
+  int formed = 0;
+  for (int c = 0; c < K; ++c) {
+    ASSERT_TRUE(every.phi_nav().col(c).cwiseAbs().maxCoeff() > 0.0) << "column " << c << " is not driven";
+    if (!dead[static_cast<std::size_t>(c)]) {
+      EXPECT_TRUE(same_column(live, every, c)) << "column " << c;
+      EXPECT_TRUE(same_column(revived, every, c)) << "column " << c;
+      ++formed;
+      continue;
+    }
+    for (int r = 0; r < 9; ++r) {
+      EXPECT_EQ(live.phi_nav()(r, c), 0.0);
+      EXPECT_FALSE(std::signbit(live.phi_nav()(r, c)));
+    }
+    EXPECT_TRUE(same_column(revived, late, c)) << "column " << c;
+    EXPECT_FALSE(same_column(revived, every, c)) << "column " << c;
+  }
+  EXPECT_EQ(formed, K - 6);
+  EXPECT_EQ(live.interval_s(), every.interval_s());
+}
 
 TEST(EkfDeadStates, SkippingThemGivesTheDenseLoopsBitsInATurningFlight) {
   fsw::EkfConfig cfg;

@@ -220,6 +220,12 @@ class EkfTransition {
   Status accumulate(const FrameIncrement& inc, const NavState& nav);
   /// Closes the sub-step in progress, so phi_nav() and interval_s() cover every accumulated frame.
   void flush();
+  /// The filter's dead states (Ekf::live_states): their columns of the navigation rows are not
+  /// formed from the next sub-step on and stay zero, for the filter multiplies them with rows of P
+  /// that are +0 (the same bits: Ekf::propagate). Ekf::propagate() sets them on the interval it is
+  /// given; the default, and an all-false dead, forms every column. Kept by reset(). A state that
+  /// comes back to life enters at the next sub-step: its column misses the sub-steps before.
+  void set_dead_states(const std::array<bool, N>& dead);
 
   const NavRows& phi_nav() const { return phi_nav_; }  ///< rows 0..8 of Phi (flushed frames)
   double interval_s() const { return interval_s_; }    ///< time covered by phi_nav()
@@ -228,6 +234,7 @@ class EkfTransition {
 
  private:
   void clear_substep();  ///< empties the sub-step sums
+  bool live_column(int c) const { return !dead_col_[static_cast<std::size_t>(c)]; }
   int substep_frames_ = 10;
   int frames_ = 0;
   NavRows phi_nav_ = NavRows::Identity();
@@ -241,6 +248,8 @@ class EkfTransition {
   Eigen::Matrix<double, 3, 9> sum_C_dv_ = Eigen::Matrix<double, 3, 9>::Zero();   ///< col 3i+j: sum C(:,i) dv_j
   Eigen::Matrix<double, 3, 9> sum_C_dth_ = Eigen::Matrix<double, 3, 9>::Zero();  ///< col 3i+j: sum C(:,i) dtheta_j
   NavState last_nav_{};  ///< the solution at the end of the last frame (linearisation point of a sub-step)
+  std::array<bool, kNavCols> dead_col_{};  ///< set_dead_states(), the navigation-driven columns
+  bool every_column_ = true;               ///< no dead column: the products over the whole block
 };
 
 /// What telemetry reads of the filter after one epoch of the 1 Hz group (hal's EKF_STATE message),
@@ -309,7 +318,9 @@ class Ekf {
   void output(double t_s, EkfOutput<Layout>& out) const;
 
   /// Replaces the covariance (restoring a saved filter, tests); symmetrised and checked like every
-  /// epoch's (a non-positive-definite P is repaired and counted). kBadInput for NaN/Inf.
+  /// epoch's (a non-positive-definite P is repaired and counted). kBadInput for NaN/Inf. A dead
+  /// state it revives enters the transition at the next sub-step (EkfTransition::set_dead_states):
+  /// exact right after a propagate(), before the next frame.
   Status set_covariance(const Mat& P);
 
   /// Dead states: sensor or extension states started with zero variance and driven by no noise
@@ -363,6 +374,10 @@ class Ekf {
   void track_consistency(const EkfUpdateReport& report);
   /// The white-noise spectral densities per state (velocity, attitude, bias random walks).
   Vec white_noise_psd() const;
+  /// propagate()'s two products with the navigation rows (PhiP's and P's first nine columns), over
+  /// the n navigation-driven columns column(0), column(1), ... (ascending, column(0) = 0).
+  template <class Column>
+  void nav_products(Mat& PhiP, Column column, int n);
   /// Marks the dead states after init() (live_states()) and indexes the others.
   void find_dead_states();
   /// The runs of consecutive live states from dead_ (and dense_loops_).
@@ -428,6 +443,11 @@ class Ekf {
   };
   std::array<LiveRun, N> runs_{};
   int n_runs_ = 0;
+  /// The live navigation-driven columns (below EkfTransition::kNavCols, ascending): the inner index
+  /// of propagate()'s products. With all of them live, propagate() passes the identity instead.
+  std::array<int, EkfTransition<Layout>::kNavCols> nav_live_{};
+  int n_nav_live_ = 0;
+  std::array<bool, N> skipped_{};  ///< skipped(i) for every i: what propagate() tells a transition
   std::span<const LiveRun> live_runs() const { return {runs_.data(), static_cast<std::size_t>(n_runs_)}; }
   Vec3 last_f_enu_mps2_ = Vec3::Zero();  ///< specific force of the last frame of the last interval, ENU
   double clock_bias_m_ = 0.0;
