@@ -3,7 +3,9 @@
 // symmetrisation and the definiteness check leave them out. The filter must give the same bits as
 // with the dense loops (set_dense_covariance_loops) on a flight that exercises every path: the
 // transition through a turn, raw GNSS updates with channels bound and released, the feedback, a
-// covariance repair, and a dead state brought back to life by a new covariance.
+// covariance repair, and a dead state brought back to life by a new covariance. The transition
+// leaves the dead states' columns out (EkfTransition::set_dead_states) with the same bits, and an
+// executive configured again forms the columns of its new filter.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "fsw/ekf.hpp"
+#include "fsw/executive.hpp"
 #include "fsw/gnss.hpp"
 #include "fsw/strapdown.hpp"
 #include "sim/scenario.hpp"
@@ -121,6 +124,53 @@ bool fly_side_by_side(Ekf& a, Ekf& b, double t0, double t1, int& epochs) {
   return true;
 }
 
+/// The raw IMU samples of the default flight from t0 to t1 (with the gyro bias of frames_of) and
+/// the truth at each.
+void samples_of(double t0, double t1, std::vector<fsw::ImuSample>& imu, std::vector<sim::TruthSample>& truth) {
+  sim::Scenario sc;
+  sc.duration_s = t1 + 1.0;
+  std::string err;
+  auto motion = sim::FlightMotion::create(sc, err);
+  if (!motion) return;
+  sim::TruthGenerator gen(*motion, 1000.0);
+  while (gen.current().t_s < t0 - 1e-9) gen.next();
+  truth.push_back(gen.current());
+  while (gen.current().t_s < t1 - 1e-9) {
+    const sim::TruthSample& t = gen.next();
+    fsw::ImuSample s;
+    s.t_s = t.t_s;
+    s.dt_s = t.dt_s;
+    s.dtheta_rad = t.dtheta_rad + Vec3(2e-9, -1e-9, 3e-9);
+    s.dv_mps = t.dv_mps;
+    imu.push_back(s);
+    truth.push_back(t);
+  }
+}
+
+/// Ticks exec over the samples (five a frame, an epoch_at() at every whole second) and returns
+/// the filter's P and x after each landed epoch, one after the other.
+std::vector<double> fly_executive(fsw::Executive<LayoutDiag>& exec, const std::vector<fsw::ImuSample>& imu,
+                                  const std::vector<sim::TruthSample>& truth) {
+  std::vector<double> trace;
+  fsw::FrameOutput out;
+  fsw::GnssEpoch ep;
+  for (std::size_t k = 0; k + 5 <= imu.size(); k += 5) {
+    fsw::FrameInput in;
+    in.imu = &imu[k];
+    in.n_imu = 5;
+    const sim::TruthSample& t = truth[k + 5];
+    if (std::abs(t.t_s - std::round(t.t_s)) < 1e-6) {
+      ep = epoch_at(t);
+      in.gnss = &ep;
+    }
+    if (exec.tick(in, out) != fsw::Status::kOk) return {};
+    if (!out.ekf_ran) continue;
+    trace.insert(trace.end(), exec.ekf().P().data(), exec.ekf().P().data() + N * N);
+    trace.insert(trace.end(), exec.ekf().x().data(), exec.ekf().x().data() + N);
+  }
+  return trace;
+}
+
 bool same_column(const fsw::EkfTransition<LayoutDiag>& a, const fsw::EkfTransition<LayoutDiag>& b, int c) {
   return std::memcmp(a.phi_nav().col(c).data(), b.phi_nav().col(c).data(), sizeof(double) * 9) == 0;
 }
@@ -169,6 +219,36 @@ TEST(EkfDeadStates, TheTransitionFormsTheLiveColumnsWithTheSameBits) {
   }
   EXPECT_EQ(formed, K - 6);
   EXPECT_EQ(live.interval_s(), every.interval_s());
+}
+
+// An executive configured again with a filter that has fewer dead states forms the columns its
+// new filter needs from the first frame: it flies the bits of a new executive.
+TEST(EkfDeadStates, AnExecutiveConfiguredAgainFormsTheColumnsOfItsNewFilter) {
+  std::vector<fsw::ImuSample> imu;
+  std::vector<sim::TruthSample> truth;
+  samples_of(60.0, 66.0, imu, truth);
+  ASSERT_EQ(imu.size(), 6000u);
+  fsw::ExecutiveConfig frozen, live;
+  frozen.ekf.lever_arm_sigma_m = live.ekf.lever_arm_sigma_m = 0.5;
+  frozen.ekf.time_offset_sigma_s = live.ekf.time_offset_sigma_s = 0.01;
+  const int ogm = LayoutDiag::offset(Block::kGyroMisalign), oas = LayoutDiag::offset(Block::kAccelScale);
+  frozen.ekf.frozen_states = (std::uint64_t{1} << (ogm + 1)) | (std::uint64_t{1} << (ogm + 4)) | (std::uint64_t{1} << (oas + 2));
+  fsw::NavState nav0;
+  nav0.t_s = truth.front().t_s;
+  nav0.llh = truth.front().llh + fsw::llh_delta_from_enu(truth.front().llh, Vec3(3.0, -2.0, 1.0));
+  nav0.vel_enu_mps = truth.front().vel_enu_mps + Vec3(0.1, 0.05, -0.02);
+  nav0.q_b_n = fsw::Quat(truth.front().C_b_n);
+  static fsw::Executive<LayoutDiag> again, fresh;  // 66-state filters: not on the test's stack
+  ASSERT_EQ(again.init(frozen, nav0), fsw::Status::kOk);
+  ASSERT_EQ(fly_executive(again, imu, truth).size(), 5u * (N * N + N));  // its transitions skip three columns
+  ASSERT_EQ(again.ekf().live_states(), N - 9);
+  ASSERT_EQ(again.init(live, nav0), fsw::Status::kOk);
+  ASSERT_EQ(fresh.init(live, nav0), fsw::Status::kOk);
+  EXPECT_EQ(again.ekf().live_states(), N - 6);
+  const std::vector<double> a = fly_executive(again, imu, truth), f = fly_executive(fresh, imu, truth);
+  ASSERT_EQ(a.size(), 5u * (N * N + N));
+  ASSERT_EQ(a.size(), f.size());
+  EXPECT_EQ(std::memcmp(a.data(), f.data(), sizeof(double) * a.size()), 0);
 }
 
 TEST(EkfDeadStates, SkippingThemGivesTheDenseLoopsBitsInATurningFlight) {
