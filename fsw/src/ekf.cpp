@@ -295,7 +295,6 @@ void Ekf<Layout>::index_live_states() {
   n_runs_ = 0;
   n_nav_live_ = 0;
   for (int i = 0; i < N; ++i) {
-    skipped_[static_cast<std::size_t>(i)] = skipped(i);
     if (skipped(i)) continue;
     if (i < EkfTransition<Layout>::kNavCols) nav_live_[static_cast<std::size_t>(n_nav_live_++)] = i;
     ++n_live_;
@@ -304,7 +303,7 @@ void Ekf<Layout>::index_live_states() {
     else
       runs_[static_cast<std::size_t>(n_runs_++)] = LiveRun{i, i + 1};
   }
-  trans_.set_dead_states(skipped_);
+  trans_.set_dead_states(skipped_states());
 }
 
 template <class Layout>
@@ -324,7 +323,7 @@ Status Ekf<Layout>::propagate() {
 template <class Layout>
 Status Ekf<Layout>::propagate(EkfTransition<Layout>& t) {
   if (!initialised_) return Status::kNotInitialised;
-  t.set_dead_states(skipped_);  // the next interval of an executive's accumulator, this one's last sub-step
+  t.set_dead_states(skipped_states());  // the next interval of an executive's accumulator, this one's last sub-step
   t.flush();
   const double T = t.interval_s();
   if (t.frames() > 0) last_f_enu_mps2_ = t.last_f_enu_mps2();

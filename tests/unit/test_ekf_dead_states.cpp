@@ -65,36 +65,55 @@ struct Frame {
   sim::TruthSample truth;  ///< at the frame's end
 };
 
-/// The navigation frames (increments, the INS solution and the truth at their end) of the default
-/// flight from t0 to t1, mechanized from a few metres off and with a gyro bias the filter can see.
-std::vector<Frame> frames_of(double t0, double t1) {
+/// The raw IMU samples of the default flight from t0 to t1, with a gyro bias the filter can see,
+/// and the truth at t0 and at each sample (truth[k + 1] is imu[k]'s).
+void samples_of(double t0, double t1, std::vector<fsw::ImuSample>& imu, std::vector<sim::TruthSample>& truth) {
   sim::Scenario sc;
   sc.duration_s = t1 + 1.0;
   std::string err;
   auto motion = sim::FlightMotion::create(sc, err);
-  std::vector<Frame> out;
-  if (!motion) return out;
+  if (!motion) return;
   sim::TruthGenerator gen(*motion, 1000.0);
   while (gen.current().t_s < t0 - 1e-9) gen.next();
-  fsw::Strapdown ins;
-  fsw::NavState nav0;
-  nav0.t_s = gen.current().t_s;
-  nav0.llh = gen.current().llh + fsw::llh_delta_from_enu(gen.current().llh, Vec3(3.0, -2.0, 1.0));
-  nav0.vel_enu_mps = gen.current().vel_enu_mps + Vec3(0.1, 0.05, -0.02);
-  nav0.q_b_n = fsw::Quat(gen.current().C_b_n);
-  ins.init(nav0);
-  fsw::FrameBuilder fb;
-  fb.configure(5);
+  truth.push_back(gen.current());
   while (gen.current().t_s < t1 - 1e-9) {
     const sim::TruthSample& t = gen.next();
     fsw::ImuSample s;
     s.t_s = t.t_s;
     s.dt_s = t.dt_s;
-    s.dtheta_rad = t.dtheta_rad + Vec3(2e-9, -1e-9, 3e-9);  // a gyro bias the filter can see
+    s.dtheta_rad = t.dtheta_rad + Vec3(2e-9, -1e-9, 3e-9);
     s.dv_mps = t.dv_mps;
-    if (fb.add(s) != fsw::Status::kOk) continue;
+    imu.push_back(s);
+    truth.push_back(t);
+  }
+}
+
+/// The INS's start: the truth a few metres and decimetres per second off.
+fsw::NavState initial_nav(const sim::TruthSample& t) {
+  fsw::NavState nav0;
+  nav0.t_s = t.t_s;
+  nav0.llh = t.llh + fsw::llh_delta_from_enu(t.llh, Vec3(3.0, -2.0, 1.0));
+  nav0.vel_enu_mps = t.vel_enu_mps + Vec3(0.1, 0.05, -0.02);
+  nav0.q_b_n = fsw::Quat(t.C_b_n);
+  return nav0;
+}
+
+/// The navigation frames (increments, the INS solution and the truth at their end) of the default
+/// flight from t0 to t1, mechanized from initial_nav() over samples_of().
+std::vector<Frame> frames_of(double t0, double t1) {
+  std::vector<fsw::ImuSample> imu;
+  std::vector<sim::TruthSample> truth;
+  samples_of(t0, t1, imu, truth);
+  std::vector<Frame> out;
+  if (truth.empty()) return out;
+  fsw::Strapdown ins;
+  ins.init(initial_nav(truth.front()));
+  fsw::FrameBuilder fb;
+  fb.configure(5);
+  for (std::size_t k = 0; k < imu.size(); ++k) {
+    if (fb.add(imu[k]) != fsw::Status::kOk) continue;
     ins.step(fb.frame());
-    out.push_back({fb.frame(), ins.state(), t});
+    out.push_back({fb.frame(), ins.state(), truth[k + 1]});
   }
   return out;
 }
@@ -122,29 +141,6 @@ bool fly_side_by_side(Ekf& a, Ekf& b, double t0, double t1, int& epochs) {
     if (!same_bits(a, b)) return false;
   }
   return true;
-}
-
-/// The raw IMU samples of the default flight from t0 to t1 (with the gyro bias of frames_of) and
-/// the truth at each.
-void samples_of(double t0, double t1, std::vector<fsw::ImuSample>& imu, std::vector<sim::TruthSample>& truth) {
-  sim::Scenario sc;
-  sc.duration_s = t1 + 1.0;
-  std::string err;
-  auto motion = sim::FlightMotion::create(sc, err);
-  if (!motion) return;
-  sim::TruthGenerator gen(*motion, 1000.0);
-  while (gen.current().t_s < t0 - 1e-9) gen.next();
-  truth.push_back(gen.current());
-  while (gen.current().t_s < t1 - 1e-9) {
-    const sim::TruthSample& t = gen.next();
-    fsw::ImuSample s;
-    s.t_s = t.t_s;
-    s.dt_s = t.dt_s;
-    s.dtheta_rad = t.dtheta_rad + Vec3(2e-9, -1e-9, 3e-9);
-    s.dv_mps = t.dv_mps;
-    imu.push_back(s);
-    truth.push_back(t);
-  }
 }
 
 /// Ticks exec over the samples (five a frame, an epoch_at() at every whole second) and returns
@@ -233,11 +229,7 @@ TEST(EkfDeadStates, AnExecutiveConfiguredAgainFormsTheColumnsOfItsNewFilter) {
   frozen.ekf.time_offset_sigma_s = live.ekf.time_offset_sigma_s = 0.01;
   const int ogm = LayoutDiag::offset(Block::kGyroMisalign), oas = LayoutDiag::offset(Block::kAccelScale);
   frozen.ekf.frozen_states = (std::uint64_t{1} << (ogm + 1)) | (std::uint64_t{1} << (ogm + 4)) | (std::uint64_t{1} << (oas + 2));
-  fsw::NavState nav0;
-  nav0.t_s = truth.front().t_s;
-  nav0.llh = truth.front().llh + fsw::llh_delta_from_enu(truth.front().llh, Vec3(3.0, -2.0, 1.0));
-  nav0.vel_enu_mps = truth.front().vel_enu_mps + Vec3(0.1, 0.05, -0.02);
-  nav0.q_b_n = fsw::Quat(truth.front().C_b_n);
+  const fsw::NavState nav0 = initial_nav(truth.front());
   static fsw::Executive<LayoutDiag> again, fresh;  // 66-state filters: not on the test's stack
   ASSERT_EQ(again.init(frozen, nav0), fsw::Status::kOk);
   ASSERT_EQ(fly_executive(again, imu, truth).size(), 5u * (N * N + N));  // its transitions skip three columns

@@ -385,6 +385,9 @@ class Ekf {
   /// The live states' correlations into the top-left n_live_ x n_live_ lower triangle of work_.
   void gather_live_correlations(const Vec& d);
   bool skipped(int i) const { return !dense_loops_ && dead_[static_cast<std::size_t>(i)]; }
+  /// skipped(i) for every i: the dead states a transition is told (none with the dense loops).
+  const std::array<bool, N>& skipped_states() const { return dense_loops_ ? kNoneDead : dead_; }
+  static constexpr std::array<bool, N> kNoneDead{};
 
   // The raw GNSS aid (fsw/src/ekf/aid_gnss_raw.cpp).
   /// Observation: each satellite's prediction from the antenna (valid[k] false and the record
@@ -447,7 +450,6 @@ class Ekf {
   /// of propagate()'s products. With all of them live, propagate() passes the identity instead.
   std::array<int, EkfTransition<Layout>::kNavCols> nav_live_{};
   int n_nav_live_ = 0;
-  std::array<bool, N> skipped_{};  ///< skipped(i) for every i: what propagate() tells a transition
   std::span<const LiveRun> live_runs() const { return {runs_.data(), static_cast<std::size_t>(n_runs_)}; }
   Vec3 last_f_enu_mps2_ = Vec3::Zero();  ///< specific force of the last frame of the last interval, ENU
   double clock_bias_m_ = 0.0;
