@@ -1,8 +1,10 @@
 // CAN protocol codec: bit-exact round trips, quantization bounds, residual carry, range handling.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <random>
 #include <vector>
 
 #include "fsw/gps_orbit.hpp"
@@ -33,6 +35,37 @@ std::vector<fsw::GpsAlmanac> default_almanac() {
 TEST(CanProtocol, Crc16CcittFalseCheckValue) {
   const char* s = "123456789";
   EXPECT_EQ(crc16_ccitt(reinterpret_cast<const std::uint8_t*>(s), 9), 0x29B1);
+}
+
+// The definition bit by bit (the register shifted through the polynomial once per message bit),
+// against the byte-table implementation: every length of a CAN FD payload, random bytes, and the
+// continuation from a running CRC (frame_crc continues from the identifier's two bytes).
+std::uint16_t crc16_ccitt_bitwise(const std::uint8_t* data, int n, std::uint16_t crc) {
+  for (int i = 0; i < n; ++i)
+    for (int b = 7; b >= 0; --b) {
+      const bool top = ((crc >> 15) ^ (data[i] >> b)) & 1u;
+      crc = static_cast<std::uint16_t>(crc << 1);
+      if (top) crc ^= 0x1021u;
+    }
+  return crc;
+}
+
+TEST(CanProtocol, Crc16TableMatchesTheBitwiseDefinition) {
+  std::mt19937 rng(20261207);
+  std::array<std::uint8_t, 64> buf{};
+  for (int trial = 0; trial < 2000; ++trial) {
+    for (auto& b : buf) b = static_cast<std::uint8_t>(rng());
+    const int n = static_cast<int>(rng() % 65);
+    const auto start = static_cast<std::uint16_t>(trial == 0 ? 0xFFFFu : rng());
+    ASSERT_EQ(crc16_ccitt(buf.data(), n, start), crc16_ccitt_bitwise(buf.data(), n, start)) << "trial " << trial;
+  }
+  // A single flipped bit anywhere in a 48-byte IMU payload changes the CRC.
+  const std::uint16_t ref = crc16_ccitt(buf.data(), 48);
+  for (int bit = 0; bit < 48 * 8; ++bit) {
+    buf[static_cast<std::size_t>(bit / 8)] ^= static_cast<std::uint8_t>(1u << (bit % 8));
+    EXPECT_NE(crc16_ccitt(buf.data(), 48), ref) << "bit " << bit;
+    buf[static_cast<std::size_t>(bit / 8)] ^= static_cast<std::uint8_t>(1u << (bit % 8));
+  }
 }
 
 TEST(CanProtocol, DlcTable) {
