@@ -109,27 +109,41 @@ const char* to_string(CodecStatus s) {
 
 namespace {
 
-// CRC-16/CCITT-FALSE a byte at a time: entry b is the register's change for the top byte b shifted
-// through the eight polynomial steps (the bitwise definition, evaluated here at compile time).
-// Every IMU sample is sealed by the simulator and checked by the receiver: the bitwise loop was
-// 61 % of a SIL run (docs/performance.md); the table gives the same CRC in an eighth of the work.
-constexpr std::array<std::uint16_t, 256> crc16_ccitt_table() {
-  std::array<std::uint16_t, 256> t{};
+// CRC-16/CCITT-FALSE eight bytes at a time ("slicing by 8"). Table 0, entry b: the register's
+// change for the top byte b shifted through the eight polynomial steps (the bitwise definition,
+// evaluated here at compile time); table k: byte b followed by k zero bytes. The CRC is linear, so
+// eight bytes from register c are the sum of each byte's table entry for the bytes after it, with
+// c folded into the first two bytes. Every IMU sample is sealed by the simulator and checked by
+// the receiver: bit by bit this was 61 % of a SIL run (docs/performance.md).
+using Crc16Tables = std::array<std::array<std::uint16_t, 256>, 8>;
+constexpr Crc16Tables crc16_ccitt_tables() {
+  Crc16Tables t{};
   for (unsigned b = 0; b < 256; ++b) {
     std::uint16_t crc = static_cast<std::uint16_t>(b << 8);
     for (int k = 0; k < 8; ++k)
       crc = (crc & 0x8000u) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021u) : static_cast<std::uint16_t>(crc << 1);
-    t[b] = crc;
+    t[0][b] = crc;
   }
+  for (std::size_t k = 1; k < 8; ++k)
+    for (unsigned b = 0; b < 256; ++b) {
+      const std::uint16_t r = t[k - 1][b];
+      t[k][b] = static_cast<std::uint16_t>((r << 8) ^ t[0][r >> 8]);
+    }
   return t;
 }
-constexpr std::array<std::uint16_t, 256> kCrc16CcittTable = crc16_ccitt_table();
+constexpr Crc16Tables kCrc16 = crc16_ccitt_tables();
 
 }  // namespace
 
 std::uint16_t crc16_ccitt(const std::uint8_t* data, int n, std::uint16_t crc) {
-  for (int i = 0; i < n; ++i)
-    crc = static_cast<std::uint16_t>((crc << 8) ^ kCrc16CcittTable[((crc >> 8) ^ data[i]) & 0xFFu]);
+  int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    const std::uint8_t* d = data + i;
+    crc = static_cast<std::uint16_t>(kCrc16[7][d[0] ^ (crc >> 8)] ^ kCrc16[6][d[1] ^ (crc & 0xFFu)] ^ kCrc16[5][d[2]] ^
+                                     kCrc16[4][d[3]] ^ kCrc16[3][d[4]] ^ kCrc16[2][d[5]] ^ kCrc16[1][d[6]] ^
+                                     kCrc16[0][d[7]]);
+  }
+  for (; i < n; ++i) crc = static_cast<std::uint16_t>((crc << 8) ^ kCrc16[0][((crc >> 8) ^ data[i]) & 0xFFu]);
   return crc;
 }
 

@@ -38,8 +38,8 @@ TEST(CanProtocol, Crc16CcittFalseCheckValue) {
 }
 
 // The definition bit by bit (the register shifted through the polynomial once per message bit),
-// against the byte-table implementation: every length of a CAN FD payload, random bytes, and the
-// continuation from a running CRC (frame_crc continues from the identifier's two bytes).
+// against the table implementation (eight bytes at a time, then byte by byte): every length of a
+// CAN FD payload, random bytes, and the continuation from a running CRC (frame_crc continues from the identifier's two bytes).
 std::uint16_t crc16_ccitt_bitwise(const std::uint8_t* data, int n, std::uint16_t crc) {
   for (int i = 0; i < n; ++i)
     for (int b = 7; b >= 0; --b) {
