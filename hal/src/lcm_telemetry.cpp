@@ -40,6 +40,8 @@ LcmLogStatus LcmTelemetry::open(const LcmTelemetryConfig& cfg) {
   published_ = 0;
   send_failures_ = 0;
   warned_log_ = false;
+  network_used_ = false;
+  network_given_up_ = false;
   if (!cfg.log_path.empty()) {
     const LcmLogStatus st = log_.open(cfg.log_path);
     if (st != LcmLogStatus::kOk) return st;
@@ -47,6 +49,7 @@ LcmLogStatus LcmTelemetry::open(const LcmTelemetryConfig& cfg) {
   url_ = resolve_lcm_url(cfg.lcm_url);
   if (url_ == "none") return LcmLogStatus::kOk;
   lcm_ = lcm_create(url_.c_str());
+  network_used_ = lcm_ != nullptr;
   if (lcm_ == nullptr) {
     warn("LCM telemetry: cannot create '" + url_ + "' (LCM needs a multicast route; on an isolated loopback: " +
          "ip route add 224.0.0.0/4 dev lo); continuing " + (log_active() ? "with the log file only" : "without telemetry"));
@@ -68,6 +71,7 @@ LcmLogStatus LcmTelemetry::publish(const char* channel, const void* data, std::s
              "'; giving up the network and continuing " + (log_active() ? "with the log file only" : "without telemetry"));
         lcm_destroy(lcm_);
         lcm_ = nullptr;
+        network_given_up_ = true;
       }
     }
   }

@@ -117,6 +117,9 @@ void expect_nav_solution_received(const std::string& url, const std::string& log
   EXPECT_GE(sink.telemetry().published(), 1u);
   EXPECT_EQ(sink.telemetry().send_failures(), 0u);
   ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
+  EXPECT_FALSE(sink.telemetry().network_active());
+  EXPECT_TRUE(sink.telemetry().network_used());  // what the end-of-run report says
+  EXPECT_FALSE(sink.telemetry().network_given_up());
   lcm_unsubscribe(rx, sub);
   lcm_destroy(rx);
   // The log got every published message too.
@@ -166,6 +169,7 @@ TEST(LcmTelemetry, FallsBackToLogOnlyWithOneWarningWhenUdpmCannotBeCreated) {
   EXPECT_EQ(w.messages.size(), 1u);  // warned once
   EXPECT_EQ(sink.telemetry().published(), 0u);
   ASSERT_EQ(sink.close(), hal::LcmLogStatus::kOk);
+  EXPECT_FALSE(sink.telemetry().network_used());
   hal::LcmLogReader r;
   ASSERT_EQ(r.open(log), hal::LcmLogStatus::kOk);
   hal::LcmLogEvent ev;
@@ -188,6 +192,29 @@ TEST(LcmTelemetry, NoneMeansNoNetworkAndNoWarning) {
   const std::uint8_t b[3] = {1, 2, 3};
   EXPECT_EQ(tel.publish("X", b, 3, 0), hal::LcmLogStatus::kOk);
   EXPECT_EQ(tel.publish("", b, 3, 0), hal::LcmLogStatus::kBadChannel);
+  EXPECT_FALSE(tel.network_used());
+}
+
+// The end-of-run report is printed after the node closed its sink: network_used() keeps saying
+// that the run published to the network (network_active() is false by then). memq:// is LCM's
+// in-process provider, so this runs on any host; reopening with "none" resets it.
+TEST(LcmTelemetry, NetworkUsedOutlivesCloseForTheReport) {
+  hal::LcmTelemetry tel;
+  hal::LcmTelemetryConfig cfg;
+  cfg.lcm_url = "memq://";
+  ASSERT_EQ(tel.open(cfg), hal::LcmLogStatus::kOk);
+  ASSERT_TRUE(tel.network_active());
+  const std::uint8_t b[3] = {1, 2, 3};
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(tel.publish("X", b, 3, 0), hal::LcmLogStatus::kOk);
+  EXPECT_EQ(tel.published(), 4u);
+  ASSERT_EQ(tel.close(), hal::LcmLogStatus::kOk);
+  EXPECT_FALSE(tel.network_active());
+  EXPECT_TRUE(tel.network_used());
+  EXPECT_FALSE(tel.network_given_up());
+  EXPECT_EQ(tel.published(), 4u);
+  cfg.lcm_url = "none";
+  ASSERT_EQ(tel.open(cfg), hal::LcmLogStatus::kOk);
+  EXPECT_FALSE(tel.network_used());
 }
 
 TEST(LcmTelemetry, LogThatCannotBeCreatedIsAnError) {
@@ -262,6 +289,8 @@ TEST(LcmNetns, LoopbackRouteMakesUdpmWorkAndLosingItFallsBackToLogOnly) {
   ASSERT_EQ(lcm_test::run("ip route del 224.0.0.0/4 dev lo && ip link set lo down"), 0);
   for (int k = 0; k < 20; ++k) ASSERT_EQ(sink.write_nav(some_nav(), true, false), hal::LcmLogStatus::kOk);
   EXPECT_FALSE(sink.telemetry().network_active());
+  EXPECT_TRUE(sink.telemetry().network_used());
+  EXPECT_TRUE(sink.telemetry().network_given_up());
   EXPECT_EQ(sink.telemetry().send_failures(), 5u);
   ASSERT_EQ(w.messages.size(), 1u);
   EXPECT_NE(w.messages[0].find("giving up the network"), std::string::npos) << w.messages[0];

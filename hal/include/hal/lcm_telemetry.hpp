@@ -57,7 +57,14 @@ class LcmTelemetry {
   /// Drops the log file being written (its target keeps its old contents).
   void abort_log() { log_.abort(); }
 
+  /// The network instance is open now (false after close() and once the network was given up).
   bool network_active() const { return lcm_ != nullptr; }
+  /// The run's telemetry went to the network: open() created the LCM instance. Stays true after
+  /// close(), for the end-of-run report (network_active() alone said "off" there, after the
+  /// node's close, although every message had been sent).
+  bool network_used() const { return network_used_; }
+  /// The network was given up after max_consecutive_send_failures failed sends in a row.
+  bool network_given_up() const { return network_given_up_; }
   bool log_active() const { return log_.is_open(); }
   /// The URL in use (after resolve_lcm_url), or "none".
   const std::string& url() const { return url_; }
@@ -78,6 +85,8 @@ class LcmTelemetry {
   std::uint64_t published_ = 0;
   std::uint64_t send_failures_ = 0;
   bool warned_log_ = false;
+  bool network_used_ = false;
+  bool network_given_up_ = false;
   WarningHandler warn_fn_ = nullptr;
   void* warn_user_ = nullptr;
 };

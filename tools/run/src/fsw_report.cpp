@@ -89,7 +89,7 @@ json fsw_summary_json(const hal::FswNode& node) {
                       {"p99_us", t.p99_us},          {"max_us", t.max_us},    {"slips", e.ekf_slips},
                       {"late", e.ekf_late},          {"lockstep_waits", g.waits}, {"lockstep_wait_max_s", g.wait_max_s}};
   }
-  j["telemetry"] = {{"network", tel.network_active()}, {"url", tel.url()},         {"published", tel.published()},
+  j["telemetry"] = {{"network", tel.network_used()}, {"network_given_up", tel.network_given_up()}, {"url", tel.url()},         {"published", tel.published()},
                     {"logged", tel.logged()},          {"send_failures", tel.send_failures()},
                     {"log_failures", tel.log_failures()}};
   return j;
@@ -101,6 +101,14 @@ void print_configuration_warnings(const fsw::ExecutiveHealth& e) {
                 "off 1 s of IMU time: imu_samples_per_frame does not match the IMU's rate, and the rates derived "
                 "from nav_rate_hz are wrong (docs/faults.md)\n",
                 e.frame_rate_mismatch);
+}
+
+std::string telemetry_network_text(const hal::LcmTelemetry& tel) {
+  if (tel.url() == "none") return "network off (lcm url 'none')";
+  if (!tel.network_used()) return "network unavailable on " + tel.url() + " (log only)";
+  if (tel.network_given_up())
+    return tel.url() + " (network given up after " + std::to_string(tel.send_failures()) + " failed sends)";
+  return tel.url();
 }
 
 void print_fsw_summary(const hal::FswNode& node) {
@@ -137,8 +145,7 @@ void print_fsw_summary(const hal::FswNode& node) {
                 "used/gated %u/%u\n",
                 e.pvt_received, e.pvt_stale, e.pvt_replaced, e.pvt_unused, e.pos_used, e.pos_rejected, e.vel_used,
                 e.vel_rejected);
-  std::printf("telemetry: %s, %llu published, %llu logged\n",
-              tel.network_active() ? tel.url().c_str() : "network off (log only)",
+  std::printf("telemetry: %s, %llu published, %llu logged\n", telemetry_network_text(tel).c_str(),
               static_cast<unsigned long long>(tel.published()), static_cast<unsigned long long>(tel.logged()));
 }
 

@@ -491,7 +491,7 @@ void read_final_counts(FswRunResult& r, const hal::FswNode& node, const hal::Can
   if (r.end_received)
     r.counts_match_end = r.last_ack.imu_frames == r.end.imu_samples && r.last_ack.frames == r.end.frames;
   const hal::LcmTelemetry& t = node.sink().telemetry();
-  r.lcm_network = t.network_active();
+  r.lcm_network = t.network_used();
   r.lcm_published = t.published();
   r.lcm_send_failures = t.send_failures();
   r.lcm_logged = t.logged();

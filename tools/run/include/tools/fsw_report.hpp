@@ -12,7 +12,8 @@ namespace tools {
 
 /// initialised, init_t_s, nav_frames, digest (16 hex digits), last_nav {t_s, lat_deg, lon_deg,
 /// height_m, vel_enu_mps}, app (flight app counters), executive (executive and EKF health),
-/// telemetry (network, url, published, logged, send/log failures).
+/// telemetry (network: the run published to the LCM network, network_given_up, url, published,
+/// logged, send/log failures).
 nlohmann::json fsw_summary_json(const hal::FswNode& node);
 /// The parts of it, for summaries that hold copies rather than the node (tools/hil.hpp).
 nlohmann::json last_nav_json(const fsw::NavState& n);
@@ -22,6 +23,9 @@ nlohmann::json executive_json(const fsw::ExecutiveHealth& e);
 nlohmann::json can_rx_json(const hal::CanRxHealth& h);
 /// The digest as 16 lower-case hex digits.
 std::string digest_hex(std::uint64_t d);
+/// The telemetry line's network part: the URL the run published to (and whether it was given up
+/// after failed sends), or why it published to none.
+std::string telemetry_network_text(const hal::LcmTelemetry& tel);
 /// Prints the summary's key lines to stdout.
 void print_fsw_summary(const hal::FswNode& node);
 /// A WARNING line per configuration mismatch the counters show (frame_rate_mismatch), none when clean.
