@@ -3,6 +3,8 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -24,9 +26,14 @@ struct TruthTrack::Progress {
   std::atomic<long long> ready{0};    ///< samples published to readers
   mutable std::atomic<bool> stop{false};
   std::atomic<bool> stopped{false};   ///< fill() returned before the end: waits past ready fail
+  // Windowed: the reader's release and fill()'s wait for it (rare: only when the integration is a
+  // whole window ahead), under a mutex so that neither a release nor a stop is missed.
+  mutable std::mutex released_mutex;
+  mutable std::condition_variable released_cv;
+  mutable long long released = 0;     ///< under released_mutex
 };
 
-TruthTrack TruthTrack::prepare(const Scenario& sc) {
+TruthTrack TruthTrack::prepare(const Scenario& sc, long long window) {
   std::string err;
   auto p = std::make_shared<Progress>();
   p->motion = FlightMotion::create(sc, err);
@@ -34,10 +41,19 @@ TruthTrack TruthTrack::prepare(const Scenario& sc) {
   TruthTrack tt;
   tt.samples_per_epoch = imu_samples_per_epoch(sc);
   const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
-  tt.imu.resize(static_cast<std::size_t>(n));
-  tt.epochs.resize(static_cast<std::size_t>(n / tt.samples_per_epoch + 1));
+  tt.samples = n;
+  if (window < 0 || (window > 0 && window < 2 * kPublishSamples))
+    throw std::runtime_error("truth track window " + std::to_string(window) + " samples: must be 0 (whole) or at least " +
+                             std::to_string(2 * kPublishSamples));
+  tt.window = window > 0 && window < n ? window : 0;
+  // A windowed ring of epochs holds every epoch from the reader's last one to the furthest the
+  // integration may be ahead of it (window samples past the reader's released position).
+  tt.imu.resize(static_cast<std::size_t>(tt.window > 0 ? tt.window : n));
+  tt.epochs.resize(static_cast<std::size_t>(tt.window > 0 ? tt.window / tt.samples_per_epoch + 2
+                                                          : n / tt.samples_per_epoch + 1));
   p->gen = std::make_unique<TruthGenerator>(*p->motion, sc.imu.rate_hz);
   tt.epochs[0] = p->gen->current();
+  if (n == 0) tt.last = p->gen->current();
   tt.progress = std::move(p);
   return tt;
 }
@@ -45,11 +61,25 @@ TruthTrack TruthTrack::prepare(const Scenario& sc) {
 void TruthTrack::fill() {
   Progress& p = *progress;
   const auto t0 = std::chrono::steady_clock::now();
-  const long long n = static_cast<long long>(imu.size());
+  const long long n = samples;
   for (long long k = p.written + 1; k <= n; ++k) {
+    if (window > 0 && k - 1 >= p.released + window) {  // sample k - 1's slot still holds one the reader needs
+      std::unique_lock<std::mutex> lock(p.released_mutex);
+      p.released_cv.wait(lock, [&] { return k - 1 < p.released + window || p.stop.load(std::memory_order_relaxed); });
+      if (k - 1 >= p.released + window) {  // stopped while waiting
+        p.stopped.store(true, std::memory_order_release);
+        p.ready.store(-1, std::memory_order_release);
+        p.ready.notify_all();
+        break;
+      }
+    }
     const TruthSample& s = p.gen->next();
-    imu[static_cast<std::size_t>(k - 1)] = {s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps};
-    if (k % samples_per_epoch == 0) epochs[static_cast<std::size_t>(k / samples_per_epoch)] = s;
+    imu[static_cast<std::size_t>(window > 0 ? (k - 1) % window : k - 1)] = {s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps};
+    if (k % samples_per_epoch == 0) {
+      const long long e = k / samples_per_epoch;
+      epochs[static_cast<std::size_t>(window > 0 ? e % static_cast<long long>(epochs.size()) : e)] = s;
+    }
+    if (k == n) last = s;
     p.written = k;
     if (k % kPublishSamples == 0 || k == n) {
       p.ready.store(k, std::memory_order_release);
@@ -66,11 +96,26 @@ void TruthTrack::fill() {
 }
 
 void TruthTrack::stop_fill() const {
-  if (progress) progress->stop.store(true, std::memory_order_relaxed);
+  if (!progress) return;
+  {
+    std::lock_guard<std::mutex> lock(progress->released_mutex);
+    progress->stop.store(true, std::memory_order_relaxed);
+  }
+  progress->released_cv.notify_all();
+}
+
+void TruthTrack::release(long long k) const {
+  if (!progress || window <= 0) return;
+  {
+    std::lock_guard<std::mutex> lock(progress->released_mutex);
+    if (k <= progress->released) return;
+    progress->released = k;
+  }
+  progress->released_cv.notify_all();
 }
 
 long long TruthTrack::wait_for(long long k) const {
-  if (!progress) return static_cast<long long>(imu.size());
+  if (!progress) return samples;
   const Progress& p = *progress;
   long long r = p.ready.load(std::memory_order_acquire);
   while (r <= k) {
@@ -87,6 +132,18 @@ TruthTrack TruthTrack::generate(const Scenario& sc) {
   tt.fill();
   tt.progress.reset();  // complete: no reader waits
   return tt;
+}
+
+TruthFillThread::TruthFillThread(TruthTrack& track) : track_(track), thread_([&track] { track.fill(); }) {}
+
+TruthFillThread::~TruthFillThread() {
+  if (!thread_.joinable()) return;
+  track_.stop_fill();
+  thread_.join();
+}
+
+void TruthFillThread::complete() {
+  if (thread_.joinable()) thread_.join();
 }
 
 SensorStream::SensorStream(const Scenario& sc, std::uint64_t seed) : sc_(sc) {
@@ -109,7 +166,7 @@ SensorStream::SensorStream(const Scenario& sc, const TruthTrack& track, const st
   samples_per_epoch_ = imu_samples_per_epoch(sc_);
   if (track.samples_per_epoch != samples_per_epoch_ || track.epochs.empty())
     throw std::runtime_error("the truth track was not generated for this scenario");
-  n_samples_ = static_cast<long long>(track.imu.size());
+  n_samples_ = track.samples;
   epoch_truth_ = &track.epochs.front();
   track_sample_ = track.epochs.front();
   imu_ = std::make_unique<ImuModel>(draw_imu_errors(sc_.imu, sc_.effects, seed), seed);
@@ -120,8 +177,14 @@ SensorStream::~SensorStream() = default;
 
 const TruthSample& SensorStream::next_truth() {
   if (gen_) return gen_->next();
+  if (track_->window > 0 && (sample_ >= track_ready_ || sample_ - track_released_ >= TruthTrack::kPublishSamples)) {
+    // Windowed: the samples before this one are copied out (track_sample_); their slots may be
+    // written again. The ring of epochs keeps the current one until the next (its size).
+    track_released_ = sample_;
+    track_->release(track_released_);
+  }
   if (sample_ >= track_ready_) track_ready_ = track_->wait_for(sample_);  // a track being generated
-  const TruthTrack::Increment& inc = track_->imu[static_cast<std::size_t>(sample_)];
+  const TruthTrack::Increment& inc = track_->increment(sample_);
   track_sample_.t_s = inc.t_s;
   track_sample_.dt_s = inc.dt_s;
   track_sample_.dtheta_rad = inc.dtheta_rad;
@@ -139,8 +202,7 @@ bool SensorStream::next(fsw::InputEvent& ev, TruthSample* truth) {
   }
   if (epoch_due_) {
     epoch_due_ = false;
-    epoch_truth_ = gen_ ? &gen_->current()
-                        : &track_->epochs[static_cast<std::size_t>(sample_ / samples_per_epoch_)];
+    epoch_truth_ = gen_ ? &gen_->current() : &track_->epoch(sample_ / samples_per_epoch_);
     gps_->measure(*epoch_truth_, epoch_);
     ev.kind = fsw::InputEvent::Kind::kGnssRaw;
     gps_->raw(epoch_, ev.gnss);
@@ -159,6 +221,13 @@ bool SensorStream::next(fsw::InputEvent& ev, TruthSample* truth) {
   if (truth != nullptr) *truth = t;
   epoch_due_ = sample_ % samples_per_epoch_ == 0;
   return true;
+}
+
+const TruthSample* SensorStream::full_truth() const {
+  if (gen_) return &gen_->current();
+  if (sample_ == n_samples_) return &track_->last;
+  if (sample_ % samples_per_epoch_ == 0) return &track_->epoch(sample_ / samples_per_epoch_);
+  return nullptr;
 }
 
 bool SensorStream::next(SensorStep& step) {

@@ -165,3 +165,87 @@ TEST(SensorStream, AStoppedTrackFailsItsReaderInsteadOfHanging) {
   std::thread reader([&] { EXPECT_THROW(all_events(s), std::runtime_error); });
   reader.join();  // returns: the reader failed, it did not wait for ever
 }
+
+namespace {
+
+/// Every event of a stream by GPS steps (what `sdins sil` reads), with the full truth it offers
+/// after each step (SensorStream::full_truth).
+struct Steps {
+  std::vector<sim::SensorStep> steps;
+  std::vector<sim::TruthSample> truth;
+};
+Steps all_steps(sim::SensorStream& s) {
+  Steps out;
+  sim::SensorStep step;
+  while (s.next(step)) {
+    out.steps.push_back(step);
+    const sim::TruthSample* t = s.full_truth();
+    EXPECT_NE(t, nullptr) << "no full truth after step " << out.steps.size();
+    if (t != nullptr) out.truth.push_back(*t);
+  }
+  return out;
+}
+
+bool same_truth(const sim::TruthSample& a, const sim::TruthSample& b) {
+  return a.t_s == b.t_s && a.llh == b.llh && a.vel_enu_mps == b.vel_enu_mps && a.C_b_n == b.C_b_n;
+}
+
+}  // namespace
+
+// A windowed track (`sdins sil`: the truth integrated a bounded window ahead of its one reader)
+// gives the steps and the full truth of the live generator, bit for bit: windows of 2000 and 2500
+// samples over a 12.5 s flight wrap the rings several times, the last step is short (no epoch),
+// and the truth after it is the last sample's.
+TEST(SensorStream, WindowedTrackGivesTheLiveGeneratorsStepsAndTruth) {
+  sim::Scenario sc = short_flight();
+  sc.duration_s = 12.5;
+  sim::SensorStream live(sc, 3);
+  const Steps want = all_steps(live);
+  ASSERT_FALSE(want.steps.back().has_epoch);
+  const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
+  ASSERT_TRUE(alm.ok()) << alm.error;
+  for (long long window : {2000LL, 2500LL}) {
+    sim::TruthTrack track = sim::TruthTrack::prepare(sc, window);
+    EXPECT_EQ(track.window, window);
+    EXPECT_EQ(static_cast<long long>(track.imu.size()), window);
+    sim::SensorStream s(sc, track, *alm.almanac, 3);
+    sim::TruthFillThread fill(track);
+    const Steps got = all_steps(s);
+    fill.complete();
+    ASSERT_EQ(got.steps.size(), want.steps.size()) << window;
+    ASSERT_EQ(got.truth.size(), want.truth.size()) << window;
+    for (std::size_t k = 0; k < want.steps.size(); ++k) {
+      const sim::SensorStep &a = want.steps[k], &b = got.steps[k];
+      ASSERT_EQ(a.imu.size(), b.imu.size()) << k;
+      EXPECT_EQ(std::memcmp(a.imu.data(), b.imu.data(), a.imu.size() * sizeof a.imu[0]), 0) << window << " step " << k;
+      EXPECT_EQ(a.has_epoch, b.has_epoch) << k;
+      if (a.has_epoch) EXPECT_EQ(std::memcmp(&a.epoch, &b.epoch, sizeof a.epoch), 0) << window << " step " << k;
+      EXPECT_TRUE(same_truth(want.truth[k], got.truth[k])) << window << " step " << k;
+    }
+  }
+}
+
+// A windowed integration a whole window ahead waits for its reader; a reader that stops (an
+// error in the run) leaves it waiting, and the fill thread's destructor stops it instead of
+// hanging. A window below two publications is refused by name.
+TEST(SensorStream, WindowedTrackStopsWhenItsReaderGoesAway) {
+  sim::Scenario sc = short_flight();
+  sc.duration_s = 30.0;
+  const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
+  ASSERT_TRUE(alm.ok()) << alm.error;
+  sim::TruthTrack track = sim::TruthTrack::prepare(sc, 2000);
+  {
+    sim::SensorStream s(sc, track, *alm.almanac, 3);
+    sim::TruthFillThread fill(track);
+    sim::SensorStep step;
+    for (int k = 0; k < 2; ++k) ASSERT_TRUE(s.next(step));
+  }  // the reader stops after 2 s of 30: the destructor must return
+  EXPECT_THROW(track.wait_for(20000), std::runtime_error);
+  try {
+    sim::TruthTrack::prepare(sc, 1999);
+    FAIL() << "a window of 1999 samples was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("window 1999"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(sim::TruthTrack::prepare(sc, 40000).window, 0);  // longer than the flight: the whole track
+}

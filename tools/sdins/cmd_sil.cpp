@@ -14,10 +14,13 @@
 #include "tools/free_inertial.hpp"
 #include "tools/fsw_report.hpp"
 #include "tools/output_file.hpp"
+#include "sim/almanac.hpp"
 #include "sim/sensor_stream.hpp"
 
 namespace sdins {
 namespace {
+/// The truth's window: 64 s at 1 kHz (4 MB of increments).
+constexpr long long kSilTruthWindowSamples = 64000;
 struct SilOptions {
   ScenarioOptions scenario;
   FswRunOptions run;
@@ -36,7 +39,13 @@ int run_sil() {
   tools::require_distinct({sil_opt.run.log, sil_opt.run.json}, {sil_opt.scenario.file, sil_opt.run.flight_config});
   const sim::Scenario sc = sil_opt.scenario.load();
   const hal::FswNodeConfig cfg = sil_opt.run.node_config();  // validated at load, before the flight is simulated
-  sim::SensorStream stream(sc);
+  // The truth integrated on a thread of its own, a window ahead of the run (bounded memory for any
+  // duration): the same events as a generator read inline (sim/sensor_stream.hpp).
+  const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
+  if (!alm.ok()) throw std::runtime_error(alm.error);
+  sim::TruthTrack track = sim::TruthTrack::prepare(sc, kSilTruthWindowSamples);
+  sim::SensorStream stream(sc, track, *alm.almanac, sc.seed);
+  sim::TruthFillThread fill(track);
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
@@ -61,12 +70,12 @@ int run_sil() {
       fsw::drive(input, node);
     }
     n_frames += static_cast<std::uint64_t>(r.n_frames);
-    const sim::TruthSample& t = stream.truth();
-    node.on_truth(t.t_s, t.llh, t.vel_enu_mps, t.C_b_n);
+    if (const sim::TruthSample* t = stream.full_truth()) node.on_truth(t->t_s, t->llh, t->vel_enu_mps, t->C_b_n);
   }
   input.finish();
   fsw::drive(input, node);
-  const sim::TruthSample truth = stream.truth();
+  fill.complete();
+  const sim::TruthSample truth = *stream.full_truth();  // the last sample's
   if (!node.close(err)) throw std::runtime_error(err);
 
   std::printf("sil: %s, %.0f s, seed %llu, %s-state model; %llu CAN frames (%d not encodable), %u rejected on receive\n",

@@ -289,24 +289,19 @@ class CaseTruth {
   CaseTruth(const sim::Scenario& sc, const sim::TruthTrack* given) : given_(given) {
     if (given_ != nullptr) return;
     own_ = sim::TruthTrack::prepare(sc);
-    thread_ = std::thread([&t = *own_] { t.fill(); });
-  }
-  ~CaseTruth() {
-    if (!thread_.joinable()) return;
-    own_->stop_fill();
-    thread_.join();
+    fill_.emplace(*own_);
   }
   CaseTruth(const CaseTruth&) = delete;
   CaseTruth& operator=(const CaseTruth&) = delete;
   const sim::TruthTrack& track() const { return given_ != nullptr ? *given_ : *own_; }
   void complete() {
-    if (thread_.joinable()) thread_.join();
+    if (fill_) fill_->complete();
   }
 
  private:
   const sim::TruthTrack* given_;
   std::optional<sim::TruthTrack> own_;
-  std::thread thread_;
+  std::optional<sim::TruthFillThread> fill_;  ///< declared after own_: stopped and joined before it goes
 };
 
 CaseResult run_case_impl(const sim::Scenario& sc, const sim::TruthTrack* given_truth, const tools::MonteCarloConfig& mc,
