@@ -543,6 +543,33 @@ void Ekf<Layout>::gather_live_correlations(const Vec& d) {
 }
 
 template <class Layout>
+void Ekf<Layout>::check_column_update(int j, int n) {
+  // work_(i, j) -= sum over k < j of work_(j, k) work_(i, k), i = j..n-1, each element's terms
+  // subtracted one at a time in increasing k: the bits of the per-k column operations. Blocks of
+  // eight rows keep their sums in registers (the compiler vectorises them across the rows); the
+  // pass per k reloaded and stored the column each time, and for n of 40-60 the loop overheads of
+  // ~1,500 short column operations were most of the check's time.
+  double* const wj = work_.col(j).data();
+  const double* const wjk = work_.row(j).data();  // w(j, k): stride N (column-major)
+  int i = j;
+  for (; i + 8 <= n; i += 8) {
+    double acc[8];
+    for (int r = 0; r < 8; ++r) acc[r] = wj[i + r];
+    for (int k = 0; k < j; ++k) {
+      const double b = wjk[static_cast<std::ptrdiff_t>(k) * N];
+      const double* const wk = work_.col(k).data() + i;
+      for (int r = 0; r < 8; ++r) acc[r] -= b * wk[r];
+    }
+    for (int r = 0; r < 8; ++r) wj[i + r] = acc[r];
+  }
+  for (; i < n; ++i) {
+    double acc = wj[i];
+    for (int k = 0; k < j; ++k) acc -= wjk[static_cast<std::ptrdiff_t>(k) * N] * work_(i, k);
+    wj[i] = acc;
+  }
+}
+
+template <class Layout>
 void Ekf<Layout>::check_covariance() {
   symmetrise();
   ++health_.cov_checks;
@@ -562,19 +589,20 @@ void Ekf<Layout>::check_covariance() {
     // identity row and column of the full correlation matrix, uncoupled: leaving it out changes
     // no pivot of the others (their updates from it are exact zeros).
     gather_live_correlations(d);
-    // Left-looking by columns: column j less the columns before it, each a contiguous column
-    // operation (column-major storage), then the pivot test and the scaling.
+    // Left-looking by columns: column j less the columns before it, then the pivot test and the
+    // scaling. Each element is w(i, j) - w(j, 0) w(i, 0) - w(j, 1) w(i, 1) - ... in that order
+    // (the order of one column operation per k); the rows go eight at a time with the sum in
+    // registers across k, instead of one pass over the column per k (check_column_update).
     bool pd = true;
     for (int j = 0; j < n && pd; ++j) {
-      const int m = n - j;
-      for (int k = 0; k < j; ++k) work_.col(j).segment(j, m) -= work_(j, k) * work_.col(k).segment(j, m);
+      check_column_update(j, n);
       const double piv = work_(j, j);
       if (!(piv > kMinPivot)) {
         pd = false;
         break;
       }
       const double l = std::sqrt(piv);
-      work_.col(j).segment(j + 1, m - 1) /= l;
+      work_.col(j).segment(j + 1, n - j - 1) /= l;
       work_(j, j) = l;
     }
     if (pd) return;

@@ -382,6 +382,8 @@ class Ekf {
   void find_dead_states();
   /// The runs of consecutive live states from dead_ (and dense_loops_).
   void index_live_states();
+  /// The Cholesky check's column j (rows j..n-1 of work_) less its columns before j.
+  void check_column_update(int j, int n);
   /// The live states' correlations into the top-left n_live_ x n_live_ lower triangle of work_.
   void gather_live_correlations(const Vec& d);
   bool skipped(int i) const { return !dense_loops_ && dead_[static_cast<std::size_t>(i)]; }
