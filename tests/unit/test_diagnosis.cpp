@@ -275,6 +275,24 @@ TEST(Diagnosis, CoastingConsistencyIsMeasuredWithAndWithoutAReference) {
   EXPECT_GT(o.reacquisition_nis_mean, 0.3);
   EXPECT_LT(o.reacquisition_nis_mean, 3.0);
 
+  // The outage runs are made wherever a core is free (the baseline's as spares in the search,
+  // the extended model's beside its confirmation, once when the two models are one): each must be
+  // the run of its model, field for field.
+  const auto same_outages = [](const tools::OutageStats& a, const tools::OutageStats& b, const char* what) {
+    EXPECT_EQ(a.windows, b.windows) << what;
+    EXPECT_EQ(a.epochs_withheld, b.epochs_withheld) << what;
+    EXPECT_EQ(a.horizontal_rms_m, b.horizontal_rms_m) << what;
+    EXPECT_EQ(a.horizontal_max_m, b.horizontal_max_m) << what;
+    EXPECT_EQ(a.velocity_rms_mps, b.velocity_rms_mps) << what;
+    EXPECT_EQ(a.predicted_horizontal_rms_m, b.predicted_horizontal_rms_m) << what;
+    EXPECT_EQ(a.horizontal_nees_mean, b.horizontal_nees_mean) << what;
+    EXPECT_EQ(a.reacquisitions, b.reacquisitions) << what;
+    EXPECT_EQ(a.reacquisition_nis_mean, b.reacquisition_nis_mean) << what;
+  };
+  ASSERT_TRUE(n.findings.empty());
+  same_outages(n.base.outages, tools::run_diagnosis_model(null_data, cfg, cfg.baseline_states, true).outages, "null base");
+  same_outages(n.extended.outages, n.base.outages, "null extended = base");
+
   // Without the reference: the same outages, the re-acquisition NIS only.
   null_data.truth.clear();
   const tools::DiagnosisResult nr = tools::diagnose(null_data, cfg);
@@ -284,8 +302,11 @@ TEST(Diagnosis, CoastingConsistencyIsMeasuredWithAndWithoutAReference) {
 
   sim::Scenario sc = baseline_scenario(420.0, 78);
   ASSERT_EQ(sim::apply_effect_assignment(sc.effects, "gyro_scale_factor.z=1000"), "");
-  const tools::DiagnosisResult h = tools::diagnose(tools::record_scenario(sc, 78), cfg);
+  const tools::RecordedData hd = tools::record_scenario(sc, 78);
+  const tools::DiagnosisResult h = tools::diagnose(hd, cfg);
   const tools::OutageStats &b = h.base.outages, &e = h.extended.outages;
+  same_outages(b, tools::run_diagnosis_model(hd, cfg, cfg.baseline_states, true).outages, "base");
+  same_outages(e, tools::run_diagnosis_model(hd, cfg, h.extended.active, true).outages, "extended");
   std::printf("gyro scale factor z 1000 ppm: NEES %.1f -> %.1f, re-acquisition NIS %.1f -> %.1f, coasting %.1f -> %.1f m\n",
               b.horizontal_nees_mean, e.horizontal_nees_mean, b.reacquisition_nis_mean, e.reacquisition_nis_mean,
               b.horizontal_rms_m, e.horizontal_rms_m);

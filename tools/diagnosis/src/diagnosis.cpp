@@ -4,6 +4,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -51,6 +52,21 @@ std::vector<DiagnosisRun> run_models(const RecordedData& data, const DiagnosisCo
   for_each_parallel(models.size(), [&](std::size_t i) { out[i] = run_diagnosis_model(data, cfg, models[i], with_outages); });
   return out;
 }
+
+/// The baseline model's runs, which depend on nothing the search finds: the baseline itself and,
+/// with outages configured, the baseline coasting through them. They are run as spares in a
+/// search step with an odd number of candidates, in the slot that would leave a core idle while
+/// the step's last run finishes (same runs, same results; only when they run changes).
+struct BaselineSpares {
+  std::optional<DiagnosisRun> base, base_outages;
+  /// The next spare not yet run, as (with_outages); false when none is left.
+  bool next(const DiagnosisConfig& cfg, bool& with_outages) const {
+    if (!base) return with_outages = false, true;
+    if (cfg.outage_length_s > 0.0 && !base_outages) return with_outages = true, true;
+    return false;
+  }
+  void store(DiagnosisRun run, bool with_outages) { (with_outages ? base_outages : base) = std::move(run); }
+};
 
 /// Position of candidate c in a run's active list, or -1.
 int position(const DiagnosisRun& run, int c) {
@@ -125,9 +141,10 @@ struct StepScores {
 class GroupSearch {
  public:
   /// refs: every run's profile reference is kept there (a group member's interval starts from it).
+  /// spares: the baseline runs, run in a step's idle slot (BaselineSpares).
   GroupSearch(const RecordedData& data, const DiagnosisConfig& cfg, DiagnosisResult& res, const Progress& say,
-              ProfileReferences& refs)
-      : data_(data), cfg_(cfg), res_(res), say_(say), refs_(refs), cands_(diagnosis_candidates()),
+              ProfileReferences& refs, BaselineSpares& spares)
+      : data_(data), cfg_(cfg), res_(res), say_(say), refs_(refs), spares_(spares), cands_(diagnosis_candidates()),
         nc_(static_cast<int>(cands_.size())), excluded_(at(nc_), false) {}
 
   /// Each step adds a finding, grows a group (then runs again on the larger subspace) or ends.
@@ -155,7 +172,7 @@ class GroupSearch {
     if (models.empty()) return false;
     say_("step " + std::to_string(step) + ": " + std::to_string(models.size()) + " candidate models of " +
          std::to_string(m0.size() - base.size() + 1) + " extension states");
-    std::vector<DiagnosisRun> runs = run_models(data_, cfg_, models);
+    std::vector<DiagnosisRun> runs = run_step_models(models);
     for (std::size_t k = 0; k < runs.size(); ++k) refs_[models[k]] = ProfileReference::of(runs[k]);
     if (!screened_) {
       res_.screening_z2.assign(at(nc_), 0.0);
@@ -194,6 +211,23 @@ class GroupSearch {
     g.info = {member(sc.best, g, 1.0, 1.0)};
     groups_.push_back(g);
     return true;
+  }
+
+  /// The step's models in parallel, results in their order; with an odd count and a baseline
+  /// spare left (BaselineSpares), that spare takes the slot a core would idle in.
+  std::vector<DiagnosisRun> run_step_models(const std::vector<std::vector<int>>& models) {
+    bool spare_outages = false;
+    const bool spare = models.size() % 2 == 1 && spares_.next(cfg_, spare_outages);
+    std::vector<DiagnosisRun> out(models.size() + (spare ? 1 : 0));
+    for_each_parallel(out.size(), [&](std::size_t i) {
+      out[i] = i < models.size() ? run_diagnosis_model(data_, cfg_, models[i])
+                                 : run_diagnosis_model(data_, cfg_, cfg_.baseline_states, spare_outages);
+    });
+    if (spare) {
+      spares_.store(std::move(out.back()), spare_outages);
+      out.pop_back();
+    }
+    return out;
   }
 
   /// Candidate c's run on top of the model: screened (first step), excluded when explained by a
@@ -275,6 +309,7 @@ class GroupSearch {
   DiagnosisResult& res_;
   const Progress& say_;
   ProfileReferences& refs_;
+  BaselineSpares& spares_;
   const std::vector<Candidate>& cands_;
   const int nc_;
   std::vector<bool> excluded_;  ///< unobservable, explained by the baseline, or in a group
@@ -309,20 +344,43 @@ bool joint_statistic(const DiagnosisRun& ext, const DiagnosisConfig& cfg, Group&
 /// The extended model: confirmed in one run with every finding, each by its joint statistic; the
 /// findings below their threshold are dropped and the rest run again (at most
 /// cfg.max_confirmation_passes times).
-/// The first pass runs the baseline model beside it (into res.base: it does not depend on the
-/// findings), and sets base_done.
+/// The first pass runs beside it whatever of the baseline's runs the search left (into spares) and,
+/// with outages configured, the extended model coasting through them (into ext_outages: valid
+/// while no finding is dropped).
 /// Each extended run's profile reference goes into refs.
 void confirm_groups(const RecordedData& data, const DiagnosisConfig& cfg, double alpha_each, std::vector<Group>& groups,
-                    DiagnosisResult& res, bool& base_done, ProfileReferences& refs, const Progress& say) {
+                    DiagnosisResult& res, BaselineSpares& spares, std::optional<DiagnosisRun>& ext_outages,
+                    ProfileReferences& refs, const Progress& say) {
   for (int pass = 0; !groups.empty(); ++pass) {
     say("extended model: baseline + " + std::to_string(groups.size()) + " findings");
+    const std::vector<int> model = search_model(cfg.baseline_states, groups);
     if (pass == 0) {
-      std::vector<DiagnosisRun> both = run_models(data, cfg, {search_model(cfg.baseline_states, groups), cfg.baseline_states});
-      res.extended = std::move(both[0]);
-      res.base = std::move(both[1]);
-      base_done = true;
+      // Jobs: the extended run, its outage run, and the baseline's runs not yet made.
+      enum class Role { kExtended, kExtendedOutages, kBase, kBaseOutages };
+      struct Job {
+        Role role;
+        DiagnosisRun run;
+      };
+      const bool outages = cfg.outage_length_s > 0.0;
+      std::vector<Job> jobs = {{Role::kExtended, {}}};
+      if (outages) jobs.push_back({Role::kExtendedOutages, {}});
+      if (!spares.base) jobs.push_back({Role::kBase, {}});
+      if (outages && !spares.base_outages) jobs.push_back({Role::kBaseOutages, {}});
+      for_each_parallel(jobs.size(), [&](std::size_t i) {
+        const Role r = jobs[i].role;
+        const bool base = r == Role::kBase || r == Role::kBaseOutages;
+        jobs[i].run = run_diagnosis_model(data, cfg, base ? cfg.baseline_states : model,
+                                          r == Role::kExtendedOutages || r == Role::kBaseOutages);
+      });
+      for (Job& j : jobs) switch (j.role) {
+          case Role::kExtended: res.extended = std::move(j.run); break;
+          case Role::kExtendedOutages: ext_outages = std::move(j.run); break;
+          case Role::kBase: spares.store(std::move(j.run), false); break;
+          case Role::kBaseOutages: spares.store(std::move(j.run), true); break;
+        }
     } else {
-      res.extended = run_diagnosis_model(data, cfg, search_model(cfg.baseline_states, groups));
+      res.extended = run_diagnosis_model(data, cfg, model);
+      ext_outages.reset();  // of a model with the dropped findings
     }
     refs[res.extended.active] = ProfileReference::of(res.extended);
     std::vector<Group> keep;
@@ -336,20 +394,29 @@ void confirm_groups(const RecordedData& data, const DiagnosisConfig& cfg, double
 }
 
 /// The baseline's run, the likelihoods on common measurements, and both models coasting through
-/// the GNSS outages.
-void score_baseline_and_outages(const RecordedData& data, const DiagnosisConfig& cfg, bool no_findings, bool base_done,
-                                DiagnosisResult& res, const Progress& say) {
+/// the GNSS outages (the runs already made are taken from spares and ext_outages; with no
+/// findings the extended model is the baseline and coasts once).
+void score_baseline_and_outages(const RecordedData& data, const DiagnosisConfig& cfg, bool no_findings,
+                                BaselineSpares& spares, std::optional<DiagnosisRun>& ext_outages, DiagnosisResult& res,
+                                const Progress& say) {
   const std::vector<int>& base = cfg.baseline_states;
   say("baseline model");
-  if (!base_done) res.base = run_diagnosis_model(data, cfg, base);
+  res.base = spares.base ? std::move(*spares.base) : run_diagnosis_model(data, cfg, base);
   if (no_findings) res.extended = res.base;
   compare_likelihood(res.base, res.extended);
   if (cfg.outage_length_s > 0.0) {  // with a reference: the coasting error; always: the re-acquisition NIS
     say("GNSS outages: " + std::to_string(cfg.outage_length_s) + " s every " + std::to_string(cfg.outage_period_s) +
         " s, baseline and extended model coasting");
-    std::vector<DiagnosisRun> o = run_models(data, cfg, {base, res.extended.active}, true);
-    res.base.outages = o[0].outages;
-    res.extended.outages = o[1].outages;
+    if (no_findings || res.extended.active == base) ext_outages.reset();
+    std::vector<std::vector<int>> missing;
+    if (!spares.base_outages) missing.push_back(base);
+    if (!ext_outages && res.extended.active != base) missing.push_back(res.extended.active);
+    std::vector<DiagnosisRun> o = run_models(data, cfg, missing, true);
+    std::size_t k = 0;
+    if (!spares.base_outages) spares.base_outages = std::move(o[k++]);
+    if (!ext_outages && res.extended.active != base) ext_outages = std::move(o[k++]);
+    res.base.outages = spares.base_outages->outages;
+    res.extended.outages = ext_outages ? ext_outages->outages : res.base.outages;
   }
 }
 
@@ -398,11 +465,12 @@ DiagnosisResult diagnose(const RecordedData& data, const DiagnosisConfig& cfg,
   DiagnosisResult res;
   res.baseline = fsw::to_string(cfg.baseline);
   ProfileReferences refs;  // the runs' data selections, for the intervals' profiles
-  std::vector<Group> groups = GroupSearch(data, cfg, res, say, refs).run();
+  BaselineSpares spares;
+  std::vector<Group> groups = GroupSearch(data, cfg, res, say, refs, spares).run();
   const double alpha_each = res.tested > 0 ? cfg.alpha / static_cast<double>(res.tested) : 0.0;
-  bool base_done = false;
-  confirm_groups(data, cfg, alpha_each, groups, res, base_done, refs, say);
-  score_baseline_and_outages(data, cfg, groups.empty(), base_done, res, say);
+  std::optional<DiagnosisRun> ext_outages;
+  confirm_groups(data, cfg, alpha_each, groups, res, spares, ext_outages, refs, say);
+  score_baseline_and_outages(data, cfg, groups.empty(), spares, ext_outages, res, say);
   findings_from_groups(groups, alpha_each, res);
   add_finding_intervals(res, data, cfg, progress, refs);
   set_headline_estimates(res.findings);
