@@ -1,6 +1,8 @@
 // Single-axis rotation and bank-to-turn analyses (paper section II) against closed forms.
 #include <gtest/gtest.h>
 
+#include <vector>
+
 #include "tools/analysis.hpp"
 
 using fsw::kDegToRad;
@@ -47,5 +49,35 @@ TEST(BankToTurn, OnlyYzAndZyAccumulateHeadingError) {
     } else {
       EXPECT_LT(std::abs(c.u_error_per_turn_arcsec), 2.0) << c.component;
     }
+  }
+}
+
+// Several bank-to-turn cases through one truth generator (run_bank_turn_cases: the analysis flies
+// its six in one group per core) are each the case flown alone, bit for bit: the series, the turn
+// ends and every figure; the order of the results is the order asked for.
+TEST(BankToTurn, CasesFlownThroughOneTruthAreTheCasesFlownAlone) {
+  sim::Scenario sc;
+  sc.duration_s = 300.0;
+  const std::vector<std::size_t> components = {3, 5, 0};
+  const std::vector<tools::BankTurnCase> grouped = tools::run_bank_turn_cases(sc, components, 20.0, 1);
+  const std::vector<tools::BankTurnCase> two_groups = tools::run_bank_turn_cases(sc, components, 20.0, 2);
+  ASSERT_EQ(grouped.size(), components.size());
+  ASSERT_EQ(two_groups.size(), components.size());
+  for (std::size_t k = 0; k < components.size(); ++k) {
+    const tools::BankTurnCase alone = tools::run_bank_turn_case(sc, components[k], 20.0);
+    for (const tools::BankTurnCase* g : {&grouped[k], &two_groups[k]}) {
+      EXPECT_EQ(g->component, alone.component);
+      EXPECT_EQ(g->t_s, alone.t_s) << alone.component;
+      EXPECT_EQ(g->phi_rad, alone.phi_rad) << alone.component;
+      EXPECT_EQ(g->roll_rad, alone.roll_rad) << alone.component;
+      EXPECT_EQ(g->turn_end_t_s, alone.turn_end_t_s) << alone.component;
+      EXPECT_EQ(g->turn_end_phi_rad, alone.turn_end_phi_rad) << alone.component;
+      EXPECT_EQ(g->u_error_per_turn_arcsec, alone.u_error_per_turn_arcsec) << alone.component;
+      EXPECT_EQ(g->predicted_per_turn_arcsec, alone.predicted_per_turn_arcsec) << alone.component;
+      EXPECT_EQ(g->tilt_per_turn_arcsec, alone.tilt_per_turn_arcsec) << alone.component;
+      EXPECT_EQ(g->u_oscillation_arcsec, alone.u_oscillation_arcsec) << alone.component;
+      EXPECT_EQ(g->accumulates, alone.accumulates) << alone.component;
+    }
+    EXPECT_GE(alone.turn_end_t_s.size(), 2u) << alone.component;  // the comparison saw turns
   }
 }

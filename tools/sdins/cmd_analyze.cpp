@@ -1,5 +1,6 @@
 // sdins analyze: the reference paper's section II analyses (self-alignment, single-axis rotation,
 // bank-to-turn) with CSV, PNG, markdown and analysis.json outputs.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -7,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "commands.hpp"
 #include "tools/output_file.hpp"
@@ -157,9 +159,10 @@ std::vector<tools::BankTurnCase> analyze_bank_turn(const sim::Scenario& sc, doub
   // ---- Bank-to-turn ----
   std::printf("bank-to-turn (%s, %.0f s, each gyro misalignment alone at %.1f arcsec):\n", sc.name.c_str(),
               sc.duration_s, gamma_arcsec);
-  // Six independent 1800 s flights: side by side, then written and printed in order.
-  std::vector<tools::BankTurnCase> bcases(6);
-  tools::for_each_parallel(bcases.size(), [&](std::size_t k) { bcases[k] = tools::run_bank_turn_case(sc, k, gamma_arcsec); });
+  // Six 1800 s flights of one trajectory: one group per core, each group's flights through one
+  // truth (integrated once per group, not per flight), then written and printed in order.
+  const std::vector<tools::BankTurnCase> bcases = tools::run_bank_turn_cases(
+      sc, {0, 1, 2, 3, 4, 5}, gamma_arcsec, static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
   for (std::size_t k = 0; k < bcases.size(); ++k) {
     const tools::BankTurnCase& c = bcases[k];
     if (c.turn_end_t_s.empty()) throw std::runtime_error("the scenario completes no turn: nothing to analyse");

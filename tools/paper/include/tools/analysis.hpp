@@ -80,5 +80,11 @@ struct BankTurnCase {
 /// Flies the scenario free-inertially with only one gyro misalignment (vertical channel held to
 /// truth: an ideal altimeter, since unaided height diverges) and measures phi_U turn by turn.
 BankTurnCase run_bank_turn_case(const sim::Scenario& sc, std::size_t component, double gamma_arcsec);
+/// The same for several components (misalignment indices), in `groups` groups side by side
+/// (tools::for_each_parallel): each group flies its cases through one truth generator
+/// (run_free_inertial of several flights), so the truth is integrated once per group, not per
+/// case. Each case is the one run_bank_turn_case gives, bit for bit, in the order of components.
+std::vector<BankTurnCase> run_bank_turn_cases(const sim::Scenario& sc, const std::vector<std::size_t>& components,
+                                              double gamma_arcsec, int groups);
 
 }  // namespace tools

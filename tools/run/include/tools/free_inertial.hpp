@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <span>
 
 #include "fsw/executive.hpp"
 #include "fsw/strapdown.hpp"
@@ -34,5 +35,21 @@ using FreeInertialCallback = std::function<void(const sim::TruthSample&, const f
 /// Returns the last errors. Never throws; a failing fsw step is reported through `status`.
 NavErrors run_free_inertial(const sim::Motion& motion, sim::ImuModel* imu, const FreeInertialConfig& cfg,
                             const FreeInertialCallback& on_frame, fsw::Status* status = nullptr);
+
+/// One of several flights through one truth: its IMU model (nullptr: perfect), its callback, and
+/// what the flight returns (the status of its first failing step, else kOk; the last errors).
+struct FreeInertialFlight {
+  sim::ImuModel* imu = nullptr;
+  FreeInertialCallback on_frame;
+  fsw::Status status = fsw::Status::kOk;
+  NavErrors last{};
+};
+
+/// Several flights of the same motion and configuration through one truth generator, sample by
+/// sample: each flight's result is the one run_free_inertial gives it alone (its own IMU model,
+/// mechanization and callback; a failing flight stops, the others go on), and the truth, most of
+/// a free-inertial flight's time, is integrated once (the paper's analysis: six misalignments of
+/// one bank-to-turn flight).
+void run_free_inertial(const sim::Motion& motion, const FreeInertialConfig& cfg, std::span<FreeInertialFlight> flights);
 
 }  // namespace tools
