@@ -357,11 +357,38 @@ def main(argv):
         raise InputError(f"{out_dir} is not a directory")
     cases = load_summary(out_dir)
     data = {id(c): load_csv(c["csv"]) for c in cases}  # validate everything before drawing
-    written = [plot_case(out_dir, c, data[id(c)]) for c in cases]
-    written.append(plot_compare_u(out_dir, cases, data))
-    written.append(plot_nees(out_dir, cases, data))
+    jobs = list(range(len(cases))) + ["compare_U", "nees"]
+    _DRAW.update(out_dir=out_dir, cases=cases, data=data)
+    written = draw_all(jobs)
     print(f"{PROG}: wrote {', '.join(written)} in {out_dir}")
     return 0
+
+
+# What the figure workers draw from: set before they are forked, so that they inherit it.
+_DRAW = {}
+
+
+def draw_one(job):
+    """One figure: a case's (its index) or one of the two comparisons; returns its file name."""
+    out_dir, cases, data = _DRAW["out_dir"], _DRAW["cases"], _DRAW["data"]
+    if job == "compare_U":
+        return plot_compare_u(out_dir, cases, data)
+    if job == "nees":
+        return plot_nees(out_dir, cases, data)
+    return plot_case(out_dir, cases[job], data[id(cases[job])])
+
+
+def draw_all(jobs):
+    """The figures in the order of jobs, drawn by one forked worker per core (each figure is
+    independent: its own file, put in place whole by save_figure); an error in any is raised
+    here. One core or one job: drawn in this process."""
+    workers = min(len(jobs), os.cpu_count() or 1)
+    if workers < 2:
+        return [draw_one(j) for j in jobs]
+    import multiprocessing  # noqa: PLC0415  (only when there is a second core)
+
+    with multiprocessing.get_context("fork").Pool(workers) as pool:
+        return pool.map(draw_one, jobs, chunksize=1)
 
 
 if __name__ == "__main__":
