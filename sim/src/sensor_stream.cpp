@@ -31,6 +31,12 @@ struct TruthTrack::Progress {
   mutable std::mutex released_mutex;
   mutable std::condition_variable released_cv;
   mutable long long released = 0;     ///< under released_mutex
+  /// fill() returns before the end: every wait past ready wakes (a new value) and fails.
+  void mark_stopped() {
+    stopped.store(true, std::memory_order_release);
+    ready.store(-1, std::memory_order_release);
+    ready.notify_all();
+  }
 };
 
 TruthTrack TruthTrack::prepare(const Scenario& sc, long long window) {
@@ -67,27 +73,20 @@ void TruthTrack::fill() {
       std::unique_lock<std::mutex> lock(p.released_mutex);
       p.released_cv.wait(lock, [&] { return k - 1 < p.released + window || p.stop.load(std::memory_order_relaxed); });
       if (k - 1 >= p.released + window) {  // stopped while waiting
-        p.stopped.store(true, std::memory_order_release);
-        p.ready.store(-1, std::memory_order_release);
-        p.ready.notify_all();
+        p.mark_stopped();
         break;
       }
     }
     const TruthSample& s = p.gen->next();
-    imu[static_cast<std::size_t>(window > 0 ? (k - 1) % window : k - 1)] = {s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps};
-    if (k % samples_per_epoch == 0) {
-      const long long e = k / samples_per_epoch;
-      epochs[static_cast<std::size_t>(window > 0 ? e % static_cast<long long>(epochs.size()) : e)] = s;
-    }
+    imu[imu_slot(k - 1)] = {s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps};
+    if (k % samples_per_epoch == 0) epochs[epoch_slot(k / samples_per_epoch)] = s;
     if (k == n) last = s;
     p.written = k;
     if (k % kPublishSamples == 0 || k == n) {
       p.ready.store(k, std::memory_order_release);
       p.ready.notify_all();
       if (p.stop.load(std::memory_order_relaxed) && k < n) {
-        p.stopped.store(true, std::memory_order_release);
-        p.ready.store(-1, std::memory_order_release);  // a new value: every wait wakes and sees stopped
-        p.ready.notify_all();
+        p.mark_stopped();
         break;
       }
     }

@@ -80,11 +80,12 @@ struct TruthTrack {
   /// overwrite their slots. No effect on a whole track.
   void release(long long k) const;
   /// Sample k's increments (0-based: t = (k + 1) / rate) and epoch e's truth, whole or windowed.
-  const Increment& increment(long long k) const {
-    return imu[static_cast<std::size_t>(window > 0 ? k % window : k)];
-  }
-  const TruthSample& epoch(long long e) const {
-    return epochs[static_cast<std::size_t>(window > 0 ? e % static_cast<long long>(epochs.size()) : e)];
+  const Increment& increment(long long k) const { return imu[imu_slot(k)]; }
+  const TruthSample& epoch(long long e) const { return epochs[epoch_slot(e)]; }
+  /// Where sample k and epoch e live in imu and epochs (the rings' index when windowed).
+  std::size_t imu_slot(long long k) const { return static_cast<std::size_t>(window > 0 ? k % window : k); }
+  std::size_t epoch_slot(long long e) const {
+    return static_cast<std::size_t>(window > 0 ? e % static_cast<long long>(epochs.size()) : e);
   }
 };
 

@@ -45,11 +45,16 @@ double joint_wald_z2(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const E
 // ---------------------------------------------------------------------------------------------
 namespace {
 
-/// Runs the models in parallel (one per extension set), results in input order.
-std::vector<DiagnosisRun> run_models(const RecordedData& data, const DiagnosisConfig& cfg,
-                                 const std::vector<std::vector<int>>& models, bool with_outages = false) {
-  std::vector<DiagnosisRun> out(models.size());
-  for_each_parallel(models.size(), [&](std::size_t i) { out[i] = run_diagnosis_model(data, cfg, models[i], with_outages); });
+/// One model run: its active candidates, with or without the GNSS outages.
+struct ModelJob {
+  std::vector<int> model;
+  bool outages = false;
+};
+
+/// Runs the jobs in parallel, results in input order.
+std::vector<DiagnosisRun> run_jobs(const RecordedData& data, const DiagnosisConfig& cfg, const std::vector<ModelJob>& jobs) {
+  std::vector<DiagnosisRun> out(jobs.size());
+  for_each_parallel(jobs.size(), [&](std::size_t i) { out[i] = run_diagnosis_model(data, cfg, jobs[i].model, jobs[i].outages); });
   return out;
 }
 
@@ -59,11 +64,12 @@ std::vector<DiagnosisRun> run_models(const RecordedData& data, const DiagnosisCo
 /// the step's last run finishes (same runs, same results; only when they run changes).
 struct BaselineSpares {
   std::optional<DiagnosisRun> base, base_outages;
-  /// The next spare not yet run, as (with_outages); false when none is left.
-  bool next(const DiagnosisConfig& cfg, bool& with_outages) const {
-    if (!base) return with_outages = false, true;
-    if (cfg.outage_length_s > 0.0 && !base_outages) return with_outages = true, true;
-    return false;
+  /// The baseline's runs not yet made, first the plain one.
+  std::vector<ModelJob> missing(const DiagnosisConfig& cfg) const {
+    std::vector<ModelJob> m;
+    if (!base) m.push_back({cfg.baseline_states, false});
+    if (cfg.outage_length_s > 0.0 && !base_outages) m.push_back({cfg.baseline_states, true});
+    return m;
   }
   void store(DiagnosisRun run, bool with_outages) { (with_outages ? base_outages : base) = std::move(run); }
 };
@@ -172,8 +178,8 @@ class GroupSearch {
     if (models.empty()) return false;
     say_("step " + std::to_string(step) + ": " + std::to_string(models.size()) + " candidate models of " +
          std::to_string(m0.size() - base.size() + 1) + " extension states");
-    std::vector<DiagnosisRun> runs = run_step_models(models);
-    for (std::size_t k = 0; k < runs.size(); ++k) refs_[models[k]] = ProfileReference::of(runs[k]);
+    std::vector<DiagnosisRun> runs = run_step_models(std::move(models));
+    for (std::size_t k = 0; k < runs.size(); ++k) refs_[runs[k].active] = ProfileReference::of(runs[k]);
     if (!screened_) {
       res_.screening_z2.assign(at(nc_), 0.0);
       res_.screening_ratio.assign(at(nc_), 1.0);
@@ -215,16 +221,15 @@ class GroupSearch {
 
   /// The step's models in parallel, results in their order; with an odd count and a baseline
   /// spare left (BaselineSpares), that spare takes the slot a core would idle in.
-  std::vector<DiagnosisRun> run_step_models(const std::vector<std::vector<int>>& models) {
-    bool spare_outages = false;
-    const bool spare = models.size() % 2 == 1 && spares_.next(cfg_, spare_outages);
-    std::vector<DiagnosisRun> out(models.size() + (spare ? 1 : 0));
-    for_each_parallel(out.size(), [&](std::size_t i) {
-      out[i] = i < models.size() ? run_diagnosis_model(data_, cfg_, models[i])
-                                 : run_diagnosis_model(data_, cfg_, cfg_.baseline_states, spare_outages);
-    });
+  std::vector<DiagnosisRun> run_step_models(std::vector<std::vector<int>> models) {
+    std::vector<ModelJob> jobs;
+    for (std::vector<int>& m : models) jobs.push_back({std::move(m), false});
+    const std::vector<ModelJob> missing = spares_.missing(cfg_);
+    const bool spare = jobs.size() % 2 == 1 && !missing.empty();
+    if (spare) jobs.push_back(missing.front());
+    std::vector<DiagnosisRun> out = run_jobs(data_, cfg_, jobs);
     if (spare) {
-      spares_.store(std::move(out.back()), spare_outages);
+      spares_.store(std::move(out.back()), jobs.back().outages);
       out.pop_back();
     }
     return out;
@@ -355,29 +360,16 @@ void confirm_groups(const RecordedData& data, const DiagnosisConfig& cfg, double
     say("extended model: baseline + " + std::to_string(groups.size()) + " findings");
     const std::vector<int> model = search_model(cfg.baseline_states, groups);
     if (pass == 0) {
-      // Jobs: the extended run, its outage run, and the baseline's runs not yet made.
-      enum class Role { kExtended, kExtendedOutages, kBase, kBaseOutages };
-      struct Job {
-        Role role;
-        DiagnosisRun run;
-      };
+      // The extended run, its outage run, and the baseline's runs not yet made, in that order.
       const bool outages = cfg.outage_length_s > 0.0;
-      std::vector<Job> jobs = {{Role::kExtended, {}}};
-      if (outages) jobs.push_back({Role::kExtendedOutages, {}});
-      if (!spares.base) jobs.push_back({Role::kBase, {}});
-      if (outages && !spares.base_outages) jobs.push_back({Role::kBaseOutages, {}});
-      for_each_parallel(jobs.size(), [&](std::size_t i) {
-        const Role r = jobs[i].role;
-        const bool base = r == Role::kBase || r == Role::kBaseOutages;
-        jobs[i].run = run_diagnosis_model(data, cfg, base ? cfg.baseline_states : model,
-                                          r == Role::kExtendedOutages || r == Role::kBaseOutages);
-      });
-      for (Job& j : jobs) switch (j.role) {
-          case Role::kExtended: res.extended = std::move(j.run); break;
-          case Role::kExtendedOutages: ext_outages = std::move(j.run); break;
-          case Role::kBase: spares.store(std::move(j.run), false); break;
-          case Role::kBaseOutages: spares.store(std::move(j.run), true); break;
-        }
+      std::vector<ModelJob> jobs = {{model, false}};
+      if (outages) jobs.push_back({model, true});
+      const std::size_t first_spare = jobs.size();
+      for (ModelJob& j : spares.missing(cfg)) jobs.push_back(std::move(j));
+      std::vector<DiagnosisRun> runs = run_jobs(data, cfg, jobs);
+      res.extended = std::move(runs[0]);
+      if (outages) ext_outages = std::move(runs[1]);
+      for (std::size_t k = first_spare; k < jobs.size(); ++k) spares.store(std::move(runs[k]), jobs[k].outages);
     } else {
       res.extended = run_diagnosis_model(data, cfg, model);
       ext_outages.reset();  // of a model with the dropped findings
@@ -407,14 +399,16 @@ void score_baseline_and_outages(const RecordedData& data, const DiagnosisConfig&
   if (cfg.outage_length_s > 0.0) {  // with a reference: the coasting error; always: the re-acquisition NIS
     say("GNSS outages: " + std::to_string(cfg.outage_length_s) + " s every " + std::to_string(cfg.outage_period_s) +
         " s, baseline and extended model coasting");
-    if (no_findings || res.extended.active == base) ext_outages.reset();
-    std::vector<std::vector<int>> missing;
-    if (!spares.base_outages) missing.push_back(base);
-    if (!ext_outages && res.extended.active != base) missing.push_back(res.extended.active);
-    std::vector<DiagnosisRun> o = run_models(data, cfg, missing, true);
-    std::size_t k = 0;
-    if (!spares.base_outages) spares.base_outages = std::move(o[k++]);
-    if (!ext_outages && res.extended.active != base) ext_outages = std::move(o[k++]);
+    const bool ext_is_base = no_findings || res.extended.active == base;
+    if (ext_is_base) ext_outages.reset();
+    std::vector<ModelJob> jobs;
+    if (!spares.base_outages) jobs.push_back({base, true});
+    if (!ext_outages && !ext_is_base) jobs.push_back({res.extended.active, true});
+    std::vector<DiagnosisRun> o = run_jobs(data, cfg, jobs);
+    for (std::size_t k = 0; k < jobs.size(); ++k) {
+      if (jobs[k].model == base) spares.base_outages = std::move(o[k]);
+      else ext_outages = std::move(o[k]);
+    }
     res.base.outages = spares.base_outages->outages;
     res.extended.outages = ext_outages ? ext_outages->outages : res.base.outages;
   }

@@ -177,7 +177,7 @@ std::vector<BankTurnCase> run_bank_turn_cases(const sim::Scenario& sc, const std
                                               double gamma_arcsec, int groups) {
   std::vector<BankTurnCase> out(components.size());
   if (components.empty()) return out;
-  const std::size_t ng = std::clamp<std::size_t>(groups < 1 ? 1 : static_cast<std::size_t>(groups), 1, components.size());
+  const std::size_t ng = std::min(static_cast<std::size_t>(std::max(groups, 1)), components.size());
   // Group g flies cases g, g + ng, g + 2 ng, ... through one truth generator.
   for_each_parallel(ng, [&](std::size_t g) {
     std::string err;

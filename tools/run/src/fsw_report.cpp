@@ -89,8 +89,9 @@ json fsw_summary_json(const hal::FswNode& node) {
                       {"p99_us", t.p99_us},          {"max_us", t.max_us},    {"slips", e.ekf_slips},
                       {"late", e.ekf_late},          {"lockstep_waits", g.waits}, {"lockstep_wait_max_s", g.wait_max_s}};
   }
-  j["telemetry"] = {{"network", tel.network_used()}, {"network_given_up", tel.network_given_up()}, {"url", tel.url()},         {"published", tel.published()},
-                    {"logged", tel.logged()},          {"send_failures", tel.send_failures()},
+  j["telemetry"] = {{"network", tel.network_used()},      {"network_given_up", tel.network_given_up()},
+                    {"url", tel.url()},                     {"published", tel.published()},
+                    {"logged", tel.logged()},               {"send_failures", tel.send_failures()},
                     {"log_failures", tel.log_failures()}};
   return j;
 }
