@@ -104,16 +104,30 @@ inline Mat3 C_ned_enu() {
   return c;
 }
 
-/// Euler angles (roll, pitch, heading) [rad] -> C_b_n (n = ENU). See conventions above.
-inline Mat3 C_b_n_from_euler(double roll_rad, double pitch_rad, double heading_rad) {
-  const double cr = std::cos(roll_rad), sr = std::sin(roll_rad);
-  const double cp = std::cos(pitch_rad), sp = std::sin(pitch_rad);
-  const double ch = std::cos(heading_rad), sh = std::sin(heading_rad);
+/// The sines and cosines of Euler angles (roll, pitch, heading): C_b_n_from_euler and
+/// omega_nb_b_from_euler_rates take them, and their angle overloads build them, so a caller that
+/// needs both at the same angles (the truth's kinematics) pays for each sine once, with the same
+/// bits as the overloads.
+struct EulerTerms {
+  double sin_roll, cos_roll, sin_pitch, cos_pitch, sin_heading, cos_heading;
+  static EulerTerms of(double roll_rad, double pitch_rad, double heading_rad) {
+    return {std::sin(roll_rad), std::cos(roll_rad),       std::sin(pitch_rad),
+            std::cos(pitch_rad), std::sin(heading_rad), std::cos(heading_rad)};
+  }
+};
+
+/// Euler angles (roll, pitch, heading) -> C_b_n (n = ENU). See conventions above.
+inline Mat3 C_b_n_from_euler(const EulerTerms& e) {
+  const double cr = e.cos_roll, sr = e.sin_roll, cp = e.cos_pitch, sp = e.sin_pitch;
+  const double ch = e.cos_heading, sh = e.sin_heading;
   Mat3 c_b_ned;
   c_b_ned << cp * ch, -cr * sh + sr * sp * ch, sr * sh + cr * sp * ch,  //
       cp * sh, cr * ch + sr * sp * sh, -sr * ch + cr * sp * sh,          //
       -sp, sr * cp, cr * cp;
   return C_ned_enu() * c_b_ned;
+}
+inline Mat3 C_b_n_from_euler(double roll_rad, double pitch_rad, double heading_rad) {
+  return C_b_n_from_euler(EulerTerms::of(roll_rad, pitch_rad, heading_rad));
 }
 
 /// C_b_n -> Euler angles (roll, pitch, heading) [rad]; heading in [0, 2 pi).
@@ -126,13 +140,18 @@ inline Vec3 euler_from_C_b_n(const Mat3& C_b_n) {
   return Vec3(roll, pitch, heading);
 }
 
-/// Body angular rate relative to the navigation frame from Euler angles and their rates.
-inline Vec3 omega_nb_b_from_euler_rates(double roll, double pitch, double roll_rate, double pitch_rate,
+/// Body angular rate relative to the navigation frame from Euler angles and their rates (the
+/// heading's sine and cosine are not used).
+inline Vec3 omega_nb_b_from_euler_rates(const EulerTerms& e, double roll_rate, double pitch_rate,
                                         double heading_rate) {
-  const double cr = std::cos(roll), sr = std::sin(roll);
-  const double cp = std::cos(pitch), sp = std::sin(pitch);
+  const double cr = e.cos_roll, sr = e.sin_roll, cp = e.cos_pitch, sp = e.sin_pitch;
   return Vec3(roll_rate - heading_rate * sp, pitch_rate * cr + heading_rate * sr * cp,
               -pitch_rate * sr + heading_rate * cr * cp);
+}
+inline Vec3 omega_nb_b_from_euler_rates(double roll, double pitch, double roll_rate, double pitch_rate,
+                                        double heading_rate) {
+  const EulerTerms e{std::sin(roll), std::cos(roll), std::sin(pitch), std::cos(pitch), 0.0, 1.0};
+  return omega_nb_b_from_euler_rates(e, roll_rate, pitch_rate, heading_rate);
 }
 
 /// Attitude error phi (ENU) between a computed and a true C_b_n: C_hat = (I - [phi x]) C_true.

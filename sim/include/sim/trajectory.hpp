@@ -48,7 +48,8 @@ class Motion {
 
   /// What derivative() and eval() need of the time alone (a motion's own values: the flight's
   /// roll, speed and flight path at t), computed once per instant: the TruthGenerator asks for
-  /// ten evaluations per sample at four to six distinct instants. Default: just the time.
+  /// six evaluations per sample (four derivatives, two kinematics) at three instants, the first
+  /// of them the previous sample's last. Default: just the time.
   struct Instant {
     double t_s = 0.0;
     double v[12] = {};
@@ -96,9 +97,10 @@ class TruthGenerator {
     Vec3 f_b;
   };
   Point evaluate(double t, const Motion::State& y);
-  void rk4(double t, double h);
-  /// The motion's Instant of t: the last two are kept (an RK4 step asks for its middle twice, and
-  /// a step's end is the next one's start and the sample's evaluation).
+  /// Advances y_ by one RK4 step from t0 to t1 and returns the state at tm between them.
+  Motion::State rk4(double t0, double tm, double t1);
+  /// The motion's Instant of t: the last two are kept (an RK4 step asks for its middle three
+  /// times, and a step's end is the sample's evaluation and the next step's start).
   const Motion::Instant& instant(double t);
   void set_current(double t, double dt, const Point& p);
 
