@@ -64,6 +64,20 @@ class Motion {
   virtual void instant(double t_s, Instant& in) const { in.t_s = t_s; }
   virtual State derivative(const Instant& in, const State& y) const { return derivative(in.t_s, y); }
   virtual Kinematics eval(const Instant& in, const State& y) const { return eval(in.t_s, y); }
+
+  /// What derivative() needs of a state that changes little within one integration step (the
+  /// flight's track and latitude sines and cosines, its radii of curvature), taken exactly at the
+  /// step's first state y0 by anchor(); derivative(in, y, a) carries them to the step's other
+  /// states by their Taylor series, whose remainders lie below the doubles' rounding for the
+  /// changes one 1 ms step makes. At y0 itself it gives derivative(in, y0) bit for bit. Default:
+  /// no anchor, derivative(in, y).
+  struct StepAnchor {
+    double v[10] = {};
+  };
+  virtual void anchor(const State& /*y0*/, StepAnchor& /*a*/) const {}
+  virtual State derivative(const Instant& in, const State& y, const StepAnchor& /*a*/) const {
+    return derivative(in, y);
+  }
 };
 
 /// One truth sample: the state at t_s and the ideal IMU increments over (t_s - dt_s, t_s].
@@ -108,6 +122,7 @@ class TruthGenerator {
   double dt_s_;
   long long index_ = 0;
   Motion::State y_;
+  Motion::StepAnchor anchor_{};
   TruthSample cur_{};
   Point p_cur_{};
   Motion::Instant inst_[2]{};
@@ -158,6 +173,10 @@ class FlightMotion final : public Motion {
   void instant(double t_s, Instant& in) const override;
   State derivative(const Instant& in, const State& y) const override;
   Kinematics eval(const Instant& in, const State& y) const override;
+  /// a.v = track, its sine and cosine, latitude, its sine and cosine, R_M, R_N and their
+  /// derivatives by the latitude.
+  void anchor(const State& y0, StepAnchor& a) const override;
+  State derivative(const Instant& in, const State& y, const StepAnchor& a) const override;
 
   const std::vector<FlightPhase>& timeline() const { return phases_; }
   /// Roll angle [rad] and roll rate [rad/s] at t.
