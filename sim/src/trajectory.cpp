@@ -441,12 +441,12 @@ Motion::State FlightMotion::derivative(const Instant& in, const State& y, const 
   const double dl = y(1) - a.v[3];
   const double c_lat = a.v[5] - (a.v[4] * dl + a.v[5] * dl * dl * 0.5);
   const double rm = a.v[6] + a.v[8] * dl, rn = a.v[7] + a.v[9] * dl;
-  const double h = y(3);
+  const Vec3 rate = fsw::llh_rate(rm, rn, c_lat, y(3), Vec3(ch * s_trk, ch * c_trk, V * sg));
   State d = State::Zero();
   d(0) = in.v[8];
-  d(1) = ch * c_trk / (rm + h);
-  d(2) = ch * s_trk / ((rn + h) * c_lat);
-  d(3) = V * sg;
+  d(1) = rate.x();
+  d(2) = rate.y();
+  d(3) = rate.z();
   return d;
 }
 

@@ -220,12 +220,15 @@ inline Vec3 omega_en_n(double lat_rad, double h_m, const Vec3& vel_enu_mps) {
   return omega_en_n(LatitudeTerms(lat_rad), h_m, vel_enu_mps);
 }
 
+/// Rate of change of (lat, lon, h) for an ENU velocity, from the radii of curvature R_M, R_N and
+/// the cosine of the latitude there (a caller that has them: the truth's RK4 stages).
+inline Vec3 llh_rate(double r_m_m, double r_n_m, double cos_lat, double h_m, const Vec3& vel_enu_mps) {
+  return Vec3(vel_enu_mps.y() / (r_m_m + h_m), vel_enu_mps.x() / ((r_n_m + h_m) * cos_lat), vel_enu_mps.z());
+}
 /// Rate of change of (lat, lon, h) for an ENU velocity.
 inline Vec3 llh_rate(const Vec3& llh, const Vec3& vel_enu_mps) {
   const LatitudeTerms l(llh.x());
-  const double h = llh.z();
-  return Vec3(vel_enu_mps.y() / (meridian_radius_m(l) + h), vel_enu_mps.x() / ((normal_radius_m(l) + h) * l.cos_lat),
-              vel_enu_mps.z());
+  return llh_rate(meridian_radius_m(l), normal_radius_m(l), l.cos_lat, llh.z(), vel_enu_mps);
 }
 
 /// Small (lat, lon, h) change for an ENU displacement [m] at llh (the same map as llh_rate).
