@@ -10,6 +10,40 @@ namespace sim {
 using fsw::kDegToRad;
 using fsw::kPi;
 
+namespace {
+/// The sine and cosine of one angle, kept for the next call with the same angle (the same bits,
+/// so the same values: a memo of std::sin and std::cos). The truth asks again for angles it has
+/// just used: an RK4 step starts at the state the last sample was evaluated at (its track and
+/// latitude), and the roll and the pitch hold still through most of a flight. One set per thread:
+/// generators on several threads keep their own.
+struct SinCosMemo {
+  bool valid = false;
+  std::uint64_t bits = 0;
+  double s = 0.0, c = 0.0;
+  void of(double x, double& s_out, double& c_out) {
+    std::uint64_t b = 0;
+    std::memcpy(&b, &x, sizeof b);
+    if (!valid || b != bits) {
+      valid = true;
+      bits = b;
+      s = std::sin(x);
+      c = std::cos(x);
+    }
+    s_out = s;
+    c_out = c;
+  }
+};
+thread_local SinCosMemo t_track, t_roll, t_pitch, t_lat;
+
+void track_sin_cos(double psi, double& s, double& c) { t_track.of(psi, s, c); }
+
+fsw::LatitudeTerms latitude_terms(double lat) {
+  double s = 0.0, c = 0.0;
+  t_lat.of(lat, s, c);
+  return fsw::LatitudeTerms(lat, s, c);
+}
+}  // namespace
+
 double smooth_step(double x) {
   x = std::clamp(x, 0.0, 1.0);
   return x - std::sin(2.0 * kPi * x) / (2.0 * kPi);
@@ -21,7 +55,7 @@ double smooth_step_rate(double x) {
 }
 
 void imu_from_kinematics(const Kinematics& k, Vec3& omega_ib_b, Vec3& f_b) {
-  const fsw::LatitudeTerms lat(k.llh.x());  // one sine and cosine for the three terms, same bits
+  const fsw::LatitudeTerms lat = latitude_terms(k.llh.x());  // one sine and cosine for the three terms
   const double h = k.llh.z();
   const Vec3 w_ie = fsw::omega_ie_n(lat);
   const Vec3 w_en = fsw::omega_en_n(lat, h, k.vel_enu_mps);
@@ -361,32 +395,6 @@ void FlightMotion::instant(double t_s, Instant& in) const {
   v[10] = level_path ? 1.0 : std::cos(v[4]);
 }
 
-namespace {
-/// sin and cos of the track, kept for the next call with the same angle (same bits, so the same
-/// values). An RK4 step's first derivative is taken at the state the truth was just evaluated at:
-/// the first of every four derivatives finds eval()'s track here (2 of 28 sine-cosine pairs per
-/// 1 kHz sample). One per thread: generators on several threads keep their own.
-struct TrackSinCos {
-  bool valid = false;
-  std::uint64_t bits = 0;
-  double s = 0.0, c = 0.0;
-};
-thread_local TrackSinCos t_track;
-
-void track_sin_cos(double psi, double& s, double& c) {
-  std::uint64_t bits = 0;
-  std::memcpy(&bits, &psi, sizeof bits);
-  if (!t_track.valid || bits != t_track.bits) {
-    t_track.valid = true;
-    t_track.bits = bits;
-    t_track.s = std::sin(psi);
-    t_track.c = std::cos(psi);
-  }
-  s = t_track.s;
-  c = t_track.c;
-}
-}  // namespace
-
 Motion::State FlightMotion::derivative(double t_s, const State& y) const {
   Instant in;
   instant(t_s, in);
@@ -411,7 +419,7 @@ Motion::State FlightMotion::derivative(const Instant& in, const State& y) const 
 void FlightMotion::anchor(const State& y0, StepAnchor& a) const {
   double s_trk = 0.0, c_trk = 0.0;
   track_sin_cos(y0(0), s_trk, c_trk);
-  const fsw::LatitudeTerms l(y0(1));
+  const fsw::LatitudeTerms l = latitude_terms(y0(1));
   const double rm = fsw::meridian_radius_m(l), rn = fsw::normal_radius_m(l);
   // dR_M/dlat = 3 R_M e2 s c / d and dR_N/dlat = R_N e2 s c / d, d = 1 - e2 s^2.
   const double k = fsw::wgs84::e2 * l.sin_lat * l.cos_lat / (1.0 - fsw::wgs84::e2 * l.sin_lat * l.sin_lat);
@@ -474,7 +482,10 @@ Kinematics FlightMotion::eval(const Instant& in, const State& y) const {
   // is no crab (the same bits of the angle).
   double sh = 0.0, ch = 0.0;
   track_sin_cos(psi + beta, sh, ch);
-  const fsw::EulerTerms e{std::sin(phi), std::cos(phi), std::sin(theta), std::cos(theta), sh, ch};
+  double sr = 0.0, cr = 0.0, s_pitch = 0.0, c_pitch = 0.0;
+  t_roll.of(phi, sr, cr);
+  t_pitch.of(theta, s_pitch, c_pitch);
+  const fsw::EulerTerms e{sr, cr, s_pitch, c_pitch, sh, ch};
   k.C_b_n = fsw::C_b_n_from_euler(e);
   k.omega_nb_b_radps = fsw::omega_nb_b_from_euler_rates(e, phi_dot, gam_dot, psi_dot + beta_dot);
   return k;

@@ -173,6 +173,8 @@ inline Vec3 attitude_error_enu(const Mat3& C_b_n_hat, const Mat3& C_b_n_true) {
 struct LatitudeTerms {
   double lat_rad, sin_lat, cos_lat;
   explicit LatitudeTerms(double lat) : lat_rad(lat), sin_lat(std::sin(lat)), cos_lat(std::cos(lat)) {}
+  /// From a sine and cosine the caller already has of this latitude (std::sin and std::cos of it).
+  LatitudeTerms(double lat, double s, double c) : lat_rad(lat), sin_lat(s), cos_lat(c) {}
 };
 
 /// Meridian radius of curvature R_M (north-south) [m], from the sine of the latitude.
