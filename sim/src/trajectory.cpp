@@ -37,6 +37,16 @@ thread_local SinCosMemo t_track, t_roll, t_pitch, t_lat;
 
 void track_sin_cos(double psi, double& s, double& c) { t_track.of(psi, s, c); }
 
+/// The flight's ODE state rate: (track rate, lat rate, lon rate, height rate).
+Motion::State flight_rate(double track_rate_radps, const Vec3& llh_rate) {
+  Motion::State d = Motion::State::Zero();
+  d(0) = track_rate_radps;
+  d(1) = llh_rate.x();
+  d(2) = llh_rate.y();
+  d(3) = llh_rate.z();
+  return d;
+}
+
 fsw::LatitudeTerms latitude_terms(double lat) {
   double s = 0.0, c = 0.0;
   t_lat.of(lat, s, c);
@@ -407,13 +417,7 @@ Motion::State FlightMotion::derivative(const Instant& in, const State& y) const 
   double s_trk = 0.0, c_trk = 0.0;
   track_sin_cos(y(0), s_trk, c_trk);
   const Vec3 v(ch * s_trk, ch * c_trk, V * sg);
-  const Vec3 rate = fsw::llh_rate(Vec3(y(1), y(2), y(3)), v);
-  State d = State::Zero();
-  d(0) = in.v[8];
-  d(1) = rate.x();
-  d(2) = rate.y();
-  d(3) = rate.z();
-  return d;
+  return flight_rate(in.v[8], fsw::llh_rate(Vec3(y(1), y(2), y(3)), v));
 }
 
 void FlightMotion::anchor(const State& y0, StepAnchor& a) const {
@@ -449,13 +453,7 @@ Motion::State FlightMotion::derivative(const Instant& in, const State& y, const 
   const double dl = y(1) - a.v[3];
   const double c_lat = a.v[5] - (a.v[4] * dl + a.v[5] * dl * dl * 0.5);
   const double rm = a.v[6] + a.v[8] * dl, rn = a.v[7] + a.v[9] * dl;
-  const Vec3 rate = fsw::llh_rate(rm, rn, c_lat, y(3), Vec3(ch * s_trk, ch * c_trk, V * sg));
-  State d = State::Zero();
-  d(0) = in.v[8];
-  d(1) = rate.x();
-  d(2) = rate.y();
-  d(3) = rate.z();
-  return d;
+  return flight_rate(in.v[8], fsw::llh_rate(rm, rn, c_lat, y(3), Vec3(ch * s_trk, ch * c_trk, V * sg)));
 }
 
 Kinematics FlightMotion::eval(double t_s, const State& y) const {
