@@ -81,19 +81,6 @@ void read_clock_fit(RecordingEvidence& ev, const std::string& log_path) {
   if (f.contains("residual_rms_s") && f["residual_rms_s"].is_number()) ev.clock_fit_residual_rms_s = f["residual_rms_s"].get<double>();
 }
 
-/// Cumulative |rotation| of the IMU against its tags: C(t), piecewise linear.
-struct CumulativeRate {
-  std::vector<double> t, c;
-  double at(double x) const {
-    if (t.empty()) return 0.0;
-    if (x <= t.front()) return c.front();
-    if (x >= t.back()) return c.back();
-    const std::size_t k = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), x) - t.begin());
-    const double u = (x - t[k - 1]) / (t[k] - t[k - 1]);
-    return c[k - 1] + u * (c[k] - c[k - 1]);
-  }
-};
-
 double correlation(const std::vector<double>& a, const std::vector<double>& b) {
   const double n = static_cast<double>(a.size());
   if (a.size() < 10) return 0.0;
@@ -114,6 +101,32 @@ double correlation(const std::vector<double>& a, const std::vector<double>& b) {
 }
 
 }  // namespace
+
+double CumulativeRate::at(double x) const {
+  std::size_t hint = 0;
+  return at(x, hint);
+}
+
+double CumulativeRate::at(double x, std::size_t& hint) const {
+  if (t.empty()) return 0.0;
+  if (x <= t.front()) return c.front();
+  if (x >= t.back()) return c.back();
+  // k = the first tag after x (std::upper_bound over all of t). With t[hint - 1] <= x every tag
+  // before hint is <= x, so k >= hint: searched in a window from hint, then beyond it.
+  std::size_t k = 0;
+  if (hint >= 1 && hint < t.size() && t[hint - 1] <= x) {
+    const std::size_t end = std::min(t.size(), hint + kWindow);
+    k = static_cast<std::size_t>(std::upper_bound(t.begin() + static_cast<std::ptrdiff_t>(hint),
+                                                  t.begin() + static_cast<std::ptrdiff_t>(end), x) - t.begin());
+    if (k == end && end < t.size())
+      k = static_cast<std::size_t>(std::upper_bound(t.begin() + static_cast<std::ptrdiff_t>(end), t.end(), x) - t.begin());
+  } else {
+    k = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), x) - t.begin());
+  }
+  hint = k;
+  const double u = (x - t[k - 1]) / (t[k] - t[k - 1]);
+  return c[k - 1] + u * (c[k] - c[k - 1]);
+}
 
 void reference_lag(RecordingEvidence& ev, const RecordedData& data) {
   const std::vector<TruthPoint>& tr = data.truth;
@@ -156,10 +169,11 @@ void reference_lag(RecordingEvidence& ev, const RecordedData& data) {
   const double lo_t = cum.t.front() + kMaxReferenceLag_s, hi_t = cum.t.back() - kMaxReferenceLag_s;
   const auto corr_at = [&](double lag) {
     std::vector<double> a, b;
+    std::size_t hint0 = 0, hint1 = 0;  // the reference's times ascend: each lookup starts at the last
     for (std::size_t k = 0; k < ref.size(); ++k) {
       if (t0[k] < lo_t || t1[k] > hi_t) continue;
       a.push_back(ref[k]);
-      b.push_back((cum.at(t1[k] + lag) - cum.at(t0[k] + lag)) / (t1[k] - t0[k]));
+      b.push_back((cum.at(t1[k] + lag, hint1) - cum.at(t0[k] + lag, hint0)) / (t1[k] - t0[k]));
     }
     return std::make_pair(correlation(a, b), static_cast<int>(a.size()));
   };

@@ -19,6 +19,7 @@
 //     its own filter lag).
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,19 @@ inline constexpr double kCounterMaxResidualPeriods = 0.25;
 inline constexpr double kClockFitTolerance_ppm = 20.0;
 /// Lags searched by the cross-correlation: +- this [s].
 inline constexpr double kMaxReferenceLag_s = 1.0;
+
+/// Cumulative |rotation| of the IMU against its tags: C(t), piecewise linear between the tags t
+/// (strictly ascending), clamped to its ends. at(x, hint) gives at(x) exactly (the same segment
+/// and the same arithmetic) and starts its search at hint, the segment of the caller's last
+/// lookup: the reference-lag correlation asks for ascending times, 244 lags x 2 per reference
+/// interval, which a search over all of a long recording's tags each time made most of the
+/// evidence's cost.
+struct CumulativeRate {
+  static constexpr std::size_t kWindow = 512;  ///< tags searched from the hint before the rest
+  std::vector<double> t, c;
+  double at(double x) const;
+  double at(double x, std::size_t& hint) const;
+};
 
 /// What the evidence says about one finding.
 struct EvidenceCheck {
