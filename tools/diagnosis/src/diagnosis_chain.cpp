@@ -6,6 +6,8 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "tools/parallel.hpp"
 #include "tools/diagnosis_intervals.hpp"
@@ -86,46 +88,49 @@ Finding shifted(Finding f, double before) {
   return f;
 }
 
-/// The baseline runs' log-likelihood over the measurements every stage used.
-void chain_log_likelihood(std::vector<ChainStage>& stages, const std::vector<const DiagnosisRun*>& runs) {
-  std::map<std::uint64_t, int> count;
+/// Each run's Gaussian log-likelihood over the measurements (scalar keys) every run used, and how
+/// many they are: each key counted once per run, summed in the run's own order.
+struct CommonLl {
+  double ll = 0.0;
+  int measurements = 0;
+};
+std::vector<CommonLl> common_log_likelihood(const std::vector<const DiagnosisRun*>& runs) {
+  std::unordered_map<std::uint64_t, int> count;
+  std::unordered_set<std::uint64_t> seen;
   for (const DiagnosisRun* r : runs) {
-    std::set<std::uint64_t> keys;
-    for (const DiagnosisRun::Scalar& s : r->scalars) keys.insert(s.key);
-    for (std::uint64_t k : keys) ++count[k];
+    seen.clear();
+    for (const DiagnosisRun::Scalar& s : r->scalars)
+      if (seen.insert(s.key).second) ++count[s.key];
   }
   const int n = static_cast<int>(runs.size());
+  std::vector<CommonLl> out(runs.size());
   for (std::size_t i = 0; i < runs.size(); ++i) {
-    double ll = 0.0;
-    int m = 0;
-    std::set<std::uint64_t> seen;
+    seen.clear();
     for (const DiagnosisRun::Scalar& s : runs[i]->scalars) {
       if (count[s.key] != n || !seen.insert(s.key).second) continue;
-      ll += -0.5 * (std::log(2.0 * fsw::kPi * s.S) + s.nu * s.nu / s.S);
-      ++m;
+      out[i].ll += -0.5 * (std::log(2.0 * fsw::kPi * s.S) + s.nu * s.nu / s.S);
+      ++out[i].measurements;
     }
-    stages[i].base_log_likelihood = ll;
-    stages[i].common_measurements = m;
+  }
+  return out;
+}
+
+/// The baseline runs' log-likelihood over the measurements every stage used.
+void chain_log_likelihood(std::vector<ChainStage>& stages, const std::vector<const DiagnosisRun*>& runs) {
+  const std::vector<CommonLl> c = common_log_likelihood(runs);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    stages[i].base_log_likelihood = c[i].ll;
+    stages[i].common_measurements = c[i].measurements;
   }
 }
 
-/// The baseline's log-likelihood over the keys every run used.
+/// The runs' log-likelihood over the keys every run used (a run that never initialised: -1e300).
 std::vector<double> common_ll(const std::vector<DiagnosisRun>& runs) {
-  std::map<std::uint64_t, int> count;
-  for (const DiagnosisRun& r : runs) {
-    std::set<std::uint64_t> keys;
-    for (const DiagnosisRun::Scalar& x : r.scalars) keys.insert(x.key);
-    for (std::uint64_t k : keys) ++count[k];
-  }
+  std::vector<const DiagnosisRun*> p;
+  for (const DiagnosisRun& r : runs) p.push_back(&r);
+  const std::vector<CommonLl> c = common_log_likelihood(p);
   std::vector<double> ll;
-  for (const DiagnosisRun& r : runs) {
-    double l = 0.0;
-    std::set<std::uint64_t> seen;
-    for (const DiagnosisRun::Scalar& x : r.scalars)
-      if (count[x.key] == static_cast<int>(runs.size()) && seen.insert(x.key).second)
-        l += -0.5 * (std::log(2.0 * fsw::kPi * x.S) + x.nu * x.nu / x.S);
-    ll.push_back(r.initialised ? l : -1e300);
-  }
+  for (std::size_t i = 0; i < runs.size(); ++i) ll.push_back(runs[i].initialised ? c[i].ll : -1e300);
   return ll;
 }
 
