@@ -35,8 +35,6 @@ struct SinCosMemo {
 };
 thread_local SinCosMemo t_track, t_roll, t_pitch, t_lat;
 
-void track_sin_cos(double psi, double& s, double& c) { t_track.of(psi, s, c); }
-
 /// The flight's ODE state rate: (track rate, lat rate, lon rate, height rate).
 Motion::State flight_rate(double track_rate_radps, const Vec3& llh_rate) {
   Motion::State d = Motion::State::Zero();
@@ -168,6 +166,20 @@ double transition_heading_change(double g, double V, double phi_b, double T) {
   }
   return g / V * T * sum;
 }
+
+/// A coordinated turn's time at constant bank: its heading change less what the roll-in and the
+/// roll-out turn, at the bank's turn rate. False (and error) when the transitions alone turn more.
+bool turn_bank_time(double g, double V, const Segment& s, std::size_t idx, double& t_bank, std::string& error) {
+  const double phi_b = s.bank_deg * kDegToRad;
+  const double dpsi_roll = transition_heading_change(g, V, phi_b, s.roll_time_s);
+  const double psi_rate = g * std::tan(phi_b) / V;
+  t_bank = (s.heading_change_deg * kDegToRad - 2.0 * dpsi_roll) / psi_rate;
+  if (!(t_bank < 0.0)) return true;
+  error = "segment " + std::to_string(idx) + ": heading change " + std::to_string(s.heading_change_deg) +
+          " deg is smaller than the " + std::to_string(2.0 * dpsi_roll / kDegToRad) +
+          " deg turned during roll-in and roll-out";
+  return false;
+}
 }  // namespace
 
 std::unique_ptr<FlightMotion> FlightMotion::create(const Scenario& sc, std::string& error) {
@@ -223,16 +235,8 @@ std::unique_ptr<FlightMotion> FlightMotion::create(const Scenario& sc, std::stri
       case SegmentType::kTurn: {
         const double phi_b = s.bank_deg * kDegToRad;
         const double T = s.roll_time_s;
-        const double dpsi_roll = transition_heading_change(m->g_coord_mps2_, V, phi_b, T);
-        const double psi_rate = m->g_coord_mps2_ * std::tan(phi_b) / V;
-        const double dpsi_total = s.heading_change_deg * kDegToRad;
-        const double t_bank = (dpsi_total - 2.0 * dpsi_roll) / psi_rate;
-        if (t_bank < 0.0) {
-          error = "segment " + std::to_string(idx) + ": heading change " + std::to_string(s.heading_change_deg) +
-                  " deg is smaller than the " + std::to_string(2.0 * dpsi_roll / kDegToRad) +
-                  " deg turned during roll-in and roll-out";
-          return nullptr;
-        }
+        double t_bank = 0.0;
+        if (!turn_bank_time(m->g_coord_mps2_, V, s, idx, t_bank, error)) return nullptr;
         m->phases_.push_back(level(FlightPhase::Kind::kRollIn, t, t + T, sign * phi_b, seg, turn, true));
         m->phases_.push_back(level(FlightPhase::Kind::kBank, t + T, t + T + t_bank, sign * phi_b, seg, turn, true));
         m->phases_.push_back(
@@ -415,14 +419,14 @@ Motion::State FlightMotion::derivative(const Instant& in, const State& y) const 
   const double V = in.v[2], sg = in.v[9], cg = in.v[10];
   const double ch = V * cg;
   double s_trk = 0.0, c_trk = 0.0;
-  track_sin_cos(y(0), s_trk, c_trk);
+  t_track.of(y(0), s_trk, c_trk);
   const Vec3 v(ch * s_trk, ch * c_trk, V * sg);
   return flight_rate(in.v[8], fsw::llh_rate(Vec3(y(1), y(2), y(3)), v));
 }
 
 void FlightMotion::anchor(const State& y0, StepAnchor& a) const {
   double s_trk = 0.0, c_trk = 0.0;
-  track_sin_cos(y0(0), s_trk, c_trk);
+  t_track.of(y0(0), s_trk, c_trk);
   const fsw::LatitudeTerms l = latitude_terms(y0(1));
   const double rm = fsw::meridian_radius_m(l), rn = fsw::normal_radius_m(l);
   // dR_M/dlat = 3 R_M e2 s c / d and dR_N/dlat = R_N e2 s c / d, d = 1 - e2 s^2.
@@ -468,7 +472,7 @@ Kinematics FlightMotion::eval(const Instant& in, const State& y) const {
   const double psi = y(0);  // the track
   const double theta = start_.pitch_deg * kDegToRad + gam;
   double sp = 0.0, cp = 0.0;
-  track_sin_cos(psi, sp, cp);
+  t_track.of(psi, sp, cp);
   Kinematics k;
   k.llh = Vec3(y(1), y(2), y(3));
   k.vel_enu_mps = V * Vec3(cg * sp, cg * cp, sg);
@@ -476,10 +480,10 @@ Kinematics FlightMotion::eval(const Instant& in, const State& y) const {
   k.acc_enu_mps2 = V_dot * Vec3(cg * sp, cg * cp, sg) + V * gam_dot * Vec3(-sg * sp, -sg * cp, cg) +
                    V * psi_dot * Vec3(cg * cp, -cg * sp, 0.0);
   // The body heading is the track plus the crab angle; the velocity above follows the track only.
-  // The heading's sine and cosine through the track's cache: the same as the track's when there
-  // is no crab (the same bits of the angle).
+  // The heading's sine and cosine through the track's memo: the track's own when there is no
+  // crab (the same bits of the angle).
   double sh = 0.0, ch = 0.0;
-  track_sin_cos(psi + beta, sh, ch);
+  t_track.of(psi + beta, sh, ch);
   double sr = 0.0, cr = 0.0, s_pitch = 0.0, c_pitch = 0.0;
   t_roll.of(phi, sr, cr);
   t_pitch.of(theta, s_pitch, c_pitch);
