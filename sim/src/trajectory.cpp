@@ -62,14 +62,30 @@ double smooth_step_rate(double x) {
   return 1.0 - std::cos(2.0 * kPi * x);
 }
 
+EarthTerms EarthTerms::exact(double lat_rad) {
+  const fsw::LatitudeTerms l = latitude_terms(lat_rad);  // one sine and cosine for all the terms
+  EarthTerms e;
+  e.sin_lat = l.sin_lat;
+  e.cos_lat = l.cos_lat;
+  e.tan_lat = std::tan(lat_rad);
+  e.r_m_m = fsw::meridian_radius_m(l);
+  e.r_n_m = fsw::normal_radius_m(l);
+  e.sqrt_1_e2_s2 = std::sqrt(1.0 - fsw::wgs84::e2 * (l.sin_lat * l.sin_lat));
+  return e;
+}
+
 void imu_from_kinematics(const Kinematics& k, Vec3& omega_ib_b, Vec3& f_b) {
-  const fsw::LatitudeTerms lat = latitude_terms(k.llh.x());  // one sine and cosine for the three terms
+  imu_from_kinematics(k, EarthTerms::exact(k.llh.x()), omega_ib_b, f_b);
+}
+
+void imu_from_kinematics(const Kinematics& k, const EarthTerms& e, Vec3& omega_ib_b, Vec3& f_b) {
   const double h = k.llh.z();
-  const Vec3 w_ie = fsw::omega_ie_n(lat);
-  const Vec3 w_en = fsw::omega_en_n(lat, h, k.vel_enu_mps);
+  const Vec3 w_ie = fsw::omega_ie_n(fsw::LatitudeTerms(k.llh.x(), e.sin_lat, e.cos_lat));
+  const Vec3 w_en = fsw::omega_en_n(e.r_m_m, e.r_n_m, e.tan_lat, h, k.vel_enu_mps);
+  const Vec3 g_enu(0.0, 0.0, -fsw::normal_gravity_from_sin2_mps2(e.sin_lat * e.sin_lat, e.sqrt_1_e2_s2, h));
   const Mat3 C_n_b = k.C_b_n.transpose();
   omega_ib_b = k.omega_nb_b_radps + C_n_b * (w_ie + w_en);
-  f_b = C_n_b * (k.acc_enu_mps2 + (2.0 * w_ie + w_en).cross(k.vel_enu_mps) - fsw::gravity_enu_mps2(lat, h));
+  f_b = C_n_b * (k.acc_enu_mps2 + (2.0 * w_ie + w_en).cross(k.vel_enu_mps) - g_enu);
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -78,7 +94,7 @@ void imu_from_kinematics(const Kinematics& k, Vec3& omega_ib_b, Vec3& f_b) {
 
 TruthGenerator::TruthGenerator(const Motion& motion, double rate_hz) : motion_(motion), dt_s_(1.0 / rate_hz) {
   y_ = motion_.initial_state();
-  p_cur_ = evaluate(0.0, y_);
+  p_cur_ = evaluate(0.0, y_, false);
   set_current(0.0, 0.0, p_cur_);
 }
 
@@ -104,10 +120,16 @@ const Motion::Instant& TruthGenerator::instant(double t) {
   return in;
 }
 
-TruthGenerator::Point TruthGenerator::evaluate(double t, const Motion::State& y) {
+TruthGenerator::Point TruthGenerator::evaluate(double t, const Motion::State& y, bool within_step) {
   Point p;
-  p.k = motion_.eval(instant(t), y);
-  imu_from_kinematics(p.k, p.omega_ib_b, p.f_b);
+  if (!within_step) {
+    p.k = motion_.eval(instant(t), y);
+    imu_from_kinematics(p.k, p.omega_ib_b, p.f_b);
+    return p;
+  }
+  EarthTerms earth;
+  p.k = motion_.eval(instant(t), y, anchor_, earth);
+  imu_from_kinematics(p.k, earth, p.omega_ib_b, p.f_b);
   return p;
 }
 
@@ -134,8 +156,8 @@ const TruthSample& TruthGenerator::next() {
   const double tm = (static_cast<double>(index_) + 0.5) * dt_s_;
   const double t1 = static_cast<double>(index_ + 1) * dt_s_;
   const Motion::State y_mid = rk4(t0, tm, t1);
-  const Point pm = evaluate(tm, y_mid);
-  const Point p1 = evaluate(t1, y_);
+  const Point pm = evaluate(tm, y_mid, true);  // both within the step rk4 just anchored
+  const Point p1 = evaluate(t1, y_, true);
   const double h = t1 - t0;
   cur_.dtheta_rad = h / 6.0 * (p_cur_.omega_ib_b + 4.0 * pm.omega_ib_b + p1.omega_ib_b);
   cur_.dv_mps = h / 6.0 * (p_cur_.f_b + 4.0 * pm.f_b + p1.f_b);
@@ -427,33 +449,62 @@ Motion::State FlightMotion::derivative(const Instant& in, const State& y) const 
 void FlightMotion::anchor(const State& y0, StepAnchor& a) const {
   double s_trk = 0.0, c_trk = 0.0;
   t_track.of(y0(0), s_trk, c_trk);
-  const fsw::LatitudeTerms l = latitude_terms(y0(1));
-  const double rm = fsw::meridian_radius_m(l), rn = fsw::normal_radius_m(l);
-  // dR_M/dlat = 3 R_M e2 s c / d and dR_N/dlat = R_N e2 s c / d, d = 1 - e2 s^2.
-  const double k = fsw::wgs84::e2 * l.sin_lat * l.cos_lat / (1.0 - fsw::wgs84::e2 * l.sin_lat * l.sin_lat);
+  const EarthTerms e = EarthTerms::exact(y0(1));
+  // dR_M/dlat = 3 R_M e2 s c / d and dR_N/dlat = R_N e2 s c / d, d = 1 - e2 s^2;
+  // d sqrt(d)/dlat = -e2 s c / sqrt(d).
+  const double e2sc = fsw::wgs84::e2 * e.sin_lat * e.cos_lat;
+  const double k = e2sc / (1.0 - fsw::wgs84::e2 * e.sin_lat * e.sin_lat);
   a.v[0] = y0(0);
   a.v[1] = s_trk;
   a.v[2] = c_trk;
   a.v[3] = y0(1);
-  a.v[4] = l.sin_lat;
-  a.v[5] = l.cos_lat;
-  a.v[6] = rm;
-  a.v[7] = rn;
-  a.v[8] = 3.0 * rm * k;
-  a.v[9] = rn * k;
+  a.v[4] = e.sin_lat;
+  a.v[5] = e.cos_lat;
+  a.v[6] = e.r_m_m;
+  a.v[7] = e.r_n_m;
+  a.v[8] = 3.0 * e.r_m_m * k;
+  a.v[9] = e.r_n_m * k;
+  a.v[10] = e.tan_lat;
+  a.v[11] = e.sqrt_1_e2_s2;
+  a.v[12] = -e2sc / e.sqrt_1_e2_s2;
 }
 
+namespace {
+// Within one step the track moves by at most |heading rate| h (1.3e-4 rad at 1 kHz): its sine
+// and cosine to the third power, remainder dp^4 / 24 < 1e-17. The latitude moves by about
+// V h / R (4e-8 rad): its sine, cosine and tangent to the second power, the radii and gravity's
+// square root to the first, leave remainders of about 1e-23, 1e-10 m (R_M'' dl^2 / 2) and 1e-17,
+// below the rounding of each. At dp = dl = 0 every correction is an exact zero and the terms are
+// the anchor's bits.
+
+/// The track's sine and cosine at psi from the step anchor a.
+void carried_track(const Motion::StepAnchor& a, double psi, double& s_trk, double& c_trk) {
+  const double dp = psi - a.v[0], dp2 = dp * dp;
+  s_trk = a.v[1] + (a.v[2] * dp - a.v[1] * dp2 * 0.5 - a.v[2] * dp2 * dp * (1.0 / 6.0));
+  c_trk = a.v[2] - (a.v[1] * dp + a.v[2] * dp2 * 0.5 - a.v[1] * dp2 * dp * (1.0 / 6.0));
+}
+
+/// The Earth terms at latitude lat from the step anchor a (its cosine and radii are what the
+/// RK4 stages take).
+EarthTerms carried_earth(const Motion::StepAnchor& a, double lat) {
+  const double dl = lat - a.v[3], dl2 = dl * dl;
+  const double t = a.v[10], sec2 = 1.0 + t * t;
+  EarthTerms e;
+  e.sin_lat = a.v[4] + (a.v[5] * dl - a.v[4] * dl2 * 0.5);
+  e.cos_lat = a.v[5] - (a.v[4] * dl + a.v[5] * dl2 * 0.5);
+  e.tan_lat = t + (sec2 * dl + t * sec2 * dl2);
+  e.r_m_m = a.v[6] + a.v[8] * dl;
+  e.r_n_m = a.v[7] + a.v[9] * dl;
+  e.sqrt_1_e2_s2 = a.v[11] + a.v[12] * dl;
+  return e;
+}
+}  // namespace
+
 Motion::State FlightMotion::derivative(const Instant& in, const State& y, const StepAnchor& a) const {
-  // Within one step the track moves by at most |heading rate| h (1.3e-4 rad at 1 kHz): its sine
-  // and cosine to the third power, remainder dp^4 / 24 < 1e-17. The latitude moves by about
-  // V h / R (4e-8 rad): the second power and the radii's first leave remainders of 1e-23 and
-  // 1e-10 m (R_M'' dl^2 / 2), below the rounding of each. At dp = dl = 0 every correction is an
-  // exact zero and the terms are the anchor's: derivative(in, y0) bit for bit.
   const double V = in.v[2], sg = in.v[9], cg = in.v[10];
   const double ch = V * cg;
-  const double dp = y(0) - a.v[0], dp2 = dp * dp;
-  const double s_trk = a.v[1] + (a.v[2] * dp - a.v[1] * dp2 * 0.5 - a.v[2] * dp2 * dp * (1.0 / 6.0));
-  const double c_trk = a.v[2] - (a.v[1] * dp + a.v[2] * dp2 * 0.5 - a.v[1] * dp2 * dp * (1.0 / 6.0));
+  double s_trk = 0.0, c_trk = 0.0;
+  carried_track(a, y(0), s_trk, c_trk);
   const double dl = y(1) - a.v[3];
   const double c_lat = a.v[5] - (a.v[4] * dl + a.v[5] * dl * dl * 0.5);
   const double rm = a.v[6] + a.v[8] * dl, rn = a.v[7] + a.v[9] * dl;
@@ -467,12 +518,23 @@ Kinematics FlightMotion::eval(double t_s, const State& y) const {
 }
 
 Kinematics FlightMotion::eval(const Instant& in, const State& y) const {
+  double sp = 0.0, cp = 0.0;
+  t_track.of(y(0), sp, cp);
+  return eval_with_track(in, y, sp, cp);
+}
+
+Kinematics FlightMotion::eval(const Instant& in, const State& y, const StepAnchor& a, EarthTerms& earth) const {
+  double sp = 0.0, cp = 0.0;
+  carried_track(a, y(0), sp, cp);
+  earth = carried_earth(a, y(1));
+  return eval_with_track(in, y, sp, cp);
+}
+
+Kinematics FlightMotion::eval_with_track(const Instant& in, const State& y, double sp, double cp) const {
   const double phi = in.v[0], phi_dot = in.v[1], V = in.v[2], V_dot = in.v[3], gam = in.v[4], gam_dot = in.v[5];
   const double beta = in.v[6], beta_dot = in.v[7], psi_dot = in.v[8], sg = in.v[9], cg = in.v[10];
-  const double psi = y(0);  // the track
+  const double psi = y(0);  // the track, whose sine and cosine are sp and cp
   const double theta = start_.pitch_deg * kDegToRad + gam;
-  double sp = 0.0, cp = 0.0;
-  t_track.of(psi, sp, cp);
   Kinematics k;
   k.llh = Vec3(y(1), y(2), y(3));
   k.vel_enu_mps = V * Vec3(cg * sp, cg * cp, sg);
@@ -480,10 +542,9 @@ Kinematics FlightMotion::eval(const Instant& in, const State& y) const {
   k.acc_enu_mps2 = V_dot * Vec3(cg * sp, cg * cp, sg) + V * gam_dot * Vec3(-sg * sp, -sg * cp, cg) +
                    V * psi_dot * Vec3(cg * cp, -cg * sp, 0.0);
   // The body heading is the track plus the crab angle; the velocity above follows the track only.
-  // The heading's sine and cosine through the track's memo: the track's own when there is no
-  // crab (the same bits of the angle).
-  double sh = 0.0, ch = 0.0;
-  t_track.of(psi + beta, sh, ch);
+  // Without crab the heading's sine and cosine are the track's; with it, through the track's memo.
+  double sh = sp, ch = cp;
+  if (beta != 0.0) t_track.of(psi + beta, sh, ch);
   double sr = 0.0, cr = 0.0, s_pitch = 0.0, c_pitch = 0.0;
   t_roll.of(phi, sr, cr);
   t_pitch.of(theta, s_pitch, c_pitch);

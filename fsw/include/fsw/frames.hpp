@@ -194,11 +194,16 @@ inline double normal_radius_m(double lat_rad) { return normal_radius_from_sin_m(
 
 /// Normal gravity magnitude: Somigliana on the ellipsoid with the second-order height term
 /// (NIMA TR8350.2 eq. 4-1 and 4-3). Points along the ellipsoid normal, downwards.
-inline double normal_gravity_mps2(const LatitudeTerms& l, double h_m) {
-  const double s2 = l.sin_lat * l.sin_lat;
-  const double g0 = wgs84::gamma_e_mps2 * (1.0 + wgs84::k_somigliana * s2) / std::sqrt(1.0 - wgs84::e2 * s2);
+/// From the latitude's squared sine s2 and sqrt(1 - e2 s2) (a caller that carries them: the truth's
+/// evaluations within a step).
+inline double normal_gravity_from_sin2_mps2(double s2, double sqrt_1_e2_s2, double h_m) {
+  const double g0 = wgs84::gamma_e_mps2 * (1.0 + wgs84::k_somigliana * s2) / sqrt_1_e2_s2;
   const double a = wgs84::a_m;
   return g0 * (1.0 - 2.0 / a * (1.0 + wgs84::f + wgs84::m - 2.0 * wgs84::f * s2) * h_m + 3.0 * h_m * h_m / (a * a));
+}
+inline double normal_gravity_mps2(const LatitudeTerms& l, double h_m) {
+  const double s2 = l.sin_lat * l.sin_lat;
+  return normal_gravity_from_sin2_mps2(s2, std::sqrt(1.0 - wgs84::e2 * s2), h_m);
 }
 inline double normal_gravity_mps2(double lat_rad, double h_m) { return normal_gravity_mps2(LatitudeTerms(lat_rad), h_m); }
 
@@ -212,11 +217,16 @@ inline Vec3 omega_ie_n(const LatitudeTerms& l) {
 }
 inline Vec3 omega_ie_n(double lat_rad) { return omega_ie_n(LatitudeTerms(lat_rad)); }
 
+/// Transport rate in ENU from the radii of curvature R_M, R_N and the latitude's tangent there (a
+/// caller that has them: the truth's evaluations within a step), the height and ENU velocity.
+inline Vec3 omega_en_n(double r_m_m, double r_n_m, double tan_lat, double h_m, const Vec3& vel_enu_mps) {
+  const double rm = r_m_m + h_m;
+  const double rn = r_n_m + h_m;
+  return Vec3(-vel_enu_mps.y() / rm, vel_enu_mps.x() / rn, vel_enu_mps.x() * tan_lat / rn);
+}
 /// Transport rate in ENU for position (lat, h) and ENU velocity.
 inline Vec3 omega_en_n(const LatitudeTerms& l, double h_m, const Vec3& vel_enu_mps) {
-  const double rm = meridian_radius_m(l) + h_m;
-  const double rn = normal_radius_m(l) + h_m;
-  return Vec3(-vel_enu_mps.y() / rm, vel_enu_mps.x() / rn, vel_enu_mps.x() * std::tan(l.lat_rad) / rn);
+  return omega_en_n(meridian_radius_m(l), normal_radius_m(l), std::tan(l.lat_rad), h_m, vel_enu_mps);
 }
 inline Vec3 omega_en_n(double lat_rad, double h_m, const Vec3& vel_enu_mps) {
   return omega_en_n(LatitudeTerms(lat_rad), h_m, vel_enu_mps);

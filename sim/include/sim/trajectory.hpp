@@ -41,6 +41,16 @@ struct MotionPhase {
   bool turning = false;
 };
 
+/// The latitude's Earth-model terms imu_from_kinematics takes (its sine, cosine and tangent, the
+/// radii of curvature, and gravity's sqrt(1 - e2 sin^2)): exact() from libm, or carried from a
+/// step's start by Motion::eval(in, y, a, earth).
+struct EarthTerms {
+  double sin_lat = 0.0, cos_lat = 1.0, tan_lat = 0.0;
+  double r_m_m = 0.0, r_n_m = 0.0;
+  double sqrt_1_e2_s2 = 1.0;
+  static EarthTerms exact(double lat_rad);
+};
+
 class Motion {
  public:
   static constexpr int kMaxStates = 6;
@@ -72,11 +82,19 @@ class Motion {
   /// changes one 1 ms step makes. At y0 itself it gives derivative(in, y0) bit for bit. Default:
   /// no anchor, derivative(in, y).
   struct StepAnchor {
-    double v[10] = {};
+    double v[13] = {};
   };
   virtual void anchor(const State& /*y0*/, StepAnchor& /*a*/) const {}
   virtual State derivative(const Instant& in, const State& y, const StepAnchor& /*a*/) const {
     return derivative(in, y);
+  }
+  /// eval(in, y) and the Earth terms at y's latitude, for a state y within the step anchored by a
+  /// (the truth's midpoint and end of a step), carried from the anchor like derivative(in, y, a):
+  /// at y0 itself, eval(in, y0) and EarthTerms::exact bit for bit. Default: those two.
+  virtual Kinematics eval(const Instant& in, const State& y, const StepAnchor& /*a*/, EarthTerms& earth) const {
+    Kinematics k = eval(in, y);
+    earth = EarthTerms::exact(k.llh.x());
+    return k;
   }
 };
 
@@ -110,7 +128,8 @@ class TruthGenerator {
     Vec3 omega_ib_b;
     Vec3 f_b;
   };
-  Point evaluate(double t, const Motion::State& y);
+  /// The point at (t, y): exactly, or (within_step) with the terms carried from anchor_.
+  Point evaluate(double t, const Motion::State& y, bool within_step);
   /// Advances y_ by one RK4 step from t0 to t1 and returns the state at tm between them.
   Motion::State rk4(double t0, double tm, double t1);
   /// The motion's Instant of t: the last two are kept (an RK4 step asks for its middle three
@@ -132,6 +151,8 @@ class TruthGenerator {
 
 /// Specific force and inertial body rate from kinematics (the equations above).
 void imu_from_kinematics(const Kinematics& k, Vec3& omega_ib_b, Vec3& f_b);
+/// The same with the Earth terms at k's latitude given.
+void imu_from_kinematics(const Kinematics& k, const EarthTerms& earth, Vec3& omega_ib_b, Vec3& f_b);
 
 // ------------------------------------------------------------------------------------------------
 // Motions
@@ -174,9 +195,11 @@ class FlightMotion final : public Motion {
   State derivative(const Instant& in, const State& y) const override;
   Kinematics eval(const Instant& in, const State& y) const override;
   /// a.v = track, its sine and cosine, latitude, its sine and cosine, R_M, R_N and their
-  /// derivatives by the latitude.
+  /// derivatives by the latitude, the latitude's tangent, gravity's sqrt(1 - e2 sin^2) and its
+  /// derivative by the latitude.
   void anchor(const State& y0, StepAnchor& a) const override;
   State derivative(const Instant& in, const State& y, const StepAnchor& a) const override;
+  Kinematics eval(const Instant& in, const State& y, const StepAnchor& a, EarthTerms& earth) const override;
 
   const std::vector<FlightPhase>& timeline() const { return phases_; }
   /// Roll angle [rad] and roll rate [rad/s] at t.
@@ -195,6 +218,8 @@ class FlightMotion final : public Motion {
   double heading_rate(const FlightPhase& p, double phi, double V) const;
   /// Roll angle and rate at t within phase p (roll() once the phase is known).
   static void roll_in(const FlightPhase& p, double t_s, double& roll_rad, double& roll_rate_radps);
+  /// eval(in, y) given the track's sine sp and cosine cp.
+  Kinematics eval_with_track(const Instant& in, const State& y, double sp, double cp) const;
 
   StartState start_{};
   double g_coord_mps2_ = 9.8;  ///< gravity used by the coordination law g tan(phi) / V
