@@ -68,6 +68,23 @@ TEST(CanProtocol, Crc16TableMatchesTheBitwiseDefinition) {
   }
 }
 
+TEST(CanProtocol, FrameCrcIsTheDefinitionOverTheIdentifierAndThePayload) {
+  // frame_crc: the identifier's two bytes (little-endian), then the payload up to the CRC field,
+  // from 0xFFFF, bit by bit; every CAN FD length.
+  std::mt19937 rng(7);
+  for (int len : {0, 1, 2, 3, 8, 12, 16, 20, 24, 32, 48, 64})
+    for (int trial = 0; trial < 50; ++trial) {
+      hal::CanFrame f;
+      f.id = static_cast<std::uint32_t>(rng() & 0x7FFu);
+      f.len = static_cast<std::uint8_t>(len);
+      for (auto& b : f.data) b = static_cast<std::uint8_t>(rng());
+      const std::uint8_t id_le[2] = {static_cast<std::uint8_t>(f.id & 0xFFu), static_cast<std::uint8_t>(f.id >> 8)};
+      std::uint16_t want = crc16_ccitt_bitwise(id_le, 2, 0xFFFF);
+      if (len >= 2) want = crc16_ccitt_bitwise(f.data.data(), len - 2, want);
+      ASSERT_EQ(hal::can::frame_crc(f), want) << "len " << len << " trial " << trial;
+    }
+}
+
 TEST(CanProtocol, DlcTable) {
   for (int len : {0, 1, 8, 12, 16, 20, 24, 32, 48, 64}) EXPECT_EQ(hal::can_dlc_to_len(hal::can_len_to_dlc(len)), len);
   EXPECT_EQ(hal::can_len_to_dlc(9), -1);
