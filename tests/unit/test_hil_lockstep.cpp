@@ -17,6 +17,7 @@
 #include "hal/fsw_node.hpp"
 #include "cfg/flight_config.hpp"
 #include "tools/hil.hpp"
+#include "tools/step_producer.hpp"
 #include "sim/sensor_stream.hpp"
 
 namespace {
@@ -317,4 +318,60 @@ TEST(HilLockstep, FlightSoftwareOnASilentBusStopsAtTheIdleTimeout) {
   EXPECT_EQ(r.frames_received, 0u);
   EXPECT_EQ(r.acks_sent, 0u);
   EXPECT_GE(r.wall_s, 0.3);
+}
+
+TEST(StepProducer, GivesTheFramesAndTruthOfEncodingInline) {
+  // The producer's thread (sdins sil, sdins bus-sim) against the same stream encoded here: the
+  // same frames in the same order, step by step, with the step's truth time and full truth.
+  const sim::Scenario sc = short_scenario(12.0, 5);
+  sim::SensorStream inline_stream(sc, sc.seed), threaded_stream(sc, sc.seed);
+  tools::StepProducer producer(threaded_stream, nullptr);
+  can::CanStepEncoder enc;
+  sim::SensorStep step;
+  tools::EncodedStep got;
+  std::vector<CanFrame> want;
+  bool first = true;
+  int steps = 0;
+  while (inline_stream.next(step)) {
+    ASSERT_TRUE(producer.next(got)) << "step " << steps;
+    const int na = first ? static_cast<int>(inline_stream.almanac().size()) : 0;
+    want.resize(static_cast<std::size_t>(can::CanStepEncoder::max_frames(static_cast<int>(step.imu.size()), na)));
+    const auto r = enc.encode(step.imu.data(), static_cast<int>(step.imu.size()), step.has_epoch ? &step.epoch : nullptr,
+                              inline_stream.almanac().data(), na, want.data());
+    first = false;
+    ASSERT_EQ(got.frames.size(), static_cast<std::size_t>(r.n_frames)) << "step " << steps;
+    for (int i = 0; i < r.n_frames; ++i) {
+      const CanFrame& a = got.frames[static_cast<std::size_t>(i)];
+      const CanFrame& b = want[static_cast<std::size_t>(i)];
+      ASSERT_EQ(a.id, b.id);
+      ASSERT_EQ(a.len, b.len);
+      ASSERT_EQ(a.data, b.data) << "step " << steps << " frame " << i;
+    }
+    EXPECT_EQ(got.has_epoch, step.has_epoch);
+    EXPECT_EQ(got.truth_t_s, inline_stream.truth().t_s);
+    const sim::TruthSample* t = inline_stream.full_truth();
+    ASSERT_EQ(got.has_full_truth, t != nullptr);
+    if (t != nullptr) {
+      EXPECT_EQ(got.full_truth.t_s, t->t_s);
+      EXPECT_EQ(got.full_truth.llh, t->llh);
+      EXPECT_EQ(got.full_truth.C_b_n, t->C_b_n);
+    }
+    ++steps;
+  }
+  EXPECT_FALSE(producer.next(got));
+  EXPECT_TRUE(producer.error().empty());
+  EXPECT_EQ(steps, 12);
+}
+
+TEST(StepProducer, AReaderThatStopsEarlyEndsTheThread) {
+  // Destroyed after two of 60 steps, with the producer waiting on a full queue: it ends, no hang.
+  const sim::Scenario sc = short_scenario(60.0, 2);
+  sim::SensorStream stream(sc, sc.seed);
+  {
+    tools::StepProducer producer(stream, nullptr);
+    tools::EncodedStep s;
+    ASSERT_TRUE(producer.next(s));
+    ASSERT_TRUE(producer.next(s));
+  }
+  SUCCEED();
 }

@@ -14,6 +14,7 @@
 #include "tools/free_inertial.hpp"
 #include "tools/fsw_report.hpp"
 #include "tools/output_file.hpp"
+#include "tools/step_producer.hpp"
 #include "sim/almanac.hpp"
 #include "sim/sensor_stream.hpp"
 
@@ -50,32 +51,33 @@ int run_sil() {
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
   hal::CanFswInput input(node.summary());
-  hal::can::CanStepEncoder enc;
-  sim::SensorStep step;
-  std::vector<hal::CanFrame> frames;
-  bool first = true;
   std::uint64_t n_frames = 0;
   int encode_rejected = 0;
-  while (stream.next(step)) {
-    const int na = first ? static_cast<int>(stream.almanac().size()) : 0;
-    frames.resize(static_cast<std::size_t>(hal::can::CanStepEncoder::max_frames(static_cast<int>(step.imu.size()), na)));
-    const auto r = enc.encode(step.imu.data(), static_cast<int>(step.imu.size()), step.has_epoch ? &step.epoch : nullptr,
-                              stream.almanac().data(), na, frames.data());
-    encode_rejected += r.imu_rejected + r.gps_rejected + r.almanac_rejected;
-    first = false;
-    // Receive time: the simulation time at the end of the step (the GPS epoch timeout runs on it).
-    const double rx_t = stream.truth().t_s;
-    for (int k = 0; k < r.n_frames; ++k) {
-      input.push(frames[static_cast<std::size_t>(k)], rx_t);
-      fsw::drive(input, node);
+  sim::TruthSample truth;  // the last sample's
+  {
+    // The sensor models and the encoding on a thread of their own, a few GPS intervals ahead (the
+    // same frames in the same order as encoded here: tools/step_producer.hpp); this thread runs
+    // the flight software.
+    tools::StepProducer producer(stream, nullptr);
+    tools::EncodedStep step;
+    while (producer.next(step)) {
+      encode_rejected += step.r.imu_rejected + step.r.gps_rejected + step.r.almanac_rejected;
+      // Receive time: the simulation time at the end of the step (the GPS epoch timeout runs on it).
+      for (const hal::CanFrame& f : step.frames) {
+        input.push(f, step.truth_t_s);
+        fsw::drive(input, node);
+      }
+      n_frames += step.frames.size();
+      if (step.has_full_truth) {
+        node.on_truth(step.full_truth.t_s, step.full_truth.llh, step.full_truth.vel_enu_mps, step.full_truth.C_b_n);
+        truth = step.full_truth;
+      }
     }
-    n_frames += static_cast<std::uint64_t>(r.n_frames);
-    if (const sim::TruthSample* t = stream.full_truth()) node.on_truth(t->t_s, t->llh, t->vel_enu_mps, t->C_b_n);
+    if (!producer.error().empty()) throw std::runtime_error("simulator: " + producer.error());
   }
   input.finish();
   fsw::drive(input, node);
   fill.complete();
-  const sim::TruthSample truth = *stream.full_truth();  // the last sample's
   if (!node.close(err)) throw std::runtime_error(err);
 
   std::printf("sil: %s, %.0f s, seed %llu, %s-state model; %llu CAN frames (%d not encodable), %u rejected on receive\n",

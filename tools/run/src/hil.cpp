@@ -4,18 +4,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
-#include <deque>
-#include <mutex>
 #include <random>
-#include <thread>
 #include <vector>
 
 #include "fsw/driver.hpp"
 #include "hal/can_fsw_input.hpp"
 #include "hal/rt_clock.hpp"
 #include "tools/number_text.hpp"
+#include "tools/step_producer.hpp"
 
 namespace tools {
 namespace {
@@ -23,86 +20,6 @@ namespace {
 using hal::CanBusStatus;
 using hal::CanFrame;
 namespace can = hal::can;
-
-/// One GPS interval encoded into frames (IMU samples, epoch, almanac with the first step).
-struct EncodedStep {
-  std::vector<CanFrame> frames;
-  can::CanStepEncoder::Result r{};
-  bool has_epoch = false;
-  int n_alm = 0;
-};
-
-/// Flies the stream on its own thread, a few steps ahead of the sender, so that simulating the
-/// next GPS interval never stalls the bus (it matters in real time: a step takes tens of ms).
-class StepProducer {
- public:
-  StepProducer(sim::SensorStream& stream, const std::atomic<bool>* stop) : stream_(stream), stop_(stop) {
-    th_ = std::thread([this] { produce(); });
-  }
-  ~StepProducer() {
-    {
-      std::lock_guard<std::mutex> lk(mu_);
-      quit_ = true;
-    }
-    cv_.notify_all();
-    th_.join();
-  }
-  /// The next step; false at the end (error() says whether the stream failed).
-  bool next(EncodedStep& out) {
-    std::unique_lock<std::mutex> lk(mu_);
-    cv_.wait(lk, [this] { return !q_.empty() || done_; });
-    if (q_.empty()) return false;
-    out = std::move(q_.front());
-    q_.pop_front();
-    cv_.notify_all();
-    return true;
-  }
-  std::string error() {
-    std::lock_guard<std::mutex> lk(mu_);
-    return error_;
-  }
-
- private:
-  void produce() {
-    try {
-      can::CanStepEncoder enc;
-      sim::SensorStep step;
-      bool first = true;
-      while (stream_.next(step)) {
-        EncodedStep e;
-        e.n_alm = first ? static_cast<int>(stream_.almanac().size()) : 0;
-        e.has_epoch = step.has_epoch;
-        e.frames.resize(static_cast<std::size_t>(
-            can::CanStepEncoder::max_frames(static_cast<int>(step.imu.size()), e.n_alm)));
-        e.r = enc.encode(step.imu.data(), static_cast<int>(step.imu.size()), step.has_epoch ? &step.epoch : nullptr,
-                         stream_.almanac().data(), e.n_alm, e.frames.data());
-        e.frames.resize(static_cast<std::size_t>(e.r.n_frames));
-        first = false;
-        std::unique_lock<std::mutex> lk(mu_);
-        cv_.wait(lk, [this] { return q_.size() < kAhead || quit_; });
-        if (quit_ || (stop_ && stop_->load())) break;
-        q_.push_back(std::move(e));
-        cv_.notify_all();
-      }
-    } catch (const std::exception& ex) {
-      std::lock_guard<std::mutex> lk(mu_);
-      error_ = ex.what();
-    }
-    std::lock_guard<std::mutex> lk(mu_);
-    done_ = true;
-    cv_.notify_all();
-  }
-
-  static constexpr std::size_t kAhead = 3;
-  sim::SensorStream& stream_;
-  const std::atomic<bool>* stop_;
-  std::mutex mu_;
-  std::condition_variable cv_;
-  std::deque<EncodedStep> q_;
-  bool done_ = false, quit_ = false;
-  std::string error_;
-  std::thread th_;
-};
 
 std::uint32_t draw_run_id() {
   std::random_device rd;
