@@ -4,7 +4,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
 
+#include "sim/imu_model.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
 #include "tools/free_inertial.hpp"
@@ -55,4 +59,41 @@ TEST(FreeInertial, PerfectImuBankToTurn30MinStaysOnTruth) {
   EXPECT_LT(m.horiz_pos_m, 1.0);
   EXPECT_LT(m.horiz_vel_mps, 0.01);
   EXPECT_LT(m.att_arcsec, 1.0);
+}
+
+namespace {
+
+/// Every frame's solution and truth time of a 200 s flight with the paper's IMU errors, the truth
+/// read inline or from its own thread.
+std::vector<double> frames_of(bool truth_thread) {
+  sim::Scenario sc;
+  sc.duration_s = 200.0;
+  std::string err;
+  auto motion = sim::FlightMotion::create(sc, err);
+  EXPECT_TRUE(motion) << err;
+  std::vector<double> out;
+  if (!motion) return out;
+  sim::ImuModel imu(sim::draw_imu_errors(sc.imu, sc.effects, 7), 7);
+  tools::FreeInertialConfig cfg;
+  cfg.duration_s = sc.duration_s;
+  cfg.truth_thread = truth_thread;
+  fsw::Status st = fsw::Status::kOk;
+  tools::run_free_inertial(
+      *motion, &imu, cfg,
+      [&](const sim::TruthSample& truth, const fsw::NavState& nav) {
+        out.insert(out.end(), {truth.t_s, truth.llh.x(), truth.C_b_n(0, 1), nav.llh.x(), nav.llh.y(), nav.llh.z(),
+                               nav.vel_enu_mps.x(), nav.q_b_n.w(), nav.q_b_n.z()});
+      },
+      &st);
+  EXPECT_EQ(st, fsw::Status::kOk);
+  return out;
+}
+
+}  // namespace
+
+TEST(FreeInertial, TheTruthOnItsOwnThreadGivesTheSameFlightBitForBit) {
+  const std::vector<double> inline_truth = frames_of(false), threaded = frames_of(true);
+  ASSERT_EQ(inline_truth.size(), 40000u * 9u);  // 200 s of 200 Hz frames
+  ASSERT_EQ(threaded.size(), inline_truth.size());
+  EXPECT_EQ(std::memcmp(threaded.data(), inline_truth.data(), inline_truth.size() * sizeof(double)), 0);
 }

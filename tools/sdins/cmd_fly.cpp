@@ -51,6 +51,7 @@ int run_fly() {
   cfg.duration_s = sc.duration_s;
   cfg.imu_rate_hz = sc.imu.rate_hz;
   cfg.nav_rate_hz = cfg::shipped_flight_config().app.exec.nav_rate_hz;  // config/default.toml
+  cfg.truth_thread = true;  // one flight: its truth beside it (the same samples)
   const int frames_per_s = static_cast<int>(std::lround(cfg.nav_rate_hz));
   std::printf("%8s %10s %10s %12s %12s %12s\n", "t [s]", "horiz [m]", "vert [m]", "phi_E [\"]", "phi_N [\"]",
               "phi_U [\"]");

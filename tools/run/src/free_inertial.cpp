@@ -3,6 +3,8 @@
 #include <cmath>
 #include <vector>
 
+#include "tools/ahead.hpp"
+
 namespace tools {
 
 void run_free_inertial(const sim::Motion& motion, const FreeInertialConfig& cfg, std::span<FreeInertialFlight> flights) {
@@ -29,8 +31,7 @@ void run_free_inertial(const sim::Motion& motion, const FreeInertialConfig& cfg,
     if (fl.status == fsw::Status::kOk) ++flying;
   }
   const long long n_samples = std::llround(cfg.duration_s * cfg.imu_rate_hz);
-  for (long long i = 0; i < n_samples && flying > 0; ++i) {
-    const sim::TruthSample& truth = gen.next();
+  const auto fly_sample = [&](const sim::TruthSample& truth) {
     for (std::size_t f = 0; f < flights.size(); ++f) {
       FreeInertialFlight& fl = flights[f];
       if (fl.status != fsw::Status::kOk) continue;
@@ -61,7 +62,26 @@ void run_free_inertial(const sim::Motion& motion, const FreeInertialConfig& cfg,
       fl.last = nav_errors(sd.state(), truth);
       if (fl.on_frame) fl.on_frame(truth, sd.state());
     }
+  };
+  if (!cfg.truth_thread) {
+    for (long long i = 0; i < n_samples && flying > 0; ++i) fly_sample(gen.next());
+    return;
   }
+  // The generator moves to its own thread (only it touches gen from here on); chunks of samples
+  // small enough to stay in the caches between the two cores.
+  constexpr std::size_t kChunk = 2048, kAhead = 4;
+  Ahead<std::vector<sim::TruthSample>> truth(kAhead, [&gen, n_samples](const Ahead<std::vector<sim::TruthSample>>::Sink& sink) {
+    for (long long i = 0; i < n_samples;) {
+      std::vector<sim::TruthSample> chunk;
+      sink.spare(chunk);
+      chunk.clear();
+      for (; i < n_samples && chunk.size() < kChunk; ++i) chunk.push_back(gen.next());
+      if (!sink.emit(std::move(chunk))) return;
+    }
+  });
+  std::vector<sim::TruthSample> chunk;
+  while (flying > 0 && truth.next(chunk))
+    for (std::size_t k = 0; k < chunk.size() && flying > 0; ++k) fly_sample(chunk[k]);
 }
 
 NavErrors run_free_inertial(const sim::Motion& motion, sim::ImuModel* imu, const FreeInertialConfig& cfg,

@@ -5,17 +5,14 @@
 #pragma once
 
 #include <atomic>
-#include <condition_variable>
 #include <cstddef>
-#include <deque>
-#include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "hal/can_frame.hpp"
 #include "hal/can_protocol.hpp"
 #include "sim/sensor_stream.hpp"
+#include "tools/ahead.hpp"
 
 namespace tools {
 
@@ -37,27 +34,14 @@ class StepProducer {
  public:
   /// stop (optional): the reader's request to stop; the producer ends at its next step.
   StepProducer(sim::SensorStream& stream, const std::atomic<bool>* stop);
-  ~StepProducer();
-  StepProducer(const StepProducer&) = delete;
-  StepProducer& operator=(const StepProducer&) = delete;
-  /// The next step; false at the end (error() says whether the stream failed). out's vectors are
-  /// swapped with the producer's, so a reader that reuses one EncodedStep allocates nothing.
-  bool next(EncodedStep& out);
-  std::string error();
+  /// The next step; false at the end (error() says whether the stream failed). out's frame buffer
+  /// goes back to the producer, so a reader that reuses one EncodedStep allocates nothing.
+  bool next(EncodedStep& out) { return ahead_.next(out); }
+  std::string error() { return ahead_.error(); }
 
  private:
-  void produce();
-
   static constexpr std::size_t kAhead = 3;
-  sim::SensorStream& stream_;
-  const std::atomic<bool>* stop_;
-  std::mutex mu_;
-  std::condition_variable cv_;
-  std::deque<EncodedStep> q_;
-  std::vector<std::vector<hal::CanFrame>> spare_;  ///< frame buffers the reader gave back
-  bool done_ = false, quit_ = false;
-  std::string error_;
-  std::thread th_;
+  Ahead<EncodedStep> ahead_;
 };
 
 }  // namespace tools
