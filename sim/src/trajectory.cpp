@@ -70,7 +70,7 @@ EarthTerms EarthTerms::exact(double lat_rad) {
   e.tan_lat = std::tan(lat_rad);
   e.r_m_m = fsw::meridian_radius_m(l);
   e.r_n_m = fsw::normal_radius_m(l);
-  e.sqrt_1_e2_s2 = std::sqrt(1.0 - fsw::wgs84::e2 * (l.sin_lat * l.sin_lat));
+  e.sqrt_1_e2_s2 = fsw::sqrt_1_e2_s2(l.sin_lat);
   return e;
 }
 

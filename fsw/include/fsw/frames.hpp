@@ -192,18 +192,20 @@ inline double normal_radius_m(const LatitudeTerms& l) { return normal_radius_fro
 /// Normal (prime-vertical) radius of curvature R_N (east-west) [m].
 inline double normal_radius_m(double lat_rad) { return normal_radius_from_sin_m(std::sin(lat_rad)); }
 
+/// sqrt(1 - e2 sin^2(lat)) from the latitude's sine: Somigliana's denominator below.
+inline double sqrt_1_e2_s2(double sin_lat) { return std::sqrt(1.0 - wgs84::e2 * (sin_lat * sin_lat)); }
+
 /// Normal gravity magnitude: Somigliana on the ellipsoid with the second-order height term
-/// (NIMA TR8350.2 eq. 4-1 and 4-3). Points along the ellipsoid normal, downwards.
-/// From the latitude's squared sine s2 and sqrt(1 - e2 s2) (a caller that carries them: the truth's
-/// evaluations within a step).
-inline double normal_gravity_from_sin2_mps2(double s2, double sqrt_1_e2_s2, double h_m) {
-  const double g0 = wgs84::gamma_e_mps2 * (1.0 + wgs84::k_somigliana * s2) / sqrt_1_e2_s2;
+/// (NIMA TR8350.2 eq. 4-1 and 4-3). Points along the ellipsoid normal, downwards. This one from
+/// the latitude's squared sine s2 and root_1_e2_s2 = sqrt_1_e2_s2(sin) (a caller that carries
+/// them: the truth's evaluations within a step).
+inline double normal_gravity_from_sin2_mps2(double s2, double root_1_e2_s2, double h_m) {
+  const double g0 = wgs84::gamma_e_mps2 * (1.0 + wgs84::k_somigliana * s2) / root_1_e2_s2;
   const double a = wgs84::a_m;
   return g0 * (1.0 - 2.0 / a * (1.0 + wgs84::f + wgs84::m - 2.0 * wgs84::f * s2) * h_m + 3.0 * h_m * h_m / (a * a));
 }
 inline double normal_gravity_mps2(const LatitudeTerms& l, double h_m) {
-  const double s2 = l.sin_lat * l.sin_lat;
-  return normal_gravity_from_sin2_mps2(s2, std::sqrt(1.0 - wgs84::e2 * s2), h_m);
+  return normal_gravity_from_sin2_mps2(l.sin_lat * l.sin_lat, sqrt_1_e2_s2(l.sin_lat), h_m);
 }
 inline double normal_gravity_mps2(double lat_rad, double h_m) { return normal_gravity_mps2(LatitudeTerms(lat_rad), h_m); }
 
