@@ -3,8 +3,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
-#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -26,11 +24,6 @@ struct TruthTrack::Progress {
   std::atomic<long long> ready{0};    ///< samples published to readers
   mutable std::atomic<bool> stop{false};
   std::atomic<bool> stopped{false};   ///< fill() returned before the end: waits past ready fail
-  // Windowed: the reader's release and fill()'s wait for it (rare: only when the integration is a
-  // whole window ahead), under a mutex so that neither a release nor a stop is missed.
-  mutable std::mutex released_mutex;
-  mutable std::condition_variable released_cv;
-  mutable long long released = 0;     ///< under released_mutex
   /// fill() returns before the end: every wait past ready wakes (a new value) and fails.
   void mark_stopped() {
     stopped.store(true, std::memory_order_release);
@@ -39,7 +32,7 @@ struct TruthTrack::Progress {
   }
 };
 
-TruthTrack TruthTrack::prepare(const Scenario& sc, long long window) {
+TruthTrack TruthTrack::prepare(const Scenario& sc) {
   std::string err;
   auto p = std::make_shared<Progress>();
   p->motion = FlightMotion::create(sc, err);
@@ -48,15 +41,8 @@ TruthTrack TruthTrack::prepare(const Scenario& sc, long long window) {
   tt.samples_per_epoch = imu_samples_per_epoch(sc);
   const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
   tt.samples = n;
-  if (window < 0 || (window > 0 && window < 2 * kPublishSamples))
-    throw std::runtime_error("truth track window " + std::to_string(window) + " samples: must be 0 (whole) or at least " +
-                             std::to_string(2 * kPublishSamples));
-  tt.window = window > 0 && window < n ? window : 0;
-  // A windowed ring of epochs holds every epoch from the reader's last one to the furthest the
-  // integration may be ahead of it (window samples past the reader's released position).
-  tt.imu.resize(static_cast<std::size_t>(tt.window > 0 ? tt.window : n));
-  tt.epochs.resize(static_cast<std::size_t>(tt.window > 0 ? tt.window / tt.samples_per_epoch + 2
-                                                          : n / tt.samples_per_epoch + 1));
+  tt.imu.resize(static_cast<std::size_t>(n));
+  tt.epochs.resize(static_cast<std::size_t>(n / tt.samples_per_epoch + 1));
   p->gen = std::make_unique<TruthGenerator>(*p->motion, sc.imu.rate_hz);
   tt.epochs[0] = p->gen->current();
   if (n == 0) tt.last = p->gen->current();
@@ -69,17 +55,9 @@ void TruthTrack::fill() {
   const auto t0 = std::chrono::steady_clock::now();
   const long long n = samples;
   for (long long k = p.written + 1; k <= n; ++k) {
-    if (window > 0 && k - 1 >= p.released + window) {  // sample k - 1's slot still holds one the reader needs
-      std::unique_lock<std::mutex> lock(p.released_mutex);
-      p.released_cv.wait(lock, [&] { return k - 1 < p.released + window || p.stop.load(std::memory_order_relaxed); });
-      if (k - 1 >= p.released + window) {  // stopped while waiting
-        p.mark_stopped();
-        break;
-      }
-    }
     const TruthSample& s = p.gen->next();
-    imu[imu_slot(k - 1)] = {s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps};
-    if (k % samples_per_epoch == 0) epochs[epoch_slot(k / samples_per_epoch)] = s;
+    imu[static_cast<std::size_t>(k - 1)] = {s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps};
+    if (k % samples_per_epoch == 0) epochs[static_cast<std::size_t>(k / samples_per_epoch)] = s;
     if (k == n) last = s;
     p.written = k;
     if (k % kPublishSamples == 0 || k == n) {
@@ -95,22 +73,7 @@ void TruthTrack::fill() {
 }
 
 void TruthTrack::stop_fill() const {
-  if (!progress) return;
-  {
-    std::lock_guard<std::mutex> lock(progress->released_mutex);
-    progress->stop.store(true, std::memory_order_relaxed);
-  }
-  progress->released_cv.notify_all();
-}
-
-void TruthTrack::release(long long k) const {
-  if (!progress || window <= 0) return;
-  {
-    std::lock_guard<std::mutex> lock(progress->released_mutex);
-    if (k <= progress->released) return;
-    progress->released = k;
-  }
-  progress->released_cv.notify_all();
+  if (progress) progress->stop.store(true, std::memory_order_relaxed);
 }
 
 long long TruthTrack::wait_for(long long k) const {
@@ -176,12 +139,6 @@ SensorStream::~SensorStream() = default;
 
 const TruthSample& SensorStream::next_truth() {
   if (gen_) return gen_->next();
-  if (track_->window > 0 && (sample_ >= track_ready_ || sample_ - track_released_ >= TruthTrack::kPublishSamples)) {
-    // Windowed: the samples before this one are copied out (track_sample_); their slots may be
-    // written again. The ring of epochs keeps the current one until the next (its size).
-    track_released_ = sample_;
-    track_->release(track_released_);
-  }
   if (sample_ >= track_ready_) track_ready_ = track_->wait_for(sample_);  // a track being generated
   const TruthTrack::Increment& inc = track_->increment(sample_);
   track_sample_.t_s = inc.t_s;

@@ -20,8 +20,6 @@
 
 namespace sdins {
 namespace {
-/// The truth's window: 64 s at 1 kHz (4 MB of increments).
-constexpr long long kSilTruthWindowSamples = 64000;
 struct SilOptions {
   ScenarioOptions scenario;
   FswRunOptions run;
@@ -40,13 +38,10 @@ int run_sil() {
   tools::require_distinct({sil_opt.run.log, sil_opt.run.json}, {sil_opt.scenario.file, sil_opt.run.flight_config});
   const sim::Scenario sc = sil_opt.scenario.load();
   const hal::FswNodeConfig cfg = sil_opt.run.node_config();  // validated at load, before the flight is simulated
-  // The truth integrated on a thread of its own, a window ahead of the run (bounded memory for any
-  // duration): the same events as a generator read inline (sim/sensor_stream.hpp).
-  const sim::AlmanacParseResult alm = sim::parse_yuma_file(sim::almanac_path(sc.gps));
-  if (!alm.ok()) throw std::runtime_error(alm.error);
-  sim::TruthTrack track = sim::TruthTrack::prepare(sc, kSilTruthWindowSamples);
-  sim::SensorStream stream(sc, track, *alm.almanac, sc.seed);
-  sim::TruthFillThread fill(track);
+  // The truth, the sensor models and the encoding on one thread of their own (StepProducer below,
+  // the truth generated alongside: no memory that grows with the duration), the receive side and
+  // the flight software on this one: the two halves of a SIL run's time.
+  sim::SensorStream stream(sc, sc.seed);
   hal::FswNode node;
   std::string err;
   if (!node.open(cfg, err)) throw std::runtime_error(err);
@@ -55,9 +50,8 @@ int run_sil() {
   int encode_rejected = 0;
   sim::TruthSample truth;  // the last sample's
   {
-    // The sensor models and the encoding on a thread of their own, a few GPS intervals ahead (the
-    // same frames in the same order as encoded here: tools/step_producer.hpp); this thread runs
-    // the flight software.
+    // A few GPS intervals ahead; the same frames in the same order as encoded here
+    // (tools/step_producer.hpp).
     tools::StepProducer producer(stream, nullptr);
     tools::EncodedStep step;
     while (producer.next(step)) {
@@ -77,7 +71,6 @@ int run_sil() {
   }
   input.finish();
   fsw::drive(input, node);
-  fill.complete();
   if (!node.close(err)) throw std::runtime_error(err);
 
   std::printf("sil: %s, %.0f s, seed %llu, %s-state model; %llu CAN frames (%d not encodable), %u rejected on receive\n",

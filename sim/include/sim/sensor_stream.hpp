@@ -41,11 +41,10 @@ struct TruthTrack {
     fsw::Vec3 dtheta_rad;
     fsw::Vec3 dv_mps;
   };
-  std::vector<Increment> imu;       ///< samples 1..n (the sample at t = 0 has no increment); a window of them when windowed
-  std::vector<TruthSample> epochs;  ///< truth at t = k / gps_rate, k = 0..; epochs[0] is t = 0; a ring when windowed
+  std::vector<Increment> imu;       ///< samples 1..n (the sample at t = 0 has no increment)
+  std::vector<TruthSample> epochs;  ///< truth at t = k / gps_rate, k = 0..; epochs[0] is t = 0
   TruthSample last;                 ///< the full truth of sample n (t = duration), once it is written
-  long long samples = 0;            ///< n: the scenario's IMU samples (imu.size() unless windowed)
-  long long window = 0;             ///< 0: every sample kept; else imu holds the last `window` (prepare(sc, window))
+  long long samples = 0;            ///< n: the scenario's IMU samples (imu.size())
   int samples_per_epoch = 1000;     ///< IMU samples between GNSS epochs
   double generate_wall_s = 0.0;     ///< the integration's own wall time (fill())
   /// Throws std::runtime_error for a scenario it cannot fly (e.g. rates that do not divide).
@@ -56,37 +55,22 @@ struct TruthTrack {
   // a stream reading sample k waits in wait_for(k) (blocked, not spinning) until it is written.
   // The values are generate()'s, whatever the threads' timing. A Monte Carlo's runs start while
   // the truth they share is integrated instead of after it (docs/performance.md).
-  //
-  // Windowed (window > 0, for one reader: `sdins sil`): imu and epochs are rings of about
-  // `window` samples; fill() writes sample k only once the reader has released every sample
-  // before k - window (release(), which a SensorStream calls as it reads), so a flight of any
-  // length streams in bounded memory with the integration on its own core.
   static constexpr long long kPublishSamples = 1000;
   struct Progress;
   std::shared_ptr<Progress> progress;  ///< null: the track is complete (generate())
-  /// Throws std::runtime_error like generate(), and for a window (samples) that is neither 0 nor
-  /// at least 2 kPublishSamples (a reader waiting for a publication must never hold the
-  /// integration back). A window at least the track's length is the whole track.
-  static TruthTrack prepare(const Scenario& sc, long long window = 0);
+  /// Throws std::runtime_error like generate().
+  static TruthTrack prepare(const Scenario& sc);
   /// Integrates every sample not yet written, publishing progress; returns early when stopped.
   void fill();
-  /// Makes a fill() in progress return at its next publication (or wait for the reader) and the
-  /// waits fail (an aborted run).
+  /// Makes a fill() in progress return at its next publication and the waits past it fail (an
+  /// aborted run).
   void stop_fill() const;
   /// Blocks until imu[k] (and every epoch up to it) is written; returns how many samples are
   /// written. Throws std::runtime_error when fill() stopped before k.
   long long wait_for(long long k) const;
-  /// Windowed: the reader is done with samples 0..k-1 (and the epochs before them); fill() may
-  /// overwrite their slots. No effect on a whole track.
-  void release(long long k) const;
-  /// Sample k's increments (0-based: t = (k + 1) / rate) and epoch e's truth, whole or windowed.
-  const Increment& increment(long long k) const { return imu[imu_slot(k)]; }
-  const TruthSample& epoch(long long e) const { return epochs[epoch_slot(e)]; }
-  /// Where sample k and epoch e live in imu and epochs (the rings' index when windowed).
-  std::size_t imu_slot(long long k) const { return static_cast<std::size_t>(window > 0 ? k % window : k); }
-  std::size_t epoch_slot(long long e) const {
-    return static_cast<std::size_t>(window > 0 ? e % static_cast<long long>(epochs.size()) : e);
-  }
+  /// Sample k's increments (0-based: t = (k + 1) / rate) and epoch e's truth.
+  const Increment& increment(long long k) const { return imu[static_cast<std::size_t>(k)]; }
+  const TruthSample& epoch(long long e) const { return epochs[static_cast<std::size_t>(e)]; }
 };
 
 /// fill() on a thread of its own while the track's readers run; the destructor stops the
@@ -171,7 +155,6 @@ class SensorStream {
   const TruthTrack* track_ = nullptr;     ///< shared source only
   TruthSample track_sample_;              ///< shared source: the fields the IMU model reads
   long long track_ready_ = 0;             ///< shared source: samples known written (TruthTrack::wait_for)
-  long long track_released_ = 0;          ///< windowed source: samples released (TruthTrack::release)
   std::unique_ptr<ImuModel> imu_;
   std::unique_ptr<GpsModel> gps_;
   std::size_t almanac_sent_ = 0;
