@@ -3,9 +3,7 @@
 // into the flight-software node, which publishes the same LCM telemetry and writes the same log.
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <stdexcept>
-#include <vector>
 
 #include "commands.hpp"
 #include "fsw/driver.hpp"
@@ -15,7 +13,6 @@
 #include "tools/fsw_report.hpp"
 #include "tools/output_file.hpp"
 #include "tools/step_producer.hpp"
-#include "sim/almanac.hpp"
 #include "sim/sensor_stream.hpp"
 
 namespace sdins {

@@ -1,6 +1,7 @@
 #include "tools/free_inertial.hpp"
 
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 #include "tools/ahead.hpp"
@@ -67,21 +68,25 @@ void run_free_inertial(const sim::Motion& motion, const FreeInertialConfig& cfg,
     for (long long i = 0; i < n_samples && flying > 0; ++i) fly_sample(gen.next());
     return;
   }
-  // The generator moves to its own thread (only it touches gen from here on); chunks of samples
-  // small enough to stay in the caches between the two cores.
+  // The generator moves to its own thread (only it touches gen from here on), in chunks of 2048
+  // samples: each hand-off is a wake-up, and 256-sample chunks spent most of the gain on them
+  // (docs/performance.md).
   constexpr std::size_t kChunk = 2048, kAhead = 4;
-  Ahead<std::vector<sim::TruthSample>> truth(kAhead, [&gen, n_samples](const Ahead<std::vector<sim::TruthSample>>::Sink& sink) {
+  using Samples = std::vector<sim::TruthSample>;
+  Ahead<Samples> truth(kAhead, [&gen, n_samples](const Ahead<Samples>::Sink& sink) {
     for (long long i = 0; i < n_samples;) {
-      std::vector<sim::TruthSample> chunk;
+      Samples chunk;
       sink.spare(chunk);
       chunk.clear();
       for (; i < n_samples && chunk.size() < kChunk; ++i) chunk.push_back(gen.next());
       if (!sink.emit(std::move(chunk))) return;
     }
   });
-  std::vector<sim::TruthSample> chunk;
+  Samples chunk;
   while (flying > 0 && truth.next(chunk))
     for (std::size_t k = 0; k < chunk.size() && flying > 0; ++k) fly_sample(chunk[k]);
+  // A truth that ended early (its thread failed) must not pass for the end of the flight.
+  if (!truth.error().empty()) throw std::runtime_error("the truth's thread failed: " + truth.error());
 }
 
 NavErrors run_free_inertial(const sim::Motion& motion, sim::ImuModel* imu, const FreeInertialConfig& cfg,
