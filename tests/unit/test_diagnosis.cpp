@@ -468,7 +468,7 @@ TEST(DiagnosisIntervals, ACorrectionAppliedAsSamplesPassIsTheRunOnACorrectedCopy
       tools::RecordingView v{&data};
       if (select) v.gnss = &selected_gnss;
       v.imu = &corr;
-      std::vector<tools::RecordedData::Event> order;
+      tools::RecordedData::Order order;
       if (corr.retimed()) {
         order = tools::retimed_order(v, corr);
         v.order = &order;

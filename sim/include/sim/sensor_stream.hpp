@@ -25,6 +25,7 @@
 #include "fsw/gps_orbit.hpp"
 #include "fsw/input_event.hpp"
 #include "fsw/strapdown.hpp"
+#include "hal/large_array.hpp"
 #include "sim/gps_model.hpp"
 #include "sim/imu_model.hpp"
 #include "sim/scenario.hpp"
@@ -41,7 +42,7 @@ struct TruthTrack {
     fsw::Vec3 dtheta_rad;
     fsw::Vec3 dv_mps;
   };
-  std::vector<Increment> imu;       ///< samples 1..n (the sample at t = 0 has no increment)
+  hal::LargeVector<Increment> imu;  ///< samples 1..n (the sample at t = 0 has no increment); huge pages
   std::vector<TruthSample> epochs;  ///< truth at t = k / gps_rate, k = 0..; epochs[0] is t = 0
   TruthSample last;                 ///< the full truth of sample n (t = duration), once it is written
   long long samples = 0;            ///< n: the scenario's IMU samples (imu.size())

@@ -47,7 +47,7 @@ std::vector<Contributions> profile_runs(const RecordingView& data, const Diagnos
     DiagnosisConfig k = cfg;
     RecordingView v = data;
     ImuCorrection corr;
-    std::vector<RecordedData::Event> order;
+    RecordedData::Order order;
     if (c.effect == Effect::kAntennaLeverArm) {
       k.app.exec.ekf.lever_arm_b_m(c.component) += thetas[i] * fsw::effect_info(c.effect).unit_to_si;
     } else if (fixed_effect_correction(c, thetas[i], t_ref_s, corr)) {
@@ -107,7 +107,7 @@ struct Selection {
   const RecordedData* data = nullptr;
   bool selected = false;  ///< false: nothing gated, the recording as it is
   std::vector<fsw::GnssRawEpoch> gnss;
-  std::vector<RecordedData::Event> order;
+  RecordedData::Order order;
   RecordingView view() const {
     RecordingView v{data};
     if (selected) {
@@ -172,7 +172,7 @@ bool fixed_effect_correction(const Candidate& c, double value, double t_ref_s, I
   }
 }
 
-std::vector<RecordedData::Event> retimed_order(const RecordingView& v, const ImuCorrection& k) {
+RecordedData::Order retimed_order(const RecordingView& v, const ImuCorrection& k) {
   // Arrival order on the corrected clock. A GNSS input arrived after a given IMU sample: that is
   // a fact of the recording, and it stays after that sample (whose tag is now corrected), unless
   // the corrected tag lies before the input's own time, when it arrives after the sample of its
@@ -183,7 +183,7 @@ std::vector<RecordedData::Event> retimed_order(const RecordingView& v, const Imu
   // maximum then sat 2-4 ms above the truth for either sign, its interval covering 5 of 20; then
   // 14 of 20, positive offsets still biased by the initialisation epoch (kProfileBurnIn_s); now
   // 20 of 20 (docs/diagnosis-intervals.md).
-  const std::vector<RecordedData::Event>& in = v.events();
+  const RecordedData::Order& in = v.events();
   const RecordedData& d = *v.data;
   const std::vector<fsw::GnssRawEpoch>& gnss = v.gnss_epochs();
   std::vector<double> key(in.size(), -1e300);
@@ -218,7 +218,7 @@ std::vector<RecordedData::Event> retimed_order(const RecordingView& v, const Imu
     if (key[a] != key[b]) return key[a] < key[b];
     return (in[a].kind == RecordedData::Kind::kImu) && (in[b].kind != RecordedData::Kind::kImu);
   });
-  std::vector<RecordedData::Event> order;
+  RecordedData::Order order;
   order.reserve(idx.size());
   for (std::size_t i : idx) order.push_back(in[i]);
   return order;

@@ -44,7 +44,7 @@ inline constexpr double kMaxReferenceLag_s = 1.0;
 /// evidence's cost.
 struct CumulativeRate {
   static constexpr std::size_t kWindow = 512;  ///< tags searched from the hint before the rest
-  std::vector<double> t, c;
+  hal::LargeVector<double> t, c;  ///< one entry per IMU sample (huge pages)
   double at(double x) const;
   double at(double x, std::size_t& hint) const;
 };

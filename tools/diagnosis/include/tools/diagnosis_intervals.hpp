@@ -80,7 +80,7 @@ void apply_fixed_effect(RecordedData& data, const Candidate& c, double value, do
 /// effect (nothing to apply to the samples).
 bool fixed_effect_correction(const Candidate& c, double value, double t_ref_s, ImuCorrection& out);
 /// The arrival order of v's inputs on the clock that k corrects (apply_fixed_effect's order).
-std::vector<RecordedData::Event> retimed_order(const RecordingView& v, const ImuCorrection& k);
+RecordedData::Order retimed_order(const RecordingView& v, const ImuCorrection& k);
 
 /// The deviance that bounds a 95% interval: the chi-square quantile of 1 degree of freedom.
 inline constexpr double kDeviance95 = 3.841458820694124;

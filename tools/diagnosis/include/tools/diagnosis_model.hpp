@@ -19,6 +19,7 @@
 #include "fsw/input_event.hpp"
 #include "fsw/strapdown.hpp"
 #include "cfg/flight_config.hpp"
+#include "hal/large_array.hpp"
 #include "sim/scenario.hpp"
 #include "sim/truth.hpp"
 #include "tools/reference.hpp"
@@ -39,10 +40,11 @@ struct RecordedData {
     std::uint32_t index;  ///< into almanac, imu, gnss or pvt
   };
   std::vector<fsw::GpsAlmanac> almanac;
-  std::vector<fsw::ImuSample> imu;
+  hal::LargeVector<fsw::ImuSample> imu;  ///< 1.8 M samples for 1800 s: huge pages (hal/large_array.hpp)
   std::vector<fsw::GnssRawEpoch> gnss;
   std::vector<fsw::GnssPvtMeasurement> pvt;  ///< GNSS position/velocity solutions (GNSS_PVT)
-  std::vector<Event> order;
+  using Order = hal::LargeVector<Event>;  ///< an arrival order (as large as imu: huge pages)
+  Order order;
   std::vector<TruthPoint> truth;  ///< time-ordered; empty without truth
   /// (time tag, the sensor's own sample counter) of every IMU input that carried one (imported
   /// recordings): a second clock, read only as evidence (tools/diagnosis_evidence.hpp).
@@ -80,11 +82,11 @@ struct ImuCorrection {
 /// the same 1800000 samples, each with its own correction.
 struct RecordingView {
   const RecordedData* data = nullptr;
-  const std::vector<RecordedData::Event>* order = nullptr;  ///< nullptr: data->order
+  const RecordedData::Order* order = nullptr;  ///< nullptr: data->order
   const std::vector<fsw::GnssRawEpoch>* gnss = nullptr;     ///< nullptr: data->gnss
   const ImuCorrection* imu = nullptr;                       ///< nullptr: the samples as recorded
 
-  const std::vector<RecordedData::Event>& events() const { return order ? *order : data->order; }
+  const RecordedData::Order& events() const { return order ? *order : data->order; }
   const std::vector<fsw::GnssRawEpoch>& gnss_epochs() const { return gnss ? *gnss : data->gnss; }
   /// Fills ev (kind, t_s and that kind's payload; the other payloads are left as they are) with the
   /// input of e as this view gives it. An almanac element's t_s is 0 (the recording keeps no
@@ -99,7 +101,7 @@ class RecordedSource {
   explicit RecordedSource(const RecordedData& d) : v_{&d} {}
   explicit RecordedSource(const RecordingView& v) : v_(v) {}
   const fsw::InputEvent* next() {
-    const std::vector<RecordedData::Event>& order = v_.events();
+    const RecordedData::Order& order = v_.events();
     if (k_ >= order.size()) return nullptr;
     v_.input_event(order[k_++], ev_);
     return &ev_;
