@@ -8,12 +8,18 @@
 //                      generator flies the scenario from t = 0 and starts again at its end
 //   truth/track/<s>    TruthTrack::generate of the default scenario cut to <s> seconds (the Monte
 //                      Carlo's shared truth), per call
+//   sensors/imu_measure
+//                      ImuModel::measure of one 1 kHz sample with the default scenario's drawn IMU
+//                      errors (seed 1), over the first 4096 truth samples of the flight in turn:
+//                      the per-run part of a Monte Carlo's simulator
 // Counter samples_per_s: 1 kHz truth samples per second of wall time.
 #include <benchmark/benchmark.h>
 
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "sim/imu_model.hpp"
 #include "sim/scenario.hpp"
 #include "sim/sensor_stream.hpp"
 #include "sim/trajectory.hpp"
@@ -55,9 +61,32 @@ void BM_TruthTrack(benchmark::State& state) {
   state.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
 }
 
+void BM_ImuMeasure(benchmark::State& state) {
+  sim::Scenario sc{};
+  std::string err;
+  const std::unique_ptr<sim::FlightMotion> motion = sim::FlightMotion::create(sc, err);
+  if (!motion) {
+    state.SkipWithError(("default scenario: " + err).c_str());
+    return;
+  }
+  sim::TruthGenerator gen(*motion, sc.imu.rate_hz);
+  std::vector<sim::TruthSample> truth(4096);
+  for (sim::TruthSample& t : truth) t = gen.next();
+  sim::ImuModel imu(sim::draw_imu_errors(sc.imu, sc.effects, 1), 1);
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const fsw::ImuSample s = imu.measure(truth[k]);
+    benchmark::DoNotOptimize(s.dv_mps.data());
+    k = (k + 1) & 4095u;
+  }
+  state.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
 }  // namespace
 
 BENCHMARK(BM_TruthSample)->Name("truth/sample")->UseRealTime();
 BENCHMARK(BM_TruthTrack)->Name("truth/track")->Arg(60)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+BENCHMARK(BM_ImuMeasure)->Name("sensors/imu_measure")->UseRealTime();
 
 BENCHMARK_MAIN();

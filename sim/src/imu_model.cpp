@@ -88,7 +88,11 @@ ImuErrors draw_imu_errors(const ImuConfig& cfg, const EffectSet& effects, std::u
   return e;
 }
 
-ImuModel::ImuModel(const ImuErrors& errors, std::uint64_t noise_seed) : e_(errors), rng_(noise_seed, kStreamNoise) {}
+ImuModel::ImuModel(const ImuErrors& errors, std::uint64_t noise_seed)
+    : e_(errors),
+      rng_(noise_seed, kStreamNoise),
+      Kg_(Mat3::Identity() + Mat3(e_.gyro_scale_factor.asDiagonal()) + e_.gyro_misalignment_rad),
+      Ka_(Mat3::Identity() + Mat3(e_.accel_scale_factor.asDiagonal()) + e_.accel_misalignment_rad) {}
 
 fsw::ImuSample ImuModel::measure(const TruthSample& truth) {
   const double dt = truth.dt_s;
@@ -104,17 +108,15 @@ fsw::ImuSample ImuModel::measure(const TruthSample& truth) {
     walk_g_ += normal3(rng_, e_.gyro_bias_rw_radps_per_rts * std::sqrt(dt));
     walk_a_ += normal3(rng_, e_.accel_bias_rw_mps2_per_rts * std::sqrt(dt));
   }
-  const Mat3 Kg = Mat3::Identity() + Mat3(e_.gyro_scale_factor.asDiagonal()) + e_.gyro_misalignment_rad;
-  const Mat3 Ka = Mat3::Identity() + Mat3(e_.accel_scale_factor.asDiagonal()) + e_.accel_misalignment_rad;
   // The increments in the sensor's axes (a fixed rotation turns the integrals exactly).
   const Vec3 dtheta = e_.mounted ? Vec3(e_.C_s_b.transpose() * truth.dtheta_rad) : truth.dtheta_rad;
   const Vec3 dv = e_.mounted ? Vec3(e_.C_s_b.transpose() * truth.dv_mps) : truth.dv_mps;
   fsw::ImuSample s;
   s.t_s = truth.t_s * (1.0 + e_.clock_drift) + e_.time_offset_s;
   s.dt_s = dt * (1.0 + e_.clock_drift);
-  s.dtheta_rad = Kg * dtheta + e_.gyro_g_sensitivity_radps_per_mps2.cwiseProduct(dv) +
+  s.dtheta_rad = Kg_ * dtheta + e_.gyro_g_sensitivity_radps_per_mps2.cwiseProduct(dv) +
                  (e_.gyro_bias_radps + drift_g_ + walk_g_) * dt;
-  s.dv_mps = Ka * dv + (e_.accel_bias_mps2 + drift_a_ + walk_a_) * dt;
+  s.dv_mps = Ka_ * dv + (e_.accel_bias_mps2 + drift_a_ + walk_a_) * dt;
   if (e_.gyro_arw_rad_per_rts > 0.0) s.dtheta_rad += normal3(rng_, e_.gyro_arw_rad_per_rts * std::sqrt(dt));
   if (e_.accel_vrw_mps_per_rts > 0.0) s.dv_mps += normal3(rng_, e_.accel_vrw_mps_per_rts * std::sqrt(dt));
   return s;

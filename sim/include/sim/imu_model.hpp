@@ -64,6 +64,7 @@ class ImuModel {
  private:
   ImuErrors e_;
   Rng rng_;
+  Mat3 Kg_, Ka_;  ///< I + scale factors + misalignments: the errors' fixed parts, formed once
   Vec3 drift_g_ = Vec3::Zero();
   Vec3 drift_a_ = Vec3::Zero();
   Vec3 walk_g_ = Vec3::Zero();
