@@ -212,6 +212,11 @@ void GpsModel::measure(const TruthSample& truth, fsw::GnssEpoch& out) noexcept {
     return d;
   };
 
+  // The receiver's positions +-0.5 s along its velocity for the delays' rates: the same for every
+  // satellite, so converted once an epoch.
+  const double h = 0.5;
+  const Vec3 llh_plus = delays ? fsw::llh_from_ecef(r_rx + h * v_rx) : Vec3::Zero();
+  const Vec3 llh_minus = delays ? fsw::llh_from_ecef(r_rx - h * v_rx) : Vec3::Zero();
   for (std::size_t k = 0; k < n; ++k) {
     const Candidate& c = cand[k];
     const AlmanacEntry& sat = almanac_[c.index];
@@ -223,11 +228,8 @@ void GpsModel::measure(const TruthSample& truth, fsw::GnssEpoch& out) noexcept {
       // Central difference over +-0.5 s of linearly extrapolated positions (receive-time ECEF)
       // and of the time.
       const Vec3 v_sat = earth_rotation(c.transit.tau_s) * c.transit.sat_vel_tx_mps;
-      const double h = 0.5;
-      const double d_plus =
-          delay_m(fsw::llh_from_ecef(r_rx + h * v_rx), c.transit.sat_pos_rx_frame_m + h * v_sat, tow + h);
-      const double d_minus =
-          delay_m(fsw::llh_from_ecef(r_rx - h * v_rx), c.transit.sat_pos_rx_frame_m - h * v_sat, tow - h);
+      const double d_plus = delay_m(llh_plus, c.transit.sat_pos_rx_frame_m + h * v_sat, tow + h);
+      const double d_minus = delay_m(llh_minus, c.transit.sat_pos_rx_frame_m - h * v_sat, tow - h);
       delay_rate = (d_plus - d_minus) / (2.0 * h);
     }
     fsw::GnssObservation& o = out.obs[k];
