@@ -26,14 +26,18 @@
 
 namespace {
 
-void BM_TruthSample(benchmark::State& state) {
-  sim::Scenario sc{};
+// The motion of scenario sc; null (the benchmark marked skipped with the reason) if it cannot fly.
+std::unique_ptr<sim::FlightMotion> default_motion(benchmark::State& state, const sim::Scenario& sc) {
   std::string err;
-  const std::unique_ptr<sim::FlightMotion> motion = sim::FlightMotion::create(sc, err);
-  if (!motion) {
-    state.SkipWithError(("default scenario: " + err).c_str());
-    return;
-  }
+  std::unique_ptr<sim::FlightMotion> motion = sim::FlightMotion::create(sc, err);
+  if (!motion) state.SkipWithError(("default scenario: " + err).c_str());
+  return motion;
+}
+
+void BM_TruthSample(benchmark::State& state) {
+  const sim::Scenario sc{};
+  const std::unique_ptr<sim::FlightMotion> motion = default_motion(state, sc);
+  if (!motion) return;
   const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
   auto gen = std::make_unique<sim::TruthGenerator>(*motion, sc.imu.rate_hz);
   long long k = 0;
@@ -62,13 +66,9 @@ void BM_TruthTrack(benchmark::State& state) {
 }
 
 void BM_ImuMeasure(benchmark::State& state) {
-  sim::Scenario sc{};
-  std::string err;
-  const std::unique_ptr<sim::FlightMotion> motion = sim::FlightMotion::create(sc, err);
-  if (!motion) {
-    state.SkipWithError(("default scenario: " + err).c_str());
-    return;
-  }
+  const sim::Scenario sc{};
+  const std::unique_ptr<sim::FlightMotion> motion = default_motion(state, sc);
+  if (!motion) return;
   sim::TruthGenerator gen(*motion, sc.imu.rate_hz);
   std::vector<sim::TruthSample> truth(4096);
   for (sim::TruthSample& t : truth) t = gen.next();
