@@ -30,7 +30,6 @@ void* allocate_large(std::size_t bytes) {
 }
 
 void deallocate_large(void* p, std::size_t bytes) noexcept {
-  if (p == nullptr) return;
   if (bytes < kHugePageBytes) {
     ::operator delete(p);
     return;

@@ -40,7 +40,6 @@ TruthTrack TruthTrack::prepare(const Scenario& sc) {
   TruthTrack tt;
   tt.samples_per_epoch = imu_samples_per_epoch(sc);
   const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
-  tt.samples = n;
   tt.imu.resize(static_cast<std::size_t>(n));
   tt.epochs.resize(static_cast<std::size_t>(n / tt.samples_per_epoch + 1));
   p->gen = std::make_unique<TruthGenerator>(*p->motion, sc.imu.rate_hz);
@@ -53,7 +52,7 @@ TruthTrack TruthTrack::prepare(const Scenario& sc) {
 void TruthTrack::fill() {
   Progress& p = *progress;
   const auto t0 = std::chrono::steady_clock::now();
-  const long long n = samples;
+  const long long n = samples();
   for (long long k = p.written + 1; k <= n; ++k) {
     const TruthSample& s = p.gen->next();
     imu[static_cast<std::size_t>(k - 1)] = {s.t_s, s.dt_s, s.dtheta_rad, s.dv_mps};
@@ -77,7 +76,7 @@ void TruthTrack::stop_fill() const {
 }
 
 long long TruthTrack::wait_for(long long k) const {
-  if (!progress) return samples;
+  if (!progress) return samples();
   const Progress& p = *progress;
   long long r = p.ready.load(std::memory_order_acquire);
   while (r <= k) {
@@ -128,7 +127,7 @@ SensorStream::SensorStream(const Scenario& sc, const TruthTrack& track, const st
   samples_per_epoch_ = imu_samples_per_epoch(sc_);
   if (track.samples_per_epoch != samples_per_epoch_ || track.epochs.empty())
     throw std::runtime_error("the truth track was not generated for this scenario");
-  n_samples_ = track.samples;
+  n_samples_ = track.samples();
   epoch_truth_ = &track.epochs.front();
   track_sample_ = track.epochs.front();
   imu_ = std::make_unique<ImuModel>(draw_imu_errors(sc_.imu, sc_.effects, seed), seed);

@@ -21,6 +21,8 @@ std::string vm_flags_of(const void* a) {
     std::uintptr_t lo = 0, hi = 0;
     char dash = 0;
     std::istringstream head(line);
+    // A mapping's header ("lo-hi perms offset dev inode path"); its fields ("Size: ...") have
+    // their colon before the first space.
     if (head >> std::hex >> lo >> dash >> hi && dash == '-' && line.find(':') > line.find(' ')) {
       inside = lo <= x && x < hi;
       continue;

@@ -239,5 +239,5 @@ TEST(SensorStream, TrackFillStopsWhenItsReaderGoesAway) {
   sim::TruthTrack stopped = sim::TruthTrack::prepare(sc);
   stopped.stop_fill();
   stopped.fill();
-  EXPECT_THROW(stopped.wait_for(stopped.samples - 1), std::runtime_error);
+  EXPECT_THROW(stopped.wait_for(stopped.samples() - 1), std::runtime_error);
 }

@@ -43,10 +43,6 @@ struct LargeArrayAllocator {
   bool operator==(const LargeArrayAllocator<U>&) const noexcept {
     return true;
   }
-  template <class U>
-  bool operator!=(const LargeArrayAllocator<U>&) const noexcept {
-    return false;
-  }
 };
 
 /// A std::vector whose storage is allocate_large()'s.

@@ -45,7 +45,6 @@ struct TruthTrack {
   hal::LargeVector<Increment> imu;  ///< samples 1..n (the sample at t = 0 has no increment); huge pages
   std::vector<TruthSample> epochs;  ///< truth at t = k / gps_rate, k = 0..; epochs[0] is t = 0
   TruthSample last;                 ///< the full truth of sample n (t = duration), once it is written
-  long long samples = 0;            ///< n: the scenario's IMU samples (imu.size())
   int samples_per_epoch = 1000;     ///< IMU samples between GNSS epochs
   double generate_wall_s = 0.0;     ///< the integration's own wall time (fill())
   /// Throws std::runtime_error for a scenario it cannot fly (e.g. rates that do not divide).
@@ -72,6 +71,8 @@ struct TruthTrack {
   /// Sample k's increments (0-based: t = (k + 1) / rate) and epoch e's truth.
   const Increment& increment(long long k) const { return imu[static_cast<std::size_t>(k)]; }
   const TruthSample& epoch(long long e) const { return epochs[static_cast<std::size_t>(e)]; }
+  /// n: the scenario's IMU samples.
+  long long samples() const { return static_cast<long long>(imu.size()); }
 };
 
 /// fill() on a thread of its own while the track's readers run; the destructor stops the
