@@ -90,11 +90,11 @@ int replay_candump(const cfg::FlightConfig& filter) {
   cfg::require_raw_gnss(filter, "--filter-config", "the CAN bus carries raw GNSS epochs (hal/can/sdins.dbc)");
   hal::CandumpReader reader;
   if (!reader.open(replay_opt.in)) throw std::runtime_error("cannot read " + replay_opt.in + ": " + reader.error());
+  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly (from the log's opening on)
   hal::FswNode node;
   std::string err;
   if (!node.open(replay_opt.run.node_config(filter), err)) throw std::runtime_error(err);
   hal::CanFswInput in(node.summary());
-  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
   hal::CanFrame f;
   std::string iface;
   while (!tools::interrupted() && reader.next(f, iface)) {
@@ -224,16 +224,19 @@ int run_replay() {
   hal::LcmReplayReader reader;
   const hal::LcmLogStatus os = reader.open(replay_opt.in, rc);
   if (os != hal::LcmLogStatus::kOk) throw std::runtime_error("cannot read " + replay_opt.in + ": " + reader.error());
-  const hal::FswNodeConfig cfg = replay_opt.run.node_config(filter);
-  hal::FswNode node;
-  std::string err;
-  if (!node.open(cfg, err)) throw std::runtime_error(err);
   // Scoring (docs/running.md): against TRUTH when the log has it.
   const tools::ScoreOptions so = replay_score_options();
   tools::ReplayScorer scorer(tools::load_reference(replay_opt.in), so);
   const bool scoring = !scorer.reference().samples.empty();
   if (!scoring && (!replay_opt.score_json.empty() || !replay_opt.score_csv.empty()))
     throw std::runtime_error(replay_opt.in + " has no usable reference on TRUTH: nothing to score (--score-json/--score-csv)");
+  // The outputs open last, with the signals polled from then on: reading the reference is setup
+  // (a signal during it leaves nothing), and once a log is open a signal ends the replay cleanly.
+  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
+  const hal::FswNodeConfig cfg = replay_opt.run.node_config(filter);
+  hal::FswNode node;
+  std::string err;
+  if (!node.open(cfg, err)) throw std::runtime_error(err);
   std::uint64_t raw_not_used = 0, withheld = 0;
   // GNSS outages: inputs at times within [t0 + k period, t0 + k period + length) are withheld.
   const auto in_outage = [&](double t) {
@@ -260,7 +263,6 @@ int run_replay() {
     scorer.on_frame(out.nav, node.summary().init_t_s);
     if (out.ekf_ran) scorer.on_ekf(out.nav, node.summary().init_t_s, node.last_ekf_nav_sigma());
   });
-  const tools::InterruptPolling polling;  // docs/faults.md: SIGINT/SIGTERM stop the replay cleanly
   tools::UntilInterrupted<hal::LcmReplayReader> log{reader};
   auto inputs = fsw::filtered(log, keep);
   fsw::drive(inputs, node, score_frames);
