@@ -6,6 +6,8 @@
 //   truth/sample       TruthGenerator::next on the default bank-to-turn scenario, one 1 kHz sample
 //                      per iteration (two RK4 steps, two evaluations, the Simpson increments); the
 //                      generator flies the scenario from t = 0 and starts again at its end
+//   truth/pipeline     TruthPipeline::next, the same samples as truth/sample with the integration on
+//                      a thread of its own (its wall time per sample; two cores busy)
 //   truth/track/<s>    TruthTrack::generate of the default scenario cut to <s> seconds (the Monte
 //                      Carlo's shared truth), per call
 //   sensors/imu_measure
@@ -23,6 +25,7 @@
 #include "sim/scenario.hpp"
 #include "sim/sensor_stream.hpp"
 #include "sim/trajectory.hpp"
+#include "sim/truth_pipeline.hpp"
 
 namespace {
 
@@ -47,6 +50,25 @@ void BM_TruthSample(benchmark::State& state) {
       k = 0;
     }
     const sim::TruthSample& s = gen->next();
+    benchmark::DoNotOptimize(s.dv_mps.data());
+    ++k;
+  }
+  state.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+void BM_TruthPipeline(benchmark::State& state) {
+  const sim::Scenario sc{};
+  const std::unique_ptr<sim::FlightMotion> motion = default_motion(state, sc);
+  if (!motion) return;
+  const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
+  auto pipe = std::make_unique<sim::TruthPipeline>(*motion, sc.imu.rate_hz, n);
+  long long k = 0;
+  for (auto _ : state) {
+    if (k == n) {  // as truth/sample
+      pipe = std::make_unique<sim::TruthPipeline>(*motion, sc.imu.rate_hz, n);
+      k = 0;
+    }
+    const sim::TruthSample& s = pipe->next();
     benchmark::DoNotOptimize(s.dv_mps.data());
     ++k;
   }
@@ -85,6 +107,7 @@ void BM_ImuMeasure(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_TruthSample)->Name("truth/sample")->UseRealTime();
+BENCHMARK(BM_TruthPipeline)->Name("truth/pipeline")->UseRealTime();
 BENCHMARK(BM_TruthTrack)->Name("truth/track")->Arg(60)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 BENCHMARK(BM_ImuMeasure)->Name("sensors/imu_measure")->UseRealTime();

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "sim/almanac.hpp"
+#include "sim/truth_pipeline.hpp"
 
 namespace sim {
 
@@ -19,7 +20,7 @@ int imu_samples_per_epoch(const Scenario& sc) {
 
 struct TruthTrack::Progress {
   std::unique_ptr<FlightMotion> motion;
-  std::unique_ptr<TruthGenerator> gen;
+  std::unique_ptr<TruthPipeline> gen;
   long long written = 0;              ///< fill()'s own count (its thread only)
   std::atomic<long long> ready{0};    ///< samples published to readers
   mutable std::atomic<bool> stop{false};
@@ -32,7 +33,9 @@ struct TruthTrack::Progress {
   }
 };
 
-TruthTrack TruthTrack::prepare(const Scenario& sc) {
+TruthTrack TruthTrack::prepare(const Scenario& sc) { return prepare(sc, false); }
+
+TruthTrack TruthTrack::prepare(const Scenario& sc, bool split) {
   std::string err;
   auto p = std::make_shared<Progress>();
   p->motion = FlightMotion::create(sc, err);
@@ -42,7 +45,7 @@ TruthTrack TruthTrack::prepare(const Scenario& sc) {
   const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
   tt.imu.resize(static_cast<std::size_t>(n));
   tt.epochs.resize(static_cast<std::size_t>(n / tt.samples_per_epoch + 1));
-  p->gen = std::make_unique<TruthGenerator>(*p->motion, sc.imu.rate_hz);
+  p->gen = std::make_unique<TruthPipeline>(*p->motion, sc.imu.rate_hz, n, split);
   tt.epochs[0] = p->gen->current();
   if (n == 0) tt.last = p->gen->current();
   tt.progress = std::move(p);
@@ -89,7 +92,7 @@ long long TruthTrack::wait_for(long long k) const {
 }
 
 TruthTrack TruthTrack::generate(const Scenario& sc) {
-  TruthTrack tt = prepare(sc);
+  TruthTrack tt = prepare(sc, true);  // nothing reads it meanwhile: the integration on a thread of its own
   tt.fill();
   tt.progress.reset();  // complete: no reader waits
   return tt;

@@ -93,8 +93,9 @@ void imu_from_kinematics(const Kinematics& k, const EarthTerms& e, Vec3& omega_i
 // ------------------------------------------------------------------------------------------------
 
 TruthGenerator::TruthGenerator(const Motion& motion, double rate_hz) : motion_(motion), dt_s_(1.0 / rate_hz) {
-  y_ = motion_.initial_state();
-  p_cur_ = evaluate(0.0, y_, false);
+  integ_.y0 = motion_.initial_state();
+  compl_.y0 = integ_.y0;
+  p_cur_ = evaluate(integ_.instants.of(motion_, 0.0), integ_.y0, nullptr);
   set_current(0.0, 0.0, p_cur_);
 }
 
@@ -110,60 +111,82 @@ void TruthGenerator::set_current(double t, double dt, const Point& p) {
   cur_.phase = motion_.phase(t);
 }
 
-const Motion::Instant& TruthGenerator::instant(double t) {
+const Motion::Instant& TruthGenerator::Instants::of(const Motion& m, double t) {
   for (int i = 0; i < 2; ++i)
-    if (inst_valid_[i] && inst_[i].t_s == t) return inst_[i];
-  Motion::Instant& in = inst_[inst_next_];
-  inst_valid_[inst_next_] = true;
-  inst_next_ ^= 1;
-  motion_.instant(t, in);
+    if (valid[i] && inst[i].t_s == t) return inst[i];
+  Motion::Instant& in = inst[next];
+  valid[next] = true;
+  next ^= 1;
+  m.instant(t, in);
   return in;
 }
 
-TruthGenerator::Point TruthGenerator::evaluate(double t, const Motion::State& y, bool within_step) {
+void TruthGenerator::Side::start(const Motion& m, double dt_s) {
+  t0 = static_cast<double>(index) * dt_s;
+  tm = (static_cast<double>(index) + 0.5) * dt_s;
+  t1 = static_cast<double>(index + 1) * dt_s;
+  m.anchor(y0, anchor);
+}
+
+TruthGenerator::Point TruthGenerator::evaluate(const Motion::Instant& in, const Motion::State& y,
+                                               const Motion::StepAnchor* a) const {
   Point p;
-  if (!within_step) {
-    p.k = motion_.eval(instant(t), y);
+  if (a == nullptr) {
+    p.k = motion_.eval(in, y);
     imu_from_kinematics(p.k, p.omega_ib_b, p.f_b);
     return p;
   }
   EarthTerms earth;
-  p.k = motion_.eval(instant(t), y, anchor_, earth);
+  p.k = motion_.eval(in, y, *a, earth);
   imu_from_kinematics(p.k, earth, p.omega_ib_b, p.f_b);
   return p;
 }
 
-Motion::State TruthGenerator::rk4(double t0, double tm, double t1) {
+void TruthGenerator::integrate(Step& s) {
   // One classical RK4 step over [t0, t1] (its middle stages at tm, the sample's midpoint) and the
   // state at tm from the step's own stages: Hermite's third-order continuous extension of RK4 at
   // theta = 1/2, weights (5/24, 1/6, 1/6, -1/24). The midpoint costs no derivative of its own; the
   // motion is smooth within a step (tests: AgreesWithAnEightTimesFinerTruthThroughATurn).
-  const double h = t1 - t0;
-  const Motion::Instant& mid = instant(tm);
-  motion_.anchor(y_, anchor_);
-  const Motion::State k1 = motion_.derivative(instant(t0), y_, anchor_);
-  const Motion::State k2 = motion_.derivative(mid, y_ + 0.5 * h * k1, anchor_);
-  const Motion::State k3 = motion_.derivative(mid, y_ + 0.5 * h * k2, anchor_);
-  const Motion::State k4 = motion_.derivative(instant(t1), y_ + h * k3, anchor_);
-  const Motion::State y_mid = y_ + h * (5.0 / 24.0 * k1 + 1.0 / 6.0 * (k2 + k3) - 1.0 / 24.0 * k4);
-  y_ += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-  return y_mid;
+  Side& d = integ_;
+  d.start(motion_, dt_s_);
+  const double h = d.t1 - d.t0;
+  const Motion::State& y = d.y0;
+  const Motion::Instant& mid = d.instants.of(motion_, d.tm);
+  const Motion::State k1 = motion_.derivative(d.instants.of(motion_, d.t0), y, d.anchor);
+  const Motion::State k2 = motion_.derivative(mid, y + 0.5 * h * k1, d.anchor);
+  const Motion::State k3 = motion_.derivative(mid, y + 0.5 * h * k2, d.anchor);
+  const Motion::State k4 = motion_.derivative(d.instants.of(motion_, d.t1), y + h * k3, d.anchor);
+  s.y_mid = y + h * (5.0 / 24.0 * k1 + 1.0 / 6.0 * (k2 + k3) - 1.0 / 24.0 * k4);
+  s.y1 = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  d.y0 = s.y1;
+  ++d.index;
 }
 
 const TruthSample& TruthGenerator::next() {
-  // Times are computed from the integer index so that they do not drift by accumulation.
-  const double t0 = static_cast<double>(index_) * dt_s_;
-  const double tm = (static_cast<double>(index_) + 0.5) * dt_s_;
-  const double t1 = static_cast<double>(index_ + 1) * dt_s_;
-  const Motion::State y_mid = rk4(t0, tm, t1);
-  const Point pm = evaluate(tm, y_mid, true);  // both within the step rk4 just anchored
-  const Point p1 = evaluate(t1, y_, true);
-  const double h = t1 - t0;
+  // The integration's anchor and instants serve the evaluations too (the same values complete()
+  // would take again); complete()'s side follows along.
+  integrate(step_);
+  compl_.index = integ_.index;
+  compl_.y0 = integ_.y0;
+  return complete(step_, integ_);
+}
+
+const TruthSample& TruthGenerator::complete(const Step& s) {
+  Side& d = compl_;
+  d.start(motion_, dt_s_);
+  d.y0 = s.y1;
+  ++d.index;
+  return complete(s, d);
+}
+
+const TruthSample& TruthGenerator::complete(const Step& s, Side& d) {
+  const Point pm = evaluate(d.instants.of(motion_, d.tm), s.y_mid, &d.anchor);  // both within the step
+  const Point p1 = evaluate(d.instants.of(motion_, d.t1), s.y1, &d.anchor);
+  const double h = d.t1 - d.t0;
   cur_.dtheta_rad = h / 6.0 * (p_cur_.omega_ib_b + 4.0 * pm.omega_ib_b + p1.omega_ib_b);
   cur_.dv_mps = h / 6.0 * (p_cur_.f_b + 4.0 * pm.f_b + p1.f_b);
-  ++index_;
   p_cur_ = p1;
-  set_current(t1, h, p1);
+  set_current(d.t1, h, p1);
   return cur_;
 }
 

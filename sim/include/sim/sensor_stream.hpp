@@ -47,6 +47,7 @@ struct TruthTrack {
   TruthSample last;                 ///< the full truth of sample n (t = duration), once it is written
   int samples_per_epoch = 1000;     ///< IMU samples between GNSS epochs
   double generate_wall_s = 0.0;     ///< the integration's own wall time (fill())
+  /// The whole track before it returns, its integration on a second thread (TruthPipeline).
   /// Throws std::runtime_error for a scenario it cannot fly (e.g. rates that do not divide).
   static TruthTrack generate(const Scenario& sc);
 
@@ -58,7 +59,9 @@ struct TruthTrack {
   static constexpr long long kPublishSamples = 1000;
   struct Progress;
   std::shared_ptr<Progress> progress;  ///< null: the track is complete (generate())
-  /// Throws std::runtime_error like generate().
+  /// Throws std::runtime_error like generate(). The integration and the evaluations on fill()'s
+  /// one thread: its readers use the other core (with the integration on a third thread a one-run
+  /// Monte Carlo took 1.22 times as long: docs/performance.md, "The truth on two threads").
   static TruthTrack prepare(const Scenario& sc);
   /// Integrates every sample not yet written, publishing progress; returns early when stopped.
   void fill();
@@ -73,6 +76,10 @@ struct TruthTrack {
   const TruthSample& epoch(long long e) const { return epochs[static_cast<std::size_t>(e)]; }
   /// n: the scenario's IMU samples.
   long long samples() const { return static_cast<long long>(imu.size()); }
+
+ private:
+  /// split: the integration on a thread of its own (TruthPipeline), for generate().
+  static TruthTrack prepare(const Scenario& sc, bool split);
 };
 
 /// fill() on a thread of its own while the track's readers run; the destructor stops the

@@ -114,13 +114,33 @@ struct TruthSample {
 };
 
 /// Steps a Motion at a fixed rate, producing truth samples. Deterministic.
+///
+/// A sample is two halves: integrate() advances the motion's ODE by one RK4 step (sequential: each
+/// step starts from the last) and hands its midpoint and end states on in a Step; complete() turns
+/// a Step into the sample (the kinematics, rates and specific force at the midpoint and the end,
+/// carried from the step's anchor, and the Simpson increments). next() is the two in turn, sharing
+/// the step's anchor and instants; TruthPipeline (truth_pipeline.hpp) runs them on two threads,
+/// where complete() takes the anchor and instants again from the step's start (the same pure
+/// functions of the same bits, so the same sample) instead of receiving them: a Step is two cache
+/// lines, where the anchor and instants would add five more to move between the cores. The halves
+/// touch disjoint members, so one thread may integrate while another completes, each in step order.
 class TruthGenerator {
  public:
+  /// What complete() needs of an integration step over (t0, t1]: its midpoint and end states.
+  struct Step {
+    Motion::State y_mid = Motion::State::Zero();
+    Motion::State y1 = Motion::State::Zero();
+  };
+
   TruthGenerator(const Motion& motion, double rate_hz);
-  /// The sample at t = 0 (no increments).
+  /// The sample at t = 0 (no increments), then the last one made.
   const TruthSample& current() const { return cur_; }
   /// Advances one sample interval and returns the new sample.
   const TruthSample& next();
+  /// The first half: the next RK4 step into s.
+  void integrate(Step& s);
+  /// The second half: the sample of s, which must be the step after the last one completed.
+  const TruthSample& complete(const Step& s);
 
  private:
   struct Point {
@@ -128,25 +148,40 @@ class TruthGenerator {
     Vec3 omega_ib_b;
     Vec3 f_b;
   };
-  /// The point at (t, y): exactly, or (within_step) with the terms carried from anchor_.
-  Point evaluate(double t, const Motion::State& y, bool within_step);
-  /// Advances y_ by one RK4 step from t0 to t1 and returns the state at tm between them.
-  Motion::State rk4(double t0, double tm, double t1);
-  /// The motion's Instant of t: the last two are kept (an RK4 step asks for its middle three
-  /// times, and a step's end is the sample's evaluation and the next step's start).
-  const Motion::Instant& instant(double t);
+  /// The motion's Instants of the last two times asked for (an RK4 step asks for its middle three
+  /// times, and a step's end is the next step's start).
+  struct Instants {
+    Motion::Instant inst[2]{};
+    bool valid[2] = {false, false};
+    int next = 0;  ///< the slot the next new instant goes into
+    const Motion::Instant& of(const Motion& m, double t);
+  };
+  /// One side's own count and state: the step index, the state the step starts from, its anchor.
+  struct Side {
+    long long index = 0;
+    Motion::State y0 = Motion::State::Zero();
+    Motion::StepAnchor anchor{};
+    Instants instants;
+    double t0 = 0.0, tm = 0.0, t1 = 0.0;
+    /// The step's times from the integer index (no drift by accumulation) and its anchor at y0.
+    void start(const Motion& m, double dt_s);
+  };
+  /// The point at (in, y): exactly (a == nullptr), or with the terms carried from the step's anchor.
+  Point evaluate(const Motion::Instant& in, const Motion::State& y, const Motion::StepAnchor* a) const;
+  /// complete()'s work given the step's side (its times, anchor and instants).
+  const TruthSample& complete(const Step& s, Side& side);
   void set_current(double t, double dt, const Point& p);
 
+  // Read by both halves; each half's own members on cache lines of their own from here on (the
+  // halves may run on two threads, and a line one writes and the other reads moves between the
+  // cores at every write: 0.15 us a sample, when motion_ shared a line with integ_).
   const Motion& motion_;
   double dt_s_;
-  long long index_ = 0;
-  Motion::State y_;
-  Motion::StepAnchor anchor_{};
+  alignas(64) Side integ_;  ///< integrate()'s (and next()'s)
+  Step step_{};             ///< next()'s
+  alignas(64) Side compl_;  ///< complete()'s, with the sample below
   TruthSample cur_{};
   Point p_cur_{};
-  Motion::Instant inst_[2]{};
-  bool inst_valid_[2] = {false, false};
-  int inst_next_ = 0;  ///< the slot the next new instant goes into
 };
 
 /// Specific force and inertial body rate from kinematics (the equations above).

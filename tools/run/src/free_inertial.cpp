@@ -1,10 +1,9 @@
 #include "tools/free_inertial.hpp"
 
 #include <cmath>
-#include <stdexcept>
 #include <vector>
 
-#include "tools/ahead.hpp"
+#include "sim/truth_pipeline.hpp"
 
 namespace tools {
 
@@ -68,25 +67,9 @@ void run_free_inertial(const sim::Motion& motion, const FreeInertialConfig& cfg,
     for (long long i = 0; i < n_samples && flying > 0; ++i) fly_sample(gen.next());
     return;
   }
-  // The generator moves to its own thread (only it touches gen from here on), in chunks of 2048
-  // samples: each hand-off is a wake-up, and 256-sample chunks spent most of the gain on them
-  // (docs/performance.md).
-  constexpr std::size_t kChunk = 2048, kAhead = 4;
-  using Samples = std::vector<sim::TruthSample>;
-  Ahead<Samples> truth(kAhead, [&gen, n_samples](const Ahead<Samples>::Sink& sink) {
-    for (long long i = 0; i < n_samples;) {
-      Samples chunk;
-      sink.spare(chunk);
-      chunk.clear();
-      for (; i < n_samples && chunk.size() < kChunk; ++i) chunk.push_back(gen.next());
-      if (!sink.emit(std::move(chunk))) return;
-    }
-  });
-  Samples chunk;
-  while (flying > 0 && truth.next(chunk))
-    for (std::size_t k = 0; k < chunk.size() && flying > 0; ++k) fly_sample(chunk[k]);
-  // A truth that ended early (its thread failed) must not pass for the end of the flight.
-  if (!truth.error().empty()) throw std::runtime_error("the truth's thread failed: " + truth.error());
+  // The truth's integration on a thread of its own (sim::TruthPipeline: the same samples as gen's).
+  sim::TruthPipeline pipe(motion, cfg.imu_rate_hz, n_samples);
+  for (long long i = 0; i < n_samples && flying > 0; ++i) fly_sample(pipe.next());
 }
 
 NavErrors run_free_inertial(const sim::Motion& motion, sim::ImuModel* imu, const FreeInertialConfig& cfg,

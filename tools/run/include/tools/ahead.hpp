@@ -1,6 +1,6 @@
 // A producer on a thread of its own, a bounded number of items ahead of its one reader: what the
-// SIL and bus-simulator sensor steps (step_producer.hpp) and a free-inertial flight's truth
-// (free_inertial.hpp) use to run the simulator beside the flight software. The items reach the
+// SIL and bus-simulator sensor steps (step_producer.hpp) use to run the simulator beside the
+// flight software (a free-inertial flight's truth has sim::TruthPipeline). The items reach the
 // reader in the order produced, so the results do not depend on the thread.
 #pragma once
 

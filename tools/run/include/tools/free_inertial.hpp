@@ -26,9 +26,10 @@ struct FreeInertialConfig {
   /// Reset height and vertical velocity to truth after every frame (an ideal altimeter): the
   /// unaided vertical channel diverges and would otherwise pollute long analyses.
   bool hold_vertical_to_truth = false;
-  /// Integrate the truth on a thread of its own, a few chunks of 2048 samples ahead of the flights
-  /// (the same samples: the results are identical): for a single flight, whose time is mostly its
-  /// truth (`sdins fly`); flights already run side by side on every core leave it off.
+  /// Integrate the truth's ODE on a thread of its own (sim::TruthPipeline), its samples evaluated
+  /// beside the flights (the same samples: the results are identical): for a single flight, whose
+  /// time is mostly its truth (`sdins fly`); flights already run side by side on every core leave
+  /// it off.
   bool truth_thread = false;
 };
 
@@ -37,8 +38,7 @@ using FreeInertialCallback = std::function<void(const sim::TruthSample&, const f
 
 /// Flies the motion with the given IMU model (nullptr: perfect IMU), initialised from truth.
 /// Returns the last errors. A failing fsw step is reported through `status`; nothing throws but
-/// the truth's thread (with truth_thread: std::system_error when it cannot start,
-/// std::runtime_error when it fails).
+/// the truth's thread (with truth_thread: std::system_error when it cannot start).
 NavErrors run_free_inertial(const sim::Motion& motion, sim::ImuModel* imu, const FreeInertialConfig& cfg,
                             const FreeInertialCallback& on_frame, fsw::Status* status = nullptr);
 
