@@ -7,7 +7,6 @@
 #include <string>
 
 #include "sim/almanac.hpp"
-#include "sim/truth_pipeline.hpp"
 
 namespace sim {
 
@@ -110,7 +109,7 @@ void TruthFillThread::complete() {
   if (thread_.joinable()) thread_.join();
 }
 
-SensorStream::SensorStream(const Scenario& sc, std::uint64_t seed) : sc_(sc) {
+SensorStream::SensorStream(const Scenario& sc, std::uint64_t seed, TruthThread truth) : sc_(sc) {
   std::string err;
   motion_ = FlightMotion::create(sc_, err);
   if (!motion_) throw std::runtime_error(err);
@@ -118,7 +117,7 @@ SensorStream::SensorStream(const Scenario& sc, std::uint64_t seed) : sc_(sc) {
   if (!alm.ok()) throw std::runtime_error(alm.error);
   samples_per_epoch_ = imu_samples_per_epoch(sc_);
   n_samples_ = std::llround(sc_.duration_s * sc_.imu.rate_hz);
-  gen_ = std::make_unique<TruthGenerator>(*motion_, sc_.imu.rate_hz);
+  gen_ = std::make_unique<TruthPipeline>(*motion_, sc_.imu.rate_hz, n_samples_, truth == TruthThread::kOwn);
   epoch_truth_ = &gen_->current();
   imu_ = std::make_unique<ImuModel>(draw_imu_errors(sc_.imu, sc_.effects, seed), seed);
   gps_ = std::make_unique<GpsModel>(sc_.gps, *alm.almanac, sc_.effects, seed);

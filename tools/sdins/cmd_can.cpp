@@ -107,7 +107,7 @@ class ExpectedCsv {
 int run_encode() {
   tools::require_distinct({can_opt.out, can_opt.expected}, {can_opt.scenario.file});
   const sim::Scenario sc = can_opt.scenario.load();
-  sim::SensorStream stream(sc);
+  sim::SensorStream stream(sc, sim::TruthThread::kOwn);  // the writer leaves the second core idle
   hal::CandumpWriter w;
   if (!w.open(can_opt.out)) throw std::runtime_error(w.error());
   ExpectedCsv csv;

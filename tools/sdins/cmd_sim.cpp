@@ -279,7 +279,7 @@ int run_sim() {
   const long long samples_per_truth = imu_samples_per_truth(sc, sim_opt.truth_rate_hz);
 
   const auto t_start = std::chrono::steady_clock::now();
-  sim::SensorStream stream(sc);
+  sim::SensorStream stream(sc, sim::TruthThread::kOwn);  // the writer leaves the second core idle
   hal::LcmLogSink sink;
   hal::LcmTelemetryConfig tcfg;
   tcfg.lcm_url = "none";

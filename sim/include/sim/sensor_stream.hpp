@@ -30,6 +30,7 @@
 #include "sim/imu_model.hpp"
 #include "sim/scenario.hpp"
 #include "sim/trajectory.hpp"
+#include "sim/truth_pipeline.hpp"
 
 namespace sim {
 
@@ -109,13 +110,20 @@ struct SensorStep {
   fsw::GnssRawEpoch epoch{};
 };
 
+/// Where a live stream's truth is integrated: on the reader's thread, or on a thread of its own
+/// (TruthPipeline: the same samples) for a reader that leaves the second core idle (`sdins sim`,
+/// `sdins can encode`); a reader whose other threads keep the cores busy (`sil`, `bus-sim`) keeps
+/// it on its own thread (docs/performance.md, "The truth on two threads").
+enum class TruthThread { kReader, kOwn };
+
 class SensorStream {
  public:
   /// The scenario's own seed, truth generated alongside.
-  explicit SensorStream(const Scenario& sc) : SensorStream(sc, sc.seed) {}
+  explicit SensorStream(const Scenario& sc, TruthThread truth = TruthThread::kReader)
+      : SensorStream(sc, sc.seed, truth) {}
   /// Throws std::runtime_error for a scenario the simulator rejects or an unreadable almanac.
   /// seed: the run's seed (IMU errors, noise, GPS errors, clock).
-  SensorStream(const Scenario& sc, std::uint64_t seed);
+  SensorStream(const Scenario& sc, std::uint64_t seed, TruthThread truth = TruthThread::kReader);
   /// The truth of a shared track (which must outlive the stream) and an almanac already read.
   SensorStream(const Scenario& sc, const TruthTrack& track, const std::vector<AlmanacEntry>& almanac,
                std::uint64_t seed);
@@ -160,7 +168,7 @@ class SensorStream {
 
   Scenario sc_;
   std::unique_ptr<FlightMotion> motion_;  ///< live source only
-  std::unique_ptr<TruthGenerator> gen_;   ///< live source only
+  std::unique_ptr<TruthPipeline> gen_;    ///< live source only (split with TruthThread::kOwn)
   const TruthTrack* track_ = nullptr;     ///< shared source only
   TruthSample track_sample_;              ///< shared source: the fields the IMU model reads
   long long track_ready_ = 0;             ///< shared source: samples known written (TruthTrack::wait_for)
