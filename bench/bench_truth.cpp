@@ -37,43 +37,29 @@ std::unique_ptr<sim::FlightMotion> default_motion(benchmark::State& state, const
   return motion;
 }
 
-void BM_TruthSample(benchmark::State& state) {
+// One truth sample per iteration through a TruthPipeline (kReader: the generator's next() itself);
+// the flight starts again at its end (once in 1.8 M samples).
+void truth_samples(benchmark::State& state, sim::TruthThread where) {
   const sim::Scenario sc{};
   const std::unique_ptr<sim::FlightMotion> motion = default_motion(state, sc);
   if (!motion) return;
   const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
-  auto gen = std::make_unique<sim::TruthGenerator>(*motion, sc.imu.rate_hz);
+  auto truth = std::make_unique<sim::TruthPipeline>(*motion, sc.imu.rate_hz, n, where);
   long long k = 0;
   for (auto _ : state) {
-    if (k == n) {  // the end of the flight: from the start again (once in 1.8 M samples)
-      gen = std::make_unique<sim::TruthGenerator>(*motion, sc.imu.rate_hz);
+    if (k == n) {
+      truth = std::make_unique<sim::TruthPipeline>(*motion, sc.imu.rate_hz, n, where);
       k = 0;
     }
-    const sim::TruthSample& s = gen->next();
+    const sim::TruthSample& s = truth->next();
     benchmark::DoNotOptimize(s.dv_mps.data());
     ++k;
   }
   state.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 
-void BM_TruthPipeline(benchmark::State& state) {
-  const sim::Scenario sc{};
-  const std::unique_ptr<sim::FlightMotion> motion = default_motion(state, sc);
-  if (!motion) return;
-  const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
-  auto pipe = std::make_unique<sim::TruthPipeline>(*motion, sc.imu.rate_hz, n);
-  long long k = 0;
-  for (auto _ : state) {
-    if (k == n) {  // as truth/sample
-      pipe = std::make_unique<sim::TruthPipeline>(*motion, sc.imu.rate_hz, n);
-      k = 0;
-    }
-    const sim::TruthSample& s = pipe->next();
-    benchmark::DoNotOptimize(s.dv_mps.data());
-    ++k;
-  }
-  state.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
-}
+void BM_TruthSample(benchmark::State& state) { truth_samples(state, sim::TruthThread::kReader); }
+void BM_TruthPipeline(benchmark::State& state) { truth_samples(state, sim::TruthThread::kOwn); }
 
 void BM_TruthTrack(benchmark::State& state) {
   sim::Scenario sc{};

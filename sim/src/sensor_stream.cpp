@@ -32,9 +32,9 @@ struct TruthTrack::Progress {
   }
 };
 
-TruthTrack TruthTrack::prepare(const Scenario& sc) { return prepare(sc, false); }
+TruthTrack TruthTrack::prepare(const Scenario& sc) { return prepare(sc, TruthThread::kReader); }
 
-TruthTrack TruthTrack::prepare(const Scenario& sc, bool split) {
+TruthTrack TruthTrack::prepare(const Scenario& sc, TruthThread where) {
   std::string err;
   auto p = std::make_shared<Progress>();
   p->motion = FlightMotion::create(sc, err);
@@ -44,7 +44,7 @@ TruthTrack TruthTrack::prepare(const Scenario& sc, bool split) {
   const long long n = std::llround(sc.duration_s * sc.imu.rate_hz);
   tt.imu.resize(static_cast<std::size_t>(n));
   tt.epochs.resize(static_cast<std::size_t>(n / tt.samples_per_epoch + 1));
-  p->gen = std::make_unique<TruthPipeline>(*p->motion, sc.imu.rate_hz, n, split);
+  p->gen = std::make_unique<TruthPipeline>(*p->motion, sc.imu.rate_hz, n, where);
   tt.epochs[0] = p->gen->current();
   if (n == 0) tt.last = p->gen->current();
   tt.progress = std::move(p);
@@ -91,7 +91,7 @@ long long TruthTrack::wait_for(long long k) const {
 }
 
 TruthTrack TruthTrack::generate(const Scenario& sc) {
-  TruthTrack tt = prepare(sc, true);  // nothing reads it meanwhile: the integration on a thread of its own
+  TruthTrack tt = prepare(sc, TruthThread::kOwn);  // nothing reads it meanwhile
   tt.fill();
   tt.progress.reset();  // complete: no reader waits
   return tt;
@@ -117,7 +117,7 @@ SensorStream::SensorStream(const Scenario& sc, std::uint64_t seed, TruthThread t
   if (!alm.ok()) throw std::runtime_error(alm.error);
   samples_per_epoch_ = imu_samples_per_epoch(sc_);
   n_samples_ = std::llround(sc_.duration_s * sc_.imu.rate_hz);
-  gen_ = std::make_unique<TruthPipeline>(*motion_, sc_.imu.rate_hz, n_samples_, truth == TruthThread::kOwn);
+  gen_ = std::make_unique<TruthPipeline>(*motion_, sc_.imu.rate_hz, n_samples_, truth);
   epoch_truth_ = &gen_->current();
   imu_ = std::make_unique<ImuModel>(draw_imu_errors(sc_.imu, sc_.effects, seed), seed);
   gps_ = std::make_unique<GpsModel>(sc_.gps, *alm.almanac, sc_.effects, seed);

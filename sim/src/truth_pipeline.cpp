@@ -2,8 +2,11 @@
 
 namespace sim {
 
-TruthPipeline::TruthPipeline(const Motion& motion, double rate_hz, long long n_samples, bool split)
-    : gen_(motion, rate_hz), n_(n_samples), split_(split), ring_(split ? static_cast<std::size_t>(kRing) : 0) {}
+TruthPipeline::TruthPipeline(const Motion& motion, double rate_hz, long long n_samples, TruthThread where)
+    : gen_(motion, rate_hz),
+      n_(n_samples),
+      split_(where == TruthThread::kOwn),
+      ring_(split_ ? static_cast<std::size_t>(kRing) : 0) {}
 
 TruthPipeline::~TruthPipeline() {
   if (!thread_.joinable()) return;
@@ -52,7 +55,7 @@ const TruthSample& TruthPipeline::next() {
     ++taken_;
     return gen_.next();
   }
-  if (taken_ == 0 && !thread_.joinable()) thread_ = std::thread([this] { integrate_all(); });
+  if (taken_ == 0) thread_ = std::thread([this] { integrate_all(); });
   if (taken_ >= known_produced_) {
     known_produced_ = produced_.load(std::memory_order_acquire);
     if (taken_ >= known_produced_) {

@@ -48,7 +48,7 @@ TEST(TruthPipeline, GivesTheGeneratorsSamplesBitForBitAndGoesOnPastItsCount) {
   // Not a whole number of the pipeline's batches or rings, so the last hand-off is a short one.
   const long long n = 100'037;
   sim::TruthGenerator gen(*f.motion, 1000.0);
-  sim::TruthPipeline pipe(*f.motion, 1000.0, n);
+  sim::TruthPipeline pipe(*f.motion, 1000.0, n, sim::TruthThread::kOwn);
   expect_same(gen.current(), pipe.current(), 0);
   long long turning = 0;
   for (long long k = 1; k <= n + 5; ++k) {  // five past n: on without the thread
@@ -66,13 +66,13 @@ TEST(TruthPipeline, StopsWhereverItsReaderLeavesIt) {
   const PipelineFlight f;
   ASSERT_TRUE(f.motion);
   const long long n = 120'000;
-  { sim::TruthPipeline never_read(*f.motion, 1000.0, n); }  // no thread started
+  { sim::TruthPipeline never_read(*f.motion, 1000.0, n, sim::TruthThread::kOwn); }  // no thread started
   for (long long read : {1LL, 255LL, 256LL, 4'097LL, 50'000LL}) {
-    sim::TruthPipeline pipe(*f.motion, 1000.0, n);
+    sim::TruthPipeline pipe(*f.motion, 1000.0, n, sim::TruthThread::kOwn);
     for (long long k = 0; k < read; ++k) pipe.next();
     EXPECT_NEAR(pipe.current().t_s, static_cast<double>(read) / 1000.0, 1e-9);
   }  // each destructor stops an integration that is waiting for a slot or still running, and joins it
-  sim::TruthPipeline empty(*f.motion, 1000.0, 0);
+  sim::TruthPipeline empty(*f.motion, 1000.0, 0, sim::TruthThread::kOwn);
   EXPECT_EQ(empty.next().t_s, 0.001);  // no samples asked for: the generator's, on the reader's thread
 }
 
@@ -80,7 +80,7 @@ TEST(TruthPipeline, UnsplitIsTheGenerator) {
   const PipelineFlight f;
   ASSERT_TRUE(f.motion);
   sim::TruthGenerator gen(*f.motion, 1000.0);
-  sim::TruthPipeline one(*f.motion, 1000.0, 3'000, false);
+  sim::TruthPipeline one(*f.motion, 1000.0, 3'000, sim::TruthThread::kReader);
   for (long long k = 1; k <= 3'010; ++k) {
     expect_same(gen.next(), one.next(), k);
     if (::testing::Test::HasFatalFailure()) return;

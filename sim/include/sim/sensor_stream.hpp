@@ -79,8 +79,8 @@ struct TruthTrack {
   long long samples() const { return static_cast<long long>(imu.size()); }
 
  private:
-  /// split: the integration on a thread of its own (TruthPipeline), for generate().
-  static TruthTrack prepare(const Scenario& sc, bool split);
+  /// generate()'s with TruthThread::kOwn.
+  static TruthTrack prepare(const Scenario& sc, TruthThread where);
 };
 
 /// fill() on a thread of its own while the track's readers run; the destructor stops the
@@ -110,15 +110,9 @@ struct SensorStep {
   fsw::GnssRawEpoch epoch{};
 };
 
-/// Where a live stream's truth is integrated: on the reader's thread, or on a thread of its own
-/// (TruthPipeline: the same samples) for a reader that leaves the second core idle (`sdins sim`,
-/// `sdins can encode`); a reader whose other threads keep the cores busy (`sil`, `bus-sim`) keeps
-/// it on its own thread (docs/performance.md, "The truth on two threads").
-enum class TruthThread { kReader, kOwn };
-
 class SensorStream {
  public:
-  /// The scenario's own seed, truth generated alongside.
+  /// The scenario's own seed, truth generated alongside (its integration where `truth` says).
   explicit SensorStream(const Scenario& sc, TruthThread truth = TruthThread::kReader)
       : SensorStream(sc, sc.seed, truth) {}
   /// Throws std::runtime_error for a scenario the simulator rejects or an unreadable almanac.
@@ -168,7 +162,7 @@ class SensorStream {
 
   Scenario sc_;
   std::unique_ptr<FlightMotion> motion_;  ///< live source only
-  std::unique_ptr<TruthPipeline> gen_;    ///< live source only (split with TruthThread::kOwn)
+  std::unique_ptr<TruthPipeline> gen_;    ///< live source only
   const TruthTrack* track_ = nullptr;     ///< shared source only
   TruthSample track_sample_;              ///< shared source: the fields the IMU model reads
   long long track_ready_ = 0;             ///< shared source: samples known written (TruthTrack::wait_for)

@@ -17,13 +17,19 @@
 
 namespace sim {
 
+/// Where the truth's integration runs: on the reader's thread (the generator's next(), no thread),
+/// or on a thread of its own, for a reader that leaves the second core idle (`sdins fly`, `sdins
+/// sim`, `sdins can encode`, TruthTrack::generate). A reader whose other threads keep the cores
+/// busy (a Monte Carlo's runs, `sil`, `bus-sim`) keeps it: the split costs 0.07-0.24 cpu-s more for
+/// 1800 s, and a third busy thread on two cores slows them all (docs/performance.md, "The truth on
+/// two threads").
+enum class TruthThread { kReader, kOwn };
+
 class TruthPipeline {
  public:
   /// The motion (which must outlive the pipeline) at rate_hz for n_samples samples after t = 0.
-  /// The integration's thread starts at the first next(). split false: no thread, next() is the
-  /// generator's (for a caller whose other threads keep the cores busy: the split costs about 0.25
-  /// more cpu, and a third busy thread on two cores then slows all of them down).
-  TruthPipeline(const Motion& motion, double rate_hz, long long n_samples, bool split = true);
+  /// With TruthThread::kOwn the integration's thread starts at the first next().
+  TruthPipeline(const Motion& motion, double rate_hz, long long n_samples, TruthThread where);
   /// Stops the integration wherever it is and joins its thread.
   ~TruthPipeline();
   TruthPipeline(const TruthPipeline&) = delete;
@@ -33,7 +39,6 @@ class TruthPipeline {
   const TruthSample& current() const { return gen_.current(); }
   /// The next sample: at most n_samples of them (the caller counts, as with TruthGenerator).
   const TruthSample& next();
-  long long samples() const { return n_; }
 
  private:
   /// Steps are handed over in batches of kBatch, through a ring of kRing: a side that finds nothing

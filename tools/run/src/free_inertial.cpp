@@ -8,14 +8,17 @@
 namespace tools {
 
 void run_free_inertial(const sim::Motion& motion, const FreeInertialConfig& cfg, std::span<FreeInertialFlight> flights) {
-  sim::TruthGenerator gen(motion, cfg.imu_rate_hz);
+  const long long n_samples = std::llround(cfg.duration_s * cfg.imu_rate_hz);
+  // With truth_thread the truth's integration runs on a thread of its own (the same samples).
+  sim::TruthPipeline source(motion, cfg.imu_rate_hz, n_samples,
+                            cfg.truth_thread ? sim::TruthThread::kOwn : sim::TruthThread::kReader);
   const int per_frame = static_cast<int>(std::lround(cfg.imu_rate_hz / cfg.nav_rate_hz));
   struct Nav {  // each flight's own mechanization
     fsw::FrameBuilder fb;
     fsw::Strapdown sd;
   };
   std::vector<Nav> nav(flights.size());
-  const sim::TruthSample& t0 = gen.current();
+  const sim::TruthSample& t0 = source.current();
   fsw::NavState init;
   init.t_s = 0.0;
   init.llh = t0.llh;
@@ -30,7 +33,6 @@ void run_free_inertial(const sim::Motion& motion, const FreeInertialConfig& cfg,
     fl.last = nav_errors(nav[f].sd.state(), t0);
     if (fl.status == fsw::Status::kOk) ++flying;
   }
-  const long long n_samples = std::llround(cfg.duration_s * cfg.imu_rate_hz);
   const auto fly_sample = [&](const sim::TruthSample& truth) {
     for (std::size_t f = 0; f < flights.size(); ++f) {
       FreeInertialFlight& fl = flights[f];
@@ -63,13 +65,7 @@ void run_free_inertial(const sim::Motion& motion, const FreeInertialConfig& cfg,
       if (fl.on_frame) fl.on_frame(truth, sd.state());
     }
   };
-  if (!cfg.truth_thread) {
-    for (long long i = 0; i < n_samples && flying > 0; ++i) fly_sample(gen.next());
-    return;
-  }
-  // The truth's integration on a thread of its own (sim::TruthPipeline: the same samples as gen's).
-  sim::TruthPipeline pipe(motion, cfg.imu_rate_hz, n_samples);
-  for (long long i = 0; i < n_samples && flying > 0; ++i) fly_sample(pipe.next());
+  for (long long i = 0; i < n_samples && flying > 0; ++i) fly_sample(source.next());
 }
 
 NavErrors run_free_inertial(const sim::Motion& motion, sim::ImuModel* imu, const FreeInertialConfig& cfg,
